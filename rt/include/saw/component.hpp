@@ -1,0 +1,71 @@
+// Component: a named unit with provided and required interfaces and a state table; no thread.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "saw/clock.hpp"
+#include "saw/provided_interface.hpp"
+#include "saw/required_interface.hpp"
+#include "saw/state_table.hpp"
+
+namespace saw {
+
+enum class Lifecycle : std::uint8_t { constructed, ready, active, finished };
+std::string_view to_string(Lifecycle l);
+
+// A component without a thread runs its commands in the caller's thread (as cisst's devices
+// do), so they must be thread-safe; a Task queues them instead.
+class Component {
+ public:
+  explicit Component(std::string name, std::size_t state_rows = StateTable::default_rows);
+  virtual ~Component();
+  Component(const Component&) = delete;
+  Component& operator=(const Component&) = delete;
+
+  const std::string& name() const noexcept { return name_; }
+  Lifecycle lifecycle() const noexcept { return lifecycle_.load(std::memory_order_acquire); }
+  virtual bool has_thread() const noexcept { return false; }
+
+  ProvidedInterface& provide(std::string name);
+  RequiredInterface& require(std::string name);
+  ProvidedInterface* provided(std::string_view name) const noexcept;
+  RequiredInterface* required(std::string_view name) const noexcept;
+  const std::vector<std::unique_ptr<ProvidedInterface>>& provided_interfaces() const noexcept {
+    return provided_;
+  }
+  const std::vector<std::unique_ptr<RequiredInterface>>& required_interfaces() const noexcept {
+    return required_;
+  }
+
+  StateTable& state_table() noexcept { return state_table_; }
+  const StateTable& state_table() const noexcept { return state_table_; }
+
+  // Time of the current cycle: real monotonic time, or the simulated clock in stepped mode.
+  TimeNs now() const noexcept { return cycle_time_; }
+
+  // Called by the manager outside any RT path.
+  virtual void startup() {}
+  virtual void cleanup() {}
+  // One cycle of work, called by the component's task after its mailboxes are drained.
+  virtual void run() {}
+
+  // For tasks and the manager.
+  void add_inbound(Mailbox* m) { inbound_.push_back(m); }
+  std::size_t process_mailboxes() noexcept;
+  void set_lifecycle(Lifecycle l) noexcept { lifecycle_.store(l, std::memory_order_release); }
+  // One full cycle: mailboxes, run(), then the state-table row stamped `time`.
+  void cycle(TimeNs time) noexcept;
+
+ private:
+  std::string name_;
+  std::atomic<Lifecycle> lifecycle_{Lifecycle::constructed};
+  std::vector<std::unique_ptr<ProvidedInterface>> provided_;
+  std::vector<std::unique_ptr<RequiredInterface>> required_;
+  StateTable state_table_;
+  std::vector<Mailbox*> inbound_;
+  TimeNs cycle_time_ = 0;
+};
+
+}  // namespace saw

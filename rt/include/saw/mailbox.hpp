@@ -1,0 +1,61 @@
+// Mailbox: one connection's bounded queue of commands or events, drained by its consumer.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "saw/invoker.hpp"
+#include "saw/spsc_ring.hpp"
+#include "saw/status.hpp"
+
+namespace saw {
+
+// The producer is the thread of the calling component (commands) or of the emitting
+// component (events); the consumer is the thread of the component that executes them.
+class Mailbox {
+ public:
+  Mailbox(std::string name, std::size_t capacity, std::size_t max_payload);
+
+  const std::string& name() const noexcept { return name_; }
+
+  // Setup: adds a call target and returns its index in this mailbox.
+  std::uint32_t add_target(Invoker target);
+
+  // Producer side. Never blocks: a full mailbox is an error, counted.
+  Status push(std::uint32_t target, const void* payload, std::size_t size) noexcept {
+    std::byte* slot = ring_.try_reserve();
+    if (slot == nullptr) {
+      full_count_.store(full_count_.load(std::memory_order_relaxed) + 1,
+                        std::memory_order_relaxed);
+      return Status::queue_full;
+    }
+    std::memcpy(slot, &target, sizeof target);
+    if (size != 0) std::memcpy(slot + header_size, payload, size);
+    ring_.commit();
+    return Status::ok;
+  }
+
+  // Consumer side: runs every queued call (at most one ring's worth); returns how many.
+  std::size_t drain() noexcept;
+
+  std::uint64_t full_count() const noexcept { return full_count_.load(std::memory_order_relaxed); }
+  std::uint64_t executed_count() const noexcept {
+    return executed_.load(std::memory_order_relaxed);
+  }
+  std::size_t capacity() const noexcept { return ring_.capacity(); }
+  std::size_t pending() const noexcept { return ring_.size_approx(); }
+
+ private:
+  static constexpr std::size_t header_size = SpscRing::slot_alignment;
+
+  std::string name_;
+  SpscRing ring_;
+  std::vector<Invoker> targets_;
+  std::atomic<std::uint64_t> full_count_{0};  // written by the producer only
+  std::atomic<std::uint64_t> executed_{0};    // written by the consumer only
+};
+
+}  // namespace saw

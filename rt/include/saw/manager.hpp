@@ -1,0 +1,90 @@
+// Manager: one per process; adds components, connects interfaces, starts and stops tasks.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "saw/component.hpp"
+#include "saw/log.hpp"
+#include "saw/rt_thread.hpp"
+#include "saw/task.hpp"
+
+namespace saw {
+
+// Thrown by connect() and start(): the message names components, interfaces, commands, types.
+class ConnectError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class ManagerState : std::uint8_t { idle, running, stepping, stopped };
+
+struct ManagerOptions {
+  bool lock_memory = true;        // mlockall when any task is real-time
+  bool hold_dma_latency = true;   // /dev/cpu_dma_latency = 0 while running
+  bool drain_log = true;          // a non-RT thread prints the RT log to stderr
+};
+
+class Manager {
+ public:
+  explicit Manager(ManagerOptions options = {});
+  ~Manager();
+  Manager(const Manager&) = delete;
+  Manager& operator=(const Manager&) = delete;
+
+  // The manager does not own a component added by reference: it must outlive the manager's use.
+  void add(Component& c);
+  Component& add(std::unique_ptr<Component> c);
+  Component* find(std::string_view name) const noexcept;
+
+  // Binds client.required to server.provided by name and type. Throws ConnectError naming
+  // both components, both interfaces, the command and both types on any mismatch.
+  void connect(std::string_view client, std::string_view required, std::string_view server,
+               std::string_view provided);
+
+  // Real threads: every periodic task on its own SCHED_FIFO thread.
+  void start();
+  // Deterministic: all tasks in the calling thread on a simulated clock starting at `t0`.
+  void start_stepped(TimeNs t0 = 0);
+  // Stepped mode: runs every task due at the next instant, in period then insertion order.
+  TimeNs step();
+  // Stepped mode: steps until the simulated clock passes `t`.
+  void step_until(TimeNs t);
+  TimeNs simulated_time() const noexcept { return sim_time_; }
+
+  void stop();
+  ManagerState state() const noexcept { return state_; }
+
+  // What start() could not get (SCHED_FIFO, mlockall, cpu_dma_latency): empty if all.
+  const std::vector<std::string>& rt_warnings() const noexcept { return rt_warnings_; }
+  const std::vector<Component*>& components() const noexcept { return components_; }
+
+ private:
+  Component& get(std::string_view name) const;
+  void check_ready_to_start();
+  void prepare_components();
+
+  ManagerOptions options_;
+  std::vector<Component*> components_;
+  std::vector<std::unique_ptr<Component>> owned_;
+  std::vector<std::unique_ptr<Mailbox>> mailboxes_;
+  std::atomic<bool> running_{false};
+  ManagerState state_ = ManagerState::idle;
+  std::vector<std::string> rt_warnings_;
+  std::optional<rt::DmaLatencyHold> dma_hold_;
+  std::unique_ptr<LogDrain> log_drain_;
+  // Stepped mode.
+  struct Stepped {
+    Task* task;
+    TimeNs next;
+  };
+  std::vector<Stepped> stepped_;
+  TimeNs sim_time_ = 0;
+  TimeNs continuous_period_ = 0;  // how often continuous tasks run in stepped mode
+};
+
+}  // namespace saw

@@ -1,0 +1,86 @@
+// RequiredInterface: the named set of functions and event handlers a component needs.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "saw/functions.hpp"
+
+namespace saw {
+
+class Component;
+
+struct FunctionSlot {
+  std::string name;
+  FunctionBase* function;
+  Need need;
+};
+
+// Runs in the client's thread when the client is a task (queued), else in the emitter's.
+struct EventHandler {
+  std::string name;
+  Signature signature;
+  Need need;
+  std::function<void(const void*)> handle;
+  bool bound = false;
+
+  Invoker invoker() {
+    return {[](void* self, const void* arg) { static_cast<EventHandler*>(self)->handle(arg); }, this};
+  }
+};
+
+class RequiredInterface {
+ public:
+  static constexpr std::size_t default_event_capacity = 64;
+
+  RequiredInterface(Component& owner, std::string name) : owner_(owner), name_(std::move(name)) {}
+  RequiredInterface(const RequiredInterface&) = delete;
+  RequiredInterface& operator=(const RequiredInterface&) = delete;
+
+  const std::string& name() const noexcept { return name_; }
+  Component& owner() const noexcept { return owner_; }
+
+  // The function object lives in the client (usually a member); it must outlive the manager's use.
+  void add_function(std::string name, FunctionBase& function, Need need = Need::required);
+
+  template <class F>
+  void add_event_handler_void(std::string name, F&& f, Need need = Need::required) {
+    add_handler({std::move(name), {CommandKind::void_event}, need,
+                 [f = std::forward<F>(f)](const void*) { f(); }});
+  }
+  template <Plain T, class F>
+  void add_event_handler_write(std::string name, F&& f, Need need = Need::required) {
+    add_handler({std::move(name), {CommandKind::write_event, type_info_of<T>()}, need,
+                 [f = std::forward<F>(f)](const void* a) { f(*static_cast<const T*>(a)); }});
+  }
+
+  // Slots in the mailbox that carries this interface's events from its server.
+  void set_event_capacity(std::size_t n) { event_capacity_ = n; }
+  std::size_t event_capacity() const noexcept { return event_capacity_; }
+
+  const std::vector<FunctionSlot>& functions() const noexcept { return functions_; }
+  const std::vector<std::unique_ptr<EventHandler>>& handlers() const noexcept { return handlers_; }
+
+  // "server.provided" once connected, else empty.
+  const std::string& connected_to() const noexcept { return connected_to_; }
+  bool is_connected() const noexcept { return !connected_to_.empty(); }
+  void set_connected_to(std::string s) { connected_to_ = std::move(s); }
+
+  // True if any function or handler is required: such an interface must be connected to start.
+  bool has_required_members() const noexcept;
+
+ private:
+  void add_handler(EventHandler h);
+  void check_new_name(const std::string& name) const;
+
+  Component& owner_;
+  std::string name_;
+  std::vector<FunctionSlot> functions_;
+  std::vector<std::unique_ptr<EventHandler>> handlers_;
+  std::size_t event_capacity_ = default_event_capacity;
+  std::string connected_to_;
+};
+
+}  // namespace saw

@@ -1,0 +1,75 @@
+// SpscRing: a bounded single-producer single-consumer ring of fixed-size byte slots.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include "saw/cache_line.hpp"
+
+namespace saw {
+
+// Lamport's ring with cached indices (each side re-reads the other's index only when it
+// looks full or empty). Slot memory is owned by whichever side the indices give it to: the
+// producer until the release store of head_, the consumer after its acquire load.
+class SpscRing {
+ public:
+  static constexpr std::size_t slot_alignment = 16;
+
+  // capacity is rounded up to a power of two; slot_size up to a multiple of 16.
+  SpscRing(std::size_t capacity, std::size_t slot_size);
+  ~SpscRing();
+  SpscRing(const SpscRing&) = delete;
+  SpscRing& operator=(const SpscRing&) = delete;
+
+  std::size_t capacity() const noexcept { return mask_ + 1; }
+  std::size_t slot_size() const noexcept { return slot_size_; }
+
+  // Producer: a free slot to fill, or nullptr when the ring is full. Publish with commit().
+  std::byte* try_reserve() noexcept {
+    const auto head = head_.load(std::memory_order_relaxed);
+    if (head - cached_tail_ > mask_) {
+      cached_tail_ = tail_.load(std::memory_order_acquire);
+      if (head - cached_tail_ > mask_) return nullptr;
+    }
+    return slot(head);
+  }
+  void commit() noexcept {
+    head_.store(head_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
+  }
+
+  // Consumer: the oldest filled slot, or nullptr when empty. Release it with pop().
+  const std::byte* front() noexcept {
+    const auto tail = tail_.load(std::memory_order_relaxed);
+    if (tail == cached_head_) {
+      cached_head_ = head_.load(std::memory_order_acquire);
+      if (tail == cached_head_) return nullptr;
+    }
+    return slot(tail);
+  }
+  void pop() noexcept {
+    tail_.store(tail_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
+  }
+
+  // Approximate fill level, for statistics from any thread.
+  std::size_t size_approx() const noexcept {
+    return static_cast<std::size_t>(head_.load(std::memory_order_acquire) -
+                                    tail_.load(std::memory_order_acquire));
+  }
+
+ private:
+  std::byte* slot(std::uint64_t index) const noexcept {
+    return storage_ + (index & mask_) * slot_size_;
+  }
+
+  std::size_t mask_;
+  std::size_t slot_size_;
+  std::byte* storage_;
+
+  alignas(cache_line) std::atomic<std::uint64_t> head_{0};
+  std::uint64_t cached_tail_ = 0;  // producer's copy
+  alignas(cache_line) std::atomic<std::uint64_t> tail_{0};
+  std::uint64_t cached_head_ = 0;  // consumer's copy
+};
+
+}  // namespace saw

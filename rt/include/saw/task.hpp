@@ -1,0 +1,75 @@
+// Task: a component with its own thread, periodic (RT, SCHED_FIFO) or continuous.
+#pragma once
+
+#include <chrono>
+#include <thread>
+
+#include "saw/component.hpp"
+#include "saw/latency_histogram.hpp"
+#include "saw/pacer.hpp"
+
+namespace saw {
+
+struct TaskConfig {
+  std::chrono::nanoseconds period{0};  // zero: continuous (run() back to back)
+  int priority = 0;                    // SCHED_FIFO 1..99; 0: SCHED_OTHER
+  int cpu = -1;                        // pinned CPU, -1: any
+  std::size_t stack_prefault = 256 * 1024;
+  std::size_t histogram_bins = 1000;   // 1 µs each
+
+  static TaskConfig periodic(std::chrono::nanoseconds period, int priority = 80, int cpu = -1) {
+    return {period, priority, cpu};
+  }
+  static TaskConfig continuous() { return {}; }
+  bool is_periodic() const noexcept { return period.count() > 0; }
+};
+
+// Period and compute-time statistics; a column ("period_statistics") of the task's state table.
+struct TaskStatistics {
+  std::uint64_t cycles = 0;
+  std::uint64_t overruns = 0;        // cycles that ended after their next wake-up
+  std::uint64_t missed_periods = 0;  // wake-ups skipped to keep phase
+  TimeNs period = 0;
+  TimeNs last_wakeup_latency = 0, max_wakeup_latency = 0;
+  TimeNs last_compute = 0, max_compute = 0;
+  double mean_compute = 0;
+  TimeNs last_wakeup = 0;            // scheduled time of the last wake-up
+};
+
+class Task : public Component {
+ public:
+  Task(std::string name, TaskConfig config, std::size_t state_rows = StateTable::default_rows);
+  ~Task() override;
+
+  bool has_thread() const noexcept override { return true; }
+  const TaskConfig& config() const noexcept { return config_; }
+  const LatencyHistogram& wakeup_histogram() const noexcept { return histogram_; }
+  // The newest statistics row (readable from any thread).
+  TaskStatistics statistics() const noexcept;
+  StateColumn<TaskStatistics> statistics_column() const noexcept { return stats_column_; }
+
+  // For the manager.
+  void start_thread(TimeNs first_wakeup, const std::atomic<bool>& running);
+  void join();
+  // Stepped mode: one cycle at simulated time t.
+  void step(TimeNs t) noexcept;
+  // True once the thread has tried to set its scheduling; false if SCHED_FIFO was refused.
+  bool realtime_ok() const noexcept { return realtime_ok_.load(std::memory_order_acquire); }
+  bool thread_ready() const noexcept { return ready_.load(std::memory_order_acquire); }
+
+ private:
+  void thread_main(TimeNs first_wakeup, const std::atomic<bool>& running);
+  void periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) noexcept;
+  void continuous_loop(const std::atomic<bool>& running) noexcept;
+  void account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t overruns, std::uint64_t missed) noexcept;
+
+  TaskConfig config_;
+  LatencyHistogram histogram_;
+  TaskStatistics stats_{};
+  StateColumn<TaskStatistics> stats_column_;
+  std::thread thread_;
+  std::atomic<bool> ready_{false};
+  std::atomic<bool> realtime_ok_{false};
+};
+
+}  // namespace saw

@@ -1,0 +1,66 @@
+#include <stdexcept>
+
+#include "saw/component.hpp"
+#include "saw/provided_interface.hpp"
+#include "saw/required_interface.hpp"
+
+namespace saw {
+namespace {
+void check_setup(const Component& owner, const std::string& iface, const std::string& what) {
+  if (owner.lifecycle() != Lifecycle::constructed)
+    throw std::logic_error("component '" + owner.name() + "' interface '" + iface + "': '" + what +
+                           "' added after start");
+}
+}  // namespace
+
+void ProvidedInterface::check_new_name(const std::string& name) const {
+  check_setup(owner_, name_, name);
+  if (find_command(name) != nullptr || find_event(name) != nullptr)
+    throw std::invalid_argument("component '" + owner_.name() + "' provided interface '" + name_ +
+                                "': '" + name + "' added twice");
+}
+
+void ProvidedInterface::add(Command c) {
+  check_new_name(c.name);
+  commands_.push_back(std::make_unique<Command>(std::move(c)));
+}
+
+Command* ProvidedInterface::find_command(std::string_view name) const noexcept {
+  for (const auto& c : commands_)
+    if (c->name == name) return c.get();
+  return nullptr;
+}
+
+EventBase* ProvidedInterface::find_event(std::string_view name) const noexcept {
+  for (const auto& e : events_)
+    if (e->name() == name) return e.get();
+  return nullptr;
+}
+
+void RequiredInterface::check_new_name(const std::string& name) const {
+  check_setup(owner_, name_, name);
+  for (const auto& f : functions_)
+    if (f.name == name) throw std::invalid_argument("required interface '" + name_ + "': '" + name + "' added twice");
+  for (const auto& h : handlers_)
+    if (h->name == name) throw std::invalid_argument("required interface '" + name_ + "': '" + name + "' added twice");
+}
+
+void RequiredInterface::add_function(std::string name, FunctionBase& function, Need need) {
+  check_new_name(name);
+  functions_.push_back({std::move(name), &function, need});
+}
+
+void RequiredInterface::add_handler(EventHandler h) {
+  check_new_name(h.name);
+  handlers_.push_back(std::make_unique<EventHandler>(std::move(h)));
+}
+
+bool RequiredInterface::has_required_members() const noexcept {
+  for (const auto& f : functions_)
+    if (f.need == Need::required) return true;
+  for (const auto& h : handlers_)
+    if (h->need == Need::required) return true;
+  return false;
+}
+
+}  // namespace saw

@@ -1,0 +1,31 @@
+#include "saw/mailbox.hpp"
+
+namespace saw {
+
+Mailbox::Mailbox(std::string name, std::size_t capacity, std::size_t max_payload)
+    : name_(std::move(name)), ring_(capacity, header_size + max_payload) {}
+
+std::uint32_t Mailbox::add_target(Invoker target) {
+  targets_.push_back(target);
+  return static_cast<std::uint32_t>(targets_.size() - 1);
+}
+
+std::size_t Mailbox::drain() noexcept {
+  // Bounded: calls queued while draining wait for the next cycle, so a chatty producer
+  // cannot keep the consumer here forever.
+  const std::size_t limit = ring_.capacity();
+  std::size_t n = 0;
+  while (n < limit) {
+    const std::byte* slot = ring_.front();
+    if (slot == nullptr) break;
+    std::uint32_t target = 0;
+    std::memcpy(&target, slot, sizeof target);
+    targets_[target](slot + header_size);
+    ring_.pop();
+    ++n;
+  }
+  if (n != 0) executed_.store(executed_.load(std::memory_order_relaxed) + n, std::memory_order_relaxed);
+  return n;
+}
+
+}  // namespace saw

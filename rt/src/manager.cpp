@@ -1,0 +1,272 @@
+#include "saw/manager.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <thread>
+
+namespace saw {
+namespace {
+
+std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
+
+template <class List, class Name>
+std::string names_of(const List& list, Name name) {
+  std::string out;
+  for (const auto& x : list) out += (out.empty() ? "" : ", ") + quoted(name(x));
+  return out.empty() ? "none" : out;
+}
+
+}  // namespace
+
+Manager::Manager(ManagerOptions options) : options_(options) {}
+
+Manager::~Manager() { stop(); }
+
+void Manager::add(Component& c) {
+  if (state_ != ManagerState::idle) throw ConnectError("add " + quoted(c.name()) + ": manager already started");
+  if (find(c.name()) != nullptr) throw ConnectError("add: a component named " + quoted(c.name()) + " exists already");
+  components_.push_back(&c);
+}
+
+Component& Manager::add(std::unique_ptr<Component> c) {
+  add(*c);
+  owned_.push_back(std::move(c));
+  return *owned_.back();
+}
+
+Component* Manager::find(std::string_view name) const noexcept {
+  for (auto* c : components_)
+    if (c->name() == name) return c;
+  return nullptr;
+}
+
+Component& Manager::get(std::string_view name) const {
+  if (auto* c = find(name)) return *c;
+  throw ConnectError("no component named " + quoted(name) + " (components: " +
+                     names_of(components_, [](const Component* c) { return c->name(); }) + ")");
+}
+
+void Manager::connect(std::string_view client_name, std::string_view required_name,
+                      std::string_view server_name, std::string_view provided_name) {
+  const std::string what = "connect " + quoted(client_name) + "." + quoted(required_name) + " -> " +
+                           quoted(server_name) + "." + quoted(provided_name) + ": ";
+  if (state_ != ManagerState::idle) throw ConnectError(what + "the manager has already started");
+  Component& client = get(client_name);
+  Component& server = get(server_name);
+  RequiredInterface* req = client.required(required_name);
+  if (req == nullptr)
+    throw ConnectError(what + "component " + quoted(client_name) + " has no required interface " +
+                       quoted(required_name) + " (it has " +
+                       names_of(client.required_interfaces(), [](const auto& r) { return r->name(); }) + ")");
+  ProvidedInterface* prov = server.provided(provided_name);
+  if (prov == nullptr)
+    throw ConnectError(what + "component " + quoted(server_name) + " has no provided interface " +
+                       quoted(provided_name) + " (it has " +
+                       names_of(server.provided_interfaces(), [](const auto& p) { return p->name(); }) + ")");
+  if (req->is_connected()) throw ConnectError(what + "the required interface is already connected to " + req->connected_to());
+
+  // Check everything first, so a failed connect changes nothing; report every problem at once.
+  std::string errors;
+  const auto check = [&](const std::string& name, const Signature& want, Need need, const Signature* have) {
+    if (have == nullptr) {
+      if (need == Need::required)
+        errors += "\n  " + quoted(name) + ": the client requires " + to_string(want) + ", the server provides no such " +
+                  (is_event(want.kind) ? "event" : "command");
+    } else if (!(*have == want)) {
+      errors += "\n  " + quoted(name) + ": the client expects " + to_string(want) + ", the server provides " +
+                to_string(*have);
+    }
+  };
+  for (const auto& f : req->functions()) {
+    const Command* c = prov->find_command(f.name);
+    check(f.name, f.function->signature(), f.need, c ? &c->signature : nullptr);
+  }
+  for (const auto& h : req->handlers()) {
+    const EventBase* e = prov->find_event(h->name);
+    check(h->name, h->signature, h->need, e ? &e->signature() : nullptr);
+  }
+  if (!errors.empty()) throw ConnectError(what + "interfaces do not match:" + errors);
+
+  // Commands: queued into a mailbox the server drains, unless the server has no thread.
+  std::size_t max_arg = 0;
+  bool any_queued = false;
+  for (const auto& f : req->functions()) {
+    const Command* c = prov->find_command(f.name);
+    if (c == nullptr) continue;
+    if (c->signature.kind == CommandKind::write || c->signature.kind == CommandKind::void_command) {
+      any_queued = true;
+      max_arg = std::max(max_arg, c->signature.arg.size);
+    }
+  }
+  Mailbox* commands = nullptr;
+  if (any_queued && server.has_thread()) {
+    mailboxes_.push_back(std::make_unique<Mailbox>(std::string(client_name) + "." + std::string(required_name) +
+                                                       " -> " + std::string(server_name) + "." + std::string(provided_name),
+                                                   prov->mailbox_capacity(), max_arg));
+    commands = mailboxes_.back().get();
+    server.add_inbound(commands);
+  }
+  for (const auto& f : req->functions()) {
+    Command* c = prov->find_command(f.name);
+    if (c == nullptr) continue;
+    FunctionBinding b;
+    if (c->signature.kind == CommandKind::read || c->signature.kind == CommandKind::qualified_read) {
+      b.command = c;
+    } else if (commands != nullptr) {
+      b.mailbox = commands;
+      b.target = commands->add_target(c->invoker());
+    } else {
+      b.direct = c->invoker();
+    }
+    f.function->bind(b);
+  }
+
+  // Events: queued into a mailbox the client drains, unless the client has no thread.
+  max_arg = 0;
+  bool any_events = false;
+  for (const auto& h : req->handlers())
+    if (prov->find_event(h->name) != nullptr) {
+      any_events = true;
+      max_arg = std::max(max_arg, h->signature.arg.size);
+    }
+  Mailbox* events = nullptr;
+  if (any_events && client.has_thread()) {
+    mailboxes_.push_back(std::make_unique<Mailbox>(std::string(server_name) + "." + std::string(provided_name) +
+                                                       " events -> " + std::string(client_name) + "." +
+                                                       std::string(required_name),
+                                                   req->event_capacity(), max_arg));
+    events = mailboxes_.back().get();
+    client.add_inbound(events);
+  }
+  for (const auto& h : req->handlers()) {
+    EventBase* e = prov->find_event(h->name);
+    if (e == nullptr) continue;
+    Observer o;
+    if (events != nullptr) {
+      o.mailbox = events;
+      o.target = events->add_target(h->invoker());
+    } else {
+      o.direct = h->invoker();
+    }
+    e->add_observer(o);
+    h->bound = true;
+  }
+  req->set_connected_to(std::string(server_name) + "." + std::string(provided_name));
+}
+
+void Manager::check_ready_to_start() {
+  if (state_ != ManagerState::idle) throw ConnectError("start: the manager has already started");
+  std::string errors;
+  for (auto* c : components_)
+    for (const auto& r : c->required_interfaces())
+      if (!r->is_connected() && r->has_required_members())
+        errors += "\n  " + quoted(c->name()) + "." + quoted(r->name()) + " is not connected";
+  if (!errors.empty()) throw ConnectError("start: required interfaces not connected:" + errors);
+}
+
+void Manager::prepare_components() {
+  for (auto* c : components_) {
+    c->state_table().finalize();
+    c->startup();
+    c->set_lifecycle(Lifecycle::ready);
+  }
+}
+
+void Manager::start() {
+  check_ready_to_start();
+  std::vector<Task*> tasks;
+  bool any_rt = false;
+  for (auto* c : components_)
+    if (auto* t = dynamic_cast<Task*>(c)) {
+      tasks.push_back(t);
+      any_rt = any_rt || t->config().priority > 0;
+    }
+  if (options_.drain_log) log_drain_ = std::make_unique<LogDrain>();
+  if (any_rt && options_.lock_memory)
+    if (auto e = rt::lock_memory(); !e.empty()) rt_warnings_.push_back(e);
+  if (any_rt && options_.hold_dma_latency) {
+    dma_hold_.emplace();
+    if (!dma_hold_->error().empty()) rt_warnings_.push_back(dma_hold_->error());
+  }
+  prepare_components();
+  running_.store(true, std::memory_order_release);
+  // All periodic tasks share one phase: their first wake-up is on a common grid.
+  const TimeNs first = monotonic_now() + 2'000'000;
+  for (auto* c : components_) c->set_lifecycle(Lifecycle::active);
+  for (auto* t : tasks) t->start_thread(first, running_);
+  for (auto* t : tasks)
+    while (!t->thread_ready()) std::this_thread::yield();  // start-up only, not an RT path
+  for (auto* t : tasks)
+    if (t->config().priority > 0 && !t->realtime_ok())
+      rt_warnings_.push_back("task '" + t->name() + "' runs without SCHED_FIFO priority " +
+                             std::to_string(t->config().priority) + " or CPU affinity (no permission?)");
+  if (!rt_warnings_.empty()) {
+    std::string msg = "sawrt WARNING: running without full real-time guarantees:";
+    for (const auto& w : rt_warnings_) msg += "\n  - " + w;
+    std::fprintf(stderr, "%s\n  (run as root, or grant rtprio and memlock limits; see docs/deploy.md)\n", msg.c_str());
+  }
+  state_ = ManagerState::running;
+}
+
+void Manager::start_stepped(TimeNs t0) {
+  check_ready_to_start();
+  prepare_components();
+  sim_time_ = t0;
+  stepped_.clear();
+  for (auto* c : components_) {
+    c->set_lifecycle(Lifecycle::active);
+    if (auto* t = dynamic_cast<Task*>(c)) stepped_.push_back({t, t0});
+  }
+  // Shorter periods first; among equals, the order the tasks were added.
+  std::stable_sort(stepped_.begin(), stepped_.end(), [](const Stepped& a, const Stepped& b) {
+    return a.task->config().period < b.task->config().period;
+  });
+  TimeNs fastest = 0;
+  for (const auto& s : stepped_)
+    if (s.task->config().is_periodic() && (fastest == 0 || s.task->config().period.count() < fastest))
+      fastest = s.task->config().period.count();
+  if (fastest == 0) fastest = 1'000'000;
+  continuous_period_ = fastest;
+  state_ = ManagerState::stepping;
+}
+
+TimeNs Manager::step() {
+  if (state_ != ManagerState::stepping) throw std::logic_error("step: the manager is not in stepped mode");
+  TimeNs next = INT64_MAX;
+  for (const auto& s : stepped_) next = std::min(next, s.next);
+  if (next == INT64_MAX) return sim_time_;
+  sim_time_ = next;
+  for (auto& s : stepped_) {
+    if (s.next != next) continue;
+    s.task->step(next);
+    const TimeNs period = s.task->config().is_periodic() ? s.task->config().period.count() : continuous_period_;
+    s.next += period;
+  }
+  return sim_time_;
+}
+
+void Manager::step_until(TimeNs t) {
+  while (true) {
+    TimeNs next = INT64_MAX;
+    for (const auto& s : stepped_) next = std::min(next, s.next);
+    if (next > t || next == INT64_MAX) break;
+    step();
+  }
+  sim_time_ = std::max(sim_time_, t);
+}
+
+void Manager::stop() {
+  if (state_ != ManagerState::running && state_ != ManagerState::stepping) return;
+  running_.store(false, std::memory_order_release);
+  for (auto* c : components_)
+    if (auto* t = dynamic_cast<Task*>(c)) t->join();
+  for (auto* c : components_) {
+    c->cleanup();
+    c->set_lifecycle(Lifecycle::finished);
+  }
+  dma_hold_.reset();
+  log_drain_.reset();
+  state_ = ManagerState::stopped;
+}
+
+}  // namespace saw

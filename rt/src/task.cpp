@@ -1,0 +1,98 @@
+#include "saw/task.hpp"
+
+#include <cerrno>
+#include <ctime>
+#include <stdexcept>
+
+#include "saw/rt_context.hpp"
+#include "saw/rt_thread.hpp"
+
+namespace saw {
+
+Task::Task(std::string name, TaskConfig config, std::size_t state_rows)
+    : Component(std::move(name), state_rows), config_(config), histogram_(config.histogram_bins) {
+  if (config_.period.count() < 0) throw std::invalid_argument("task '" + this->name() + "': negative period");
+  if (config_.priority < 0 || config_.priority > 99)
+    throw std::invalid_argument("task '" + this->name() + "': priority must be 0..99");
+  stats_.period = config_.period.count();
+  stats_column_ = state_table().add_column("period_statistics", &stats_);
+  provide("task").add_command_read("period_statistics", stats_column_);
+}
+
+Task::~Task() { join(); }
+
+TaskStatistics Task::statistics() const noexcept {
+  TaskStatistics s;
+  if (state_table().read_latest(stats_column_, s) != Status::ok) return {};
+  return s;
+}
+
+void Task::start_thread(TimeNs first_wakeup, const std::atomic<bool>& running) {
+  thread_ = std::thread([this, first_wakeup, &running] { thread_main(first_wakeup, running); });
+}
+
+void Task::join() {
+  if (thread_.joinable()) thread_.join();
+}
+
+void Task::thread_main(TimeNs first_wakeup, const std::atomic<bool>& running) {
+  bool rt_ok = true;
+  if (config_.priority > 0 && !rt::set_fifo(config_.priority).empty()) rt_ok = false;
+  if (config_.cpu >= 0 && !rt::set_affinity(config_.cpu).empty()) rt_ok = false;
+  rt::prefault_stack(config_.stack_prefault);
+  realtime_ok_.store(rt_ok, std::memory_order_release);
+  ready_.store(true, std::memory_order_release);
+  if (config_.is_periodic())
+    periodic_loop(first_wakeup, running);
+  else
+    continuous_loop(running);
+}
+
+void Task::account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t overruns,
+                   std::uint64_t missed) noexcept {
+  const TimeNs compute = end - woke;
+  ++stats_.cycles;
+  stats_.overruns = overruns;
+  stats_.missed_periods = missed;
+  stats_.last_compute = compute;
+  if (compute > stats_.max_compute) stats_.max_compute = compute;
+  stats_.mean_compute += (static_cast<double>(compute) - stats_.mean_compute) / static_cast<double>(stats_.cycles);
+  stats_.last_wakeup = scheduled;
+}
+
+void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) noexcept {
+  RtContextScope rt_scope;
+  Pacer pacer(first_wakeup, config_.period.count());
+  while (running.load(std::memory_order_acquire)) {
+    const TimeNs scheduled = pacer.next_wakeup();
+    const timespec ts = to_timespec(scheduled);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    const TimeNs woke = monotonic_now();
+    const TimeNs latency = woke - scheduled;
+    histogram_.record(latency);
+    stats_.last_wakeup_latency = latency;
+    if (latency > stats_.max_wakeup_latency) stats_.max_wakeup_latency = latency;
+    cycle(woke);
+    const TimeNs end = monotonic_now();
+    pacer.finish_cycle(end);
+    account(scheduled, woke, end, pacer.overruns(), pacer.missed_periods());
+  }
+}
+
+void Task::continuous_loop(const std::atomic<bool>& running) noexcept {
+  while (running.load(std::memory_order_acquire)) {
+    const TimeNs woke = monotonic_now();
+    cycle(woke);
+    account(woke, woke, monotonic_now(), 0, 0);
+  }
+}
+
+void Task::step(TimeNs t) noexcept {
+  RtContextScope rt_scope;
+  stats_.last_wakeup_latency = 0;
+  cycle(t);
+  account(t, t, t, 0, 0);
+}
+
+}  // namespace saw

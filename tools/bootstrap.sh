@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Installs everything sawrt needs on Debian 12; idempotent and quick when all is present.
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cache="$root/.cache"
+
+apt_packages=(
+  build-essential cmake ninja-build pkg-config git python3 python3-venv python3-pip
+  libeigen3-dev liborocos-kdl-dev libusb-1.0-0-dev
+  libfastrtps-dev libfastcdr-dev fastddsgen
+  libyaml-cpp-dev libcli11-dev libfmt-dev
+  libgtest-dev libbenchmark-dev rt-tests clang-format
+)
+
+missing=()
+for p in "${apt_packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if ((${#missing[@]})); then
+  echo "bootstrap: installing from Debian: ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# Ruckig: pinned sdist from PyPI, checksum verified, unpacked into an ignored cache.
+ruckig_version=0.19.4
+ruckig_sha256=71d003bf0ff9aa0031d4520b0290a5ffa6458149f5afce8be3ed6d6fba49ea64
+ruckig_dir="$cache/ruckig-$ruckig_version"
+if [ ! -f "$ruckig_dir/CMakeLists.txt" ]; then
+  mkdir -p "$cache"
+  tarball="$cache/ruckig-$ruckig_version.tar.gz"
+  if [ ! -f "$tarball" ]; then
+    echo "bootstrap: fetching ruckig==$ruckig_version sdist from PyPI"
+    tmp=$(mktemp -d)
+    python3 -m pip download --quiet --no-binary :all: --no-deps "ruckig==$ruckig_version" -d "$tmp"
+    mv "$tmp/ruckig-$ruckig_version.tar.gz" "$tarball"
+    rm -rf "$tmp"
+  fi
+  echo "$ruckig_sha256  $tarball" | sha256sum --check --quiet ||
+    { echo "bootstrap: checksum mismatch for $tarball" >&2; rm -f "$tarball"; exit 1; }
+  tar -xzf "$tarball" -C "$cache"
+fi
