@@ -197,9 +197,7 @@ void Manager::start() {
   for (auto* t : tasks)
     while (!t->thread_ready()) std::this_thread::yield();  // start-up only, not an RT path
   for (auto* t : tasks)
-    if (t->config().priority > 0 && !t->realtime_ok())
-      rt_warnings_.push_back("task '" + t->name() + "' runs without SCHED_FIFO priority " +
-                             std::to_string(t->config().priority) + " or CPU affinity (no permission?)");
+    if (!t->rt_setup_error().empty()) rt_warnings_.push_back("task '" + t->name() + "': " + t->rt_setup_error());
   if (!rt_warnings_.empty()) {
     std::string msg = "sawrt WARNING: running without full real-time guarantees:";
     for (const auto& w : rt_warnings_) msg += "\n  - " + w;

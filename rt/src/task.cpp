@@ -36,11 +36,12 @@ void Task::join() {
 }
 
 void Task::thread_main(TimeNs first_wakeup, const std::atomic<bool>& running) {
-  bool rt_ok = true;
-  if (config_.priority > 0 && !rt::set_fifo(config_.priority).empty()) rt_ok = false;
-  if (config_.cpu >= 0 && !rt::set_affinity(config_.cpu).empty()) rt_ok = false;
+  std::string error;
+  if (config_.priority > 0) error = rt::set_fifo(config_.priority);
+  if (config_.cpu >= 0)
+    if (auto e = rt::set_affinity(config_.cpu); !e.empty()) error += (error.empty() ? "" : "; ") + e;
   rt::prefault_stack(config_.stack_prefault);
-  realtime_ok_.store(rt_ok, std::memory_order_release);
+  rt_setup_error_ = std::move(error);
   ready_.store(true, std::memory_order_release);
   if (config_.is_periodic())
     periodic_loop(first_wakeup, running);

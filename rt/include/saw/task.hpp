@@ -53,9 +53,9 @@ class Task : public Component {
   void join();
   // Stepped mode: one cycle at simulated time t.
   void step(TimeNs t) noexcept;
-  // True once the thread has tried to set its scheduling; false if SCHED_FIFO was refused.
-  bool realtime_ok() const noexcept { return realtime_ok_.load(std::memory_order_acquire); }
   bool thread_ready() const noexcept { return ready_.load(std::memory_order_acquire); }
+  // Once thread_ready(): what the thread could not get (SCHED_FIFO, affinity), empty if all.
+  const std::string& rt_setup_error() const noexcept { return rt_setup_error_; }
 
  private:
   void thread_main(TimeNs first_wakeup, const std::atomic<bool>& running);
@@ -69,7 +69,7 @@ class Task : public Component {
   StateColumn<TaskStatistics> stats_column_;
   std::thread thread_;
   std::atomic<bool> ready_{false};
-  std::atomic<bool> realtime_ok_{false};
+  std::string rt_setup_error_;  // written by the thread before ready_ (release)
 };
 
 }  // namespace saw
