@@ -190,12 +190,17 @@ void Manager::start() {
   }
   prepare_components();
   running_.store(true, std::memory_order_release);
-  // All periodic tasks share one phase: their first wake-up is on a common grid.
-  const TimeNs first = monotonic_now() + 2'000'000;
+  first_wakeup_.store(0, std::memory_order_relaxed);
   for (auto* c : components_) c->set_lifecycle(Lifecycle::active);
-  for (auto* t : tasks) t->start_thread(first, running_);
+  for (auto* t : tasks) t->start_thread(first_wakeup_, running_);
   for (auto* t : tasks)
     while (!t->thread_ready()) std::this_thread::yield();  // start-up only, not an RT path
+  // Every periodic task shares one phase: the first wake-up is one period after all are set up.
+  TimeNs lead = 1'000'000;
+  for (auto* t : tasks)
+    if (t->config().is_periodic()) lead = std::max<TimeNs>(lead, t->config().period.count());
+  first_wakeup_.store(monotonic_now() + lead, std::memory_order_release);
+  first_wakeup_.notify_all();
   for (auto* t : tasks)
     if (!t->rt_setup_error().empty()) rt_warnings_.push_back("task '" + t->name() + "': " + t->rt_setup_error());
   if (!rt_warnings_.empty()) {

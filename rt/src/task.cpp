@@ -27,15 +27,15 @@ TaskStatistics Task::statistics() const noexcept {
   return s;
 }
 
-void Task::start_thread(TimeNs first_wakeup, const std::atomic<bool>& running) {
-  thread_ = std::thread([this, first_wakeup, &running] { thread_main(first_wakeup, running); });
+void Task::start_thread(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running) {
+  thread_ = std::thread([this, &first_wakeup, &running] { thread_main(first_wakeup, running); });
 }
 
 void Task::join() {
   if (thread_.joinable()) thread_.join();
 }
 
-void Task::thread_main(TimeNs first_wakeup, const std::atomic<bool>& running) {
+void Task::thread_main(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running) {
   std::string error;
   if (config_.priority > 0) error = rt::set_fifo(config_.priority);
   if (config_.cpu >= 0)
@@ -43,8 +43,10 @@ void Task::thread_main(TimeNs first_wakeup, const std::atomic<bool>& running) {
   rt::prefault_stack(config_.stack_prefault);
   rt_setup_error_ = std::move(error);
   ready_.store(true, std::memory_order_release);
+  // Wait (not an RT path yet) until every task is set up and the common first wake-up is known.
+  first_wakeup.wait(0, std::memory_order_acquire);
   if (config_.is_periodic())
-    periodic_loop(first_wakeup, running);
+    periodic_loop(first_wakeup.load(std::memory_order_acquire), running);
   else
     continuous_loop(running);
 }

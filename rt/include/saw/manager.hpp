@@ -73,6 +73,7 @@ class Manager {
   std::vector<std::unique_ptr<Component>> owned_;
   std::vector<std::unique_ptr<Mailbox>> mailboxes_;
   std::atomic<bool> running_{false};
+  std::atomic<TimeNs> first_wakeup_{0};
   ManagerState state_ = ManagerState::idle;
   std::vector<std::string> rt_warnings_;
   std::optional<rt::DmaLatencyHold> dma_hold_;

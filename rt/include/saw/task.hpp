@@ -48,8 +48,9 @@ class Task : public Component {
   TaskStatistics statistics() const noexcept;
   StateColumn<TaskStatistics> statistics_column() const noexcept { return stats_column_; }
 
-  // For the manager.
-  void start_thread(TimeNs first_wakeup, const std::atomic<bool>& running);
+  // For the manager: the thread sets itself up, reports thread_ready(), then waits until
+  // `first_wakeup` is non-zero and runs until `running` is false.
+  void start_thread(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running);
   void join();
   // Stepped mode: one cycle at simulated time t.
   void step(TimeNs t) noexcept;
@@ -58,7 +59,7 @@ class Task : public Component {
   const std::string& rt_setup_error() const noexcept { return rt_setup_error_; }
 
  private:
-  void thread_main(TimeNs first_wakeup, const std::atomic<bool>& running);
+  void thread_main(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running);
   void periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) noexcept;
   void continuous_loop(const std::atomic<bool>& running) noexcept;
   void account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t overruns, std::uint64_t missed) noexcept;
