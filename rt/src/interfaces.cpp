@@ -13,15 +13,15 @@ void check_setup(const Component& owner, const std::string& iface, const std::st
 }
 }  // namespace
 
-void ProvidedInterface::check_new_name(const std::string& name) const {
+void ProvidedInterface::check_new_name(const std::string& name, bool event) const {
   check_setup(owner_, name_, name);
-  if (find_command(name) != nullptr || find_event(name) != nullptr)
+  if (event ? find_event(name) != nullptr : find_command(name) != nullptr)
     throw std::invalid_argument("component '" + owner_.name() + "' provided interface '" + name_ +
                                 "': '" + name + "' added twice");
 }
 
 void ProvidedInterface::add(Command c) {
-  check_new_name(c.name);
+  check_new_name(c.name, false);
   commands_.push_back(std::make_unique<Command>(std::move(c)));
 }
 
@@ -37,21 +37,27 @@ EventBase* ProvidedInterface::find_event(std::string_view name) const noexcept {
   return nullptr;
 }
 
-void RequiredInterface::check_new_name(const std::string& name) const {
+void RequiredInterface::check_new_name(const std::string& name, bool handler) const {
   check_setup(owner_, name_, name);
-  for (const auto& f : functions_)
-    if (f.name == name) throw std::invalid_argument("required interface '" + name_ + "': '" + name + "' added twice");
-  for (const auto& h : handlers_)
-    if (h->name == name) throw std::invalid_argument("required interface '" + name_ + "': '" + name + "' added twice");
+  const auto twice = [&] {
+    throw std::invalid_argument("component '" + owner_.name() + "' required interface '" + name_ + "': '" + name +
+                                "' added twice");
+  };
+  if (!handler)
+    for (const auto& f : functions_)
+      if (f.name == name) twice();
+  if (handler)
+    for (const auto& h : handlers_)
+      if (h->name == name) twice();
 }
 
 void RequiredInterface::add_function(std::string name, FunctionBase& function, Need need) {
-  check_new_name(name);
+  check_new_name(name, false);
   functions_.push_back({std::move(name), &function, need});
 }
 
 void RequiredInterface::add_handler(EventHandler h) {
-  check_new_name(h.name);
+  check_new_name(h.name, true);
   handlers_.push_back(std::make_unique<EventHandler>(std::move(h)));
 }
 

@@ -157,10 +157,12 @@ class ProvidedInterface {
 
  private:
   void add(Command c);
-  void check_new_name(const std::string& name) const;
+  // Commands and events are separate namespaces (CRTK has both a read and an event
+  // `operating_state`); within each, a name is unique.
+  void check_new_name(const std::string& name, bool event) const;
   template <class E>
   E& add_event(std::string name) {
-    check_new_name(name);
+    check_new_name(name, true);
     auto e = std::make_unique<E>(std::move(name));
     E& ref = *e;
     events_.push_back(std::move(e));

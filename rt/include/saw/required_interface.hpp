@@ -73,7 +73,7 @@ class RequiredInterface {
 
  private:
   void add_handler(EventHandler h);
-  void check_new_name(const std::string& name) const;
+  void check_new_name(const std::string& name, bool handler) const;
 
   Component& owner_;
   std::string name_;

@@ -1,0 +1,92 @@
+// CollaborativeControlForce: the paper's teleoperation task between a master and a slave device.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "saw/crtk.hpp"
+#include "saw/task.hpp"
+#include "saw/teleop/offset_trajectory.hpp"
+#include "saw/teleop/teleop_law.hpp"
+
+namespace saw::teleop {
+
+struct Prediction {
+  bool enabled = false;
+  double horizon = 0.0;  // s: how far ahead the local model predicts (the link's delay)
+};
+
+struct TeleopConfig {
+  Scale scale;
+  Gains gains;
+  ForceLimits limits;
+  bool ratchet = true;
+  OffsetLimits offset_limits;
+  Prediction prediction;
+  double stale_timeout = 0.01;  // s: an input older than this is a fault
+  // Aligned mode: after enabling, the slave offset travels (jerk-limited) from the value that
+  // cancels the error to `slave_offset`, pulling the slave smoothly into the configured pose.
+  bool align = false;
+  Vec3 slave_offset{};
+  bool start_enabled = true;
+};
+
+enum class FaultReason : std::uint8_t { none, master_stale, slave_stale, master_missing, slave_missing };
+
+// Required interfaces "master" and "slave" (CRTK: measured_cp, measured_cv, servo_cf; optional
+// clutch event on the master). Provided interface "teleop": state_command, set_scale,
+// set_gains, set_force_limits, set_prediction, set_slave_offset, and its state as read commands.
+class CollaborativeControlForce : public Task {
+ public:
+  CollaborativeControlForce(std::string name, TaskConfig task, TeleopConfig config);
+
+  void run() override;
+
+  // Readable from the owning thread or, through the state table, from any thread.
+  OperatingStateValue operating_state() const noexcept { return state_.state; }
+  FaultReason fault_reason() const noexcept { return fault_; }
+  std::uint64_t rejected_commands() const noexcept { return rejected_; }
+  std::uint64_t refused_sends() const noexcept { return refused_sends_; }
+
+  // State-table columns (for tests and the recorder).
+  struct Columns {
+    StateColumn<OperatingState> operating_state;
+    StateColumn<Vec3> master_force, slave_force, master_error, slave_error, slave_offset;
+    StateColumn<double> tracking_error;
+    StateColumn<bool> ratcheting, clutched;
+  };
+  const Columns& columns() const noexcept { return columns_; }
+
+ private:
+  struct Input {
+    Eigen::Vector3d position, velocity;
+  };
+  bool read_inputs(Input& master, Input& slave) noexcept;
+  void handle_state_command(StateCommand c) noexcept;
+  void set_operating_state(OperatingStateValue s) noexcept;
+  void send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept;
+  Eigen::Vector3d predict(const Input& in) const noexcept;
+  void snap_offsets(const Input& master, const Input& slave) noexcept;
+
+  TeleopConfig config_;
+  OffsetTrajectory slave_offset_;
+  Eigen::Vector3d master_offset_ = Eigen::Vector3d::Zero();
+  bool clutched_ = false, ratcheting_ = false, snap_pending_ = true;
+  bool rescale_pending_ = false;
+  Scale previous_scale_;
+  FaultReason fault_ = FaultReason::none;
+  std::uint64_t rejected_ = 0, refused_sends_ = 0;
+
+  // State-table sources.
+  OperatingState state_{};
+  Vec3 master_force_{}, slave_force_{}, master_error_{}, slave_error_{}, slave_offset_value_{};
+  double tracking_error_ = 0;
+  Columns columns_;
+
+  // Required: master and slave.
+  FunctionRead<Pose> master_cp_, slave_cp_;
+  FunctionRead<Twist> master_cv_, slave_cv_;
+  FunctionWrite<Wrench> master_cf_, slave_cf_;
+  EventWrite<OperatingState>* state_event_ = nullptr;
+};
+
+}  // namespace saw::teleop

@@ -1,0 +1,205 @@
+#include "saw/teleop/collaborative_control_force.hpp"
+
+#include <cmath>
+
+namespace saw::teleop {
+namespace {
+
+Eigen::Vector3d to_eigen(const Vec3& v) { return {v[0], v[1], v[2]}; }
+Vec3 to_vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+bool finite(double x) { return std::isfinite(x); }
+double seconds(const TaskConfig& t) { return static_cast<double>(t.period.count()) * 1e-9; }
+
+}  // namespace
+
+CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfig task, TeleopConfig config)
+    : Task(std::move(name), task),
+      config_(config),
+      slave_offset_(seconds(task) > 0 ? seconds(task) : 0.001, config.offset_limits) {
+  auto& st = state_table();
+  columns_.operating_state = st.add_column("operating_state", &state_);
+  columns_.master_force = st.add_column("master_force", &master_force_);
+  columns_.slave_force = st.add_column("slave_force", &slave_force_);
+  columns_.master_error = st.add_column("master_error", &master_error_);
+  columns_.slave_error = st.add_column("slave_error", &slave_error_);
+  columns_.slave_offset = st.add_column("slave_offset", &slave_offset_value_);
+  columns_.tracking_error = st.add_column("tracking_error", &tracking_error_);
+  columns_.ratcheting = st.add_column("ratcheting", &ratcheting_);
+  columns_.clutched = st.add_column("clutched", &clutched_);
+
+  auto& p = provide("teleop");
+  p.add_command_read("operating_state", columns_.operating_state);
+  p.add_command_read("master_force", columns_.master_force);
+  p.add_command_read("slave_force", columns_.slave_force);
+  p.add_command_read("tracking_error", columns_.tracking_error);
+  p.add_command_write<StateCommand>("state_command", [this](const StateCommand& c) { handle_state_command(c); });
+  p.add_command_write<double>("set_scale", [this](const double& s) {
+    Scale next = config_.scale;
+    next.scale = s;
+    if (!next.valid()) return void(++rejected_);
+    if (!rescale_pending_) previous_scale_ = config_.scale;
+    config_.scale = next;
+    rescale_pending_ = true;  // re-express the offset so the error (and force) do not jump
+  });
+  p.add_command_write<Gains>("set_gains", [this](const Gains& g) {
+    if (!finite(g.master) || !finite(g.slave) || g.master < 0 || g.slave < 0) return void(++rejected_);
+    config_.gains = g;
+  });
+  p.add_command_write<ForceLimits>("set_force_limits", [this](const ForceLimits& l) {
+    if (!finite(l.master) || !finite(l.slave) || l.master < 0 || l.slave < 0) return void(++rejected_);
+    config_.limits = l;
+  });
+  p.add_command_write<Prediction>("set_prediction", [this](const Prediction& pr) {
+    if (!finite(pr.horizon) || pr.horizon < 0 || pr.horizon > 1.0) return void(++rejected_);
+    config_.prediction = pr;
+  });
+  p.add_command_write<Vec3>("set_slave_offset", [this](const Vec3& o) {
+    if (!finite(o[0]) || !finite(o[1]) || !finite(o[2])) return void(++rejected_);
+    config_.slave_offset = o;
+    config_.align = true;
+    slave_offset_.set_target(to_eigen(o));
+  });
+  state_event_ = &p.add_event_write<OperatingState>("operating_state");
+
+  for (auto [iface, cp, cv, cf] : {std::tuple{"master", &master_cp_, &master_cv_, &master_cf_},
+                                   std::tuple{"slave", &slave_cp_, &slave_cv_, &slave_cf_}}) {
+    auto& r = require(iface);
+    r.add_function("measured_cp", *cp);
+    r.add_function("measured_cv", *cv);
+    r.add_function("servo_cf", *cf);
+  }
+  required("master")->add_event_handler_write<ButtonEvent>(
+      "clutch", [this](const ButtonEvent& b) { clutched_ = b.pressed; }, Need::optional);
+  state_.state = config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
+}
+
+void CollaborativeControlForce::set_operating_state(OperatingStateValue s) noexcept {
+  if (state_.state == s) return;
+  state_.state = s;
+  (void)(*state_event_)(state_);
+}
+
+void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
+  switch (c) {
+    case StateCommand::enable:
+      fault_ = FaultReason::none;
+      snap_pending_ = true;
+      set_operating_state(OperatingStateValue::enabled);
+      break;
+    case StateCommand::disable: set_operating_state(OperatingStateValue::disabled); break;
+    case StateCommand::pause:
+      if (state_.state == OperatingStateValue::enabled) set_operating_state(OperatingStateValue::paused);
+      break;
+    case StateCommand::resume:
+      if (state_.state == OperatingStateValue::paused) {
+        snap_pending_ = true;
+        set_operating_state(OperatingStateValue::enabled);
+      }
+      break;
+    case StateCommand::home: break;  // nothing to home: the devices home themselves
+  }
+}
+
+bool CollaborativeControlForce::read_inputs(Input& master, Input& slave) noexcept {
+  const auto stale_ns = static_cast<TimeNs>(config_.stale_timeout * 1e9);
+  for (auto [in, cp, cv, missing, stale] :
+       {std::tuple{&master, &master_cp_, &master_cv_, FaultReason::master_missing, FaultReason::master_stale},
+        std::tuple{&slave, &slave_cp_, &slave_cv_, FaultReason::slave_missing, FaultReason::slave_stale}}) {
+    Pose pose;
+    Twist twist;
+    RowStamp stamp;
+    if ((*cp)(pose, stamp) != Status::ok || (*cv)(twist) != Status::ok) {
+      fault_ = missing;
+      return false;
+    }
+    if (now() - stamp.time > stale_ns) {
+      fault_ = stale;
+      return false;
+    }
+    in->position = to_eigen(pose.position);
+    in->velocity = to_eigen(twist.linear);
+  }
+  return true;
+}
+
+Eigen::Vector3d CollaborativeControlForce::predict(const Input& in) const noexcept {
+  if (!config_.prediction.enabled || config_.prediction.horizon <= 0) return in.position;
+  // Eq. 7, x(t) = x(t−1) + δt·ẋ(t−1), stepped over the horizon with the last known velocity.
+  const double dt = seconds(config());
+  const auto steps = static_cast<int>(std::lround(config_.prediction.horizon / dt));
+  Eigen::Vector3d x = in.position;
+  for (int i = 0; i < steps; ++i) x += dt * in.velocity;
+  return x;
+}
+
+void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept {
+  Wrench w;
+  w.force = to_vec3(f_master);
+  if (master_cf_(w) != Status::ok) ++refused_sends_;
+  w.force = to_vec3(f_slave);
+  if (slave_cf_(w) != Status::ok) ++refused_sends_;
+  master_force_ = to_vec3(f_master);
+  slave_force_ = to_vec3(f_slave);
+}
+
+void CollaborativeControlForce::snap_offsets(const Input& master, const Input& slave) noexcept {
+  slave_offset_.reset(cancelling_slave_offset(predict(master), master_offset_, predict(slave), config_.scale));
+}
+
+void CollaborativeControlForce::run() {
+  Input master, slave;
+  const bool inputs_ok = read_inputs(master, slave);
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  if (!inputs_ok) {
+    // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
+    if (state_.state == OperatingStateValue::enabled) set_operating_state(OperatingStateValue::fault);
+    send_forces(zero, zero);
+    return;
+  }
+  if (state_.state != OperatingStateValue::enabled || clutched_) {
+    // Forces off; keep the offset cancelling so that enabling or releasing the clutch cannot jump.
+    snap_offsets(master, slave);
+    snap_pending_ = rescale_pending_ = false;
+    ratcheting_ = false;
+    send_forces(zero, zero);
+    return;
+  }
+  const Eigen::Vector3d p_m = predict(master), p_s = predict(slave);
+  if (snap_pending_) {
+    snap_offsets(master, slave);
+    if (config_.align) slave_offset_.set_target(to_eigen(config_.slave_offset));
+    snap_pending_ = false;
+  }
+  if (rescale_pending_) {
+    // e_s = d_s − S⁻¹·d_m must not jump: shift o_s by (S'⁻¹ − S⁻¹)·d_m, target included.
+    const Eigen::Vector3d d_m = p_m + master_offset_;
+    const Eigen::Vector3d shift =
+        (config_.scale.master_to_slave() - previous_scale_.master_to_slave()).cwiseProduct(d_m);
+    const Eigen::Vector3d target = slave_offset_.target() + shift;
+    const bool was_moving = slave_offset_.moving();
+    slave_offset_.reset(slave_offset_.offset() + shift);
+    if (was_moving) slave_offset_.set_target(target);
+    rescale_pending_ = false;
+  }
+  const Eigen::Vector3d& o_s = slave_offset_.update();
+  const LawOutput law = compute_law(p_m, master_offset_, p_s, o_s, config_.scale, config_.gains, config_.limits);
+  // Ratchet: at a force limit, slip the offset target so the error returns to the limit; the
+  // offset follows the jerk-limited trajectory, the saturated force holds meanwhile.
+  ratcheting_ = false;
+  if (config_.ratchet) {
+    const LawOutput at_target =
+        compute_law(p_m, master_offset_, p_s, slave_offset_.target(), config_.scale, config_.gains, config_.limits);
+    if (at_target.master_saturated || at_target.slave_saturated) {
+      slave_offset_.set_target(slave_offset_.target() + ratchet_shift(at_target, config_.scale, config_.gains, config_.limits));
+      ratcheting_ = true;
+    }
+    ratcheting_ = ratcheting_ || slave_offset_.moving();
+  }
+  master_error_ = to_vec3(law.master_error);
+  slave_error_ = to_vec3(law.slave_error);
+  slave_offset_value_ = to_vec3(o_s);
+  tracking_error_ = law.slave_error.norm();
+  send_forces(law.master_force, law.slave_force);
+}
+
+}  // namespace saw::teleop

@@ -1,0 +1,273 @@
+// The teleoperation task against fake devices, on the stepped clock: clutch, ratchet, faults,
+// jerk-limited offsets, run-time settings, delay and prediction.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fake_device.hpp"
+#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/delay_task.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using saw::testing::FakeDevice;
+using saw::teleop::CollaborativeControlForce;
+using saw::teleop::TeleopConfig;
+
+double norm(const saw::Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+double dist(const saw::Vec3& a, const saw::Vec3& b) { return norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]}); }
+
+// Lets the test call the teleop's provided "teleop" interface.
+class Operator : public saw::Component {
+ public:
+  Operator() : Component("operator") {
+    auto& r = require("teleop");
+    r.add_function("state_command", state_command);
+    r.add_function("set_scale", set_scale);
+    r.add_function("set_gains", set_gains);
+    r.add_function("set_prediction", set_prediction);
+    r.add_function("operating_state", operating_state);
+  }
+  saw::FunctionWrite<saw::StateCommand> state_command;
+  saw::FunctionWrite<double> set_scale;
+  saw::FunctionWrite<saw::teleop::Gains> set_gains;
+  saw::FunctionWrite<saw::teleop::Prediction> set_prediction;
+  saw::FunctionRead<saw::OperatingState> operating_state;
+};
+
+struct Rig {
+  explicit Rig(TeleopConfig config) : teleop("teleop", saw::TaskConfig::periodic(1ms, 0), config) {
+    manager.add(master);
+    manager.add(slave);
+    manager.add(teleop);
+    manager.add(op);
+    manager.connect("teleop", "master", "master", "arm");
+    manager.connect("teleop", "slave", "slave", "arm");
+    manager.connect("operator", "teleop", "teleop", "teleop");
+    manager.start_stepped();
+  }
+  void step(int n = 1, bool publish_master = true) {
+    for (int i = 0; i < n; ++i) {
+      if (publish_master)
+        stepper({&master, &slave});
+      else
+        stepper({&slave});
+    }
+  }
+  FakeDevice master{"master"}, slave{"slave"};
+  CollaborativeControlForce teleop;
+  Operator op;
+  saw::Manager manager;
+  saw::testing::Stepper stepper{manager};
+};
+
+TeleopConfig basic() {
+  TeleopConfig c;
+  c.gains = {100, 100};
+  c.limits = {3, 3};
+  return c;
+}
+
+TEST(CollaborativeControlForce, EnablingWithDevicesApartMakesNoForce) {
+  Rig rig(basic());
+  rig.master.position = {0.05, 0.01, 0};
+  rig.slave.position = {-0.02, 0.03, 0.01};
+  rig.step(3);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_LT(norm(rig.master.force), 1e-9);
+  EXPECT_LT(norm(rig.slave.force), 1e-9);
+  // Then the master moves: the slave is pulled the same way, the master back.
+  rig.master.position = {0.06, 0.01, 0};
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.force[0], 1.0, 1e-9);
+  EXPECT_NEAR(rig.master.force[0], -1.0, 1e-9);
+}
+
+TEST(CollaborativeControlForce, ClutchTurnsForcesOffAndReleasesWithoutJump) {
+  Rig rig(basic());
+  rig.step(2);
+  rig.master.press_clutch(true);
+  rig.step(1);
+  for (int i = 0; i < 50; ++i) {  // the operator repositions the master by 5 cm
+    rig.master.position[1] += 0.001;
+    rig.step(1);
+    EXPECT_LT(norm(rig.slave.force), 1e-12);
+    EXPECT_LT(norm(rig.master.force), 1e-12);
+  }
+  rig.master.press_clutch(false);
+  rig.step(2);
+  EXPECT_LT(norm(rig.slave.force), 1e-9) << "releasing the clutch must not jump";
+  rig.master.position[1] += 0.01;  // teleoperation resumes from the new offset
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.force[1], 1.0, 1e-9);
+}
+
+TEST(CollaborativeControlForce, RatchetSlipsAtTheLimitAndResumesBelowIt) {
+  TeleopConfig c = basic();
+  c.offset_limits = {0.5, 20, 1000};
+  Rig rig(c);
+  rig.step(2);
+  // The slave is blocked; the operator pushes the master 10 cm: the force would be 10 N.
+  double max_force = 0;
+  bool ratcheted = false;
+  for (int i = 0; i < 100; ++i) {
+    rig.master.position[0] += 0.001;
+    rig.step(1);
+    max_force = std::max(max_force, norm(rig.master.force));
+    bool r = false;
+    ASSERT_EQ(rig.teleop.state_table().read_latest(rig.teleop.columns().ratcheting, r), saw::Status::ok);
+    ratcheted = ratcheted || r;
+  }
+  EXPECT_TRUE(ratcheted);
+  EXPECT_LE(max_force, 3.0 + 1e-9);
+  rig.step(200);  // the push stops: the force holds at the limit while the operator holds
+  EXPECT_NEAR(norm(rig.master.force), 3.0, 1e-6);
+  rig.master.position[0] -= 0.005;  // the operator backs off 5 mm: below the limit again
+  rig.step(2);
+  EXPECT_NEAR(norm(rig.master.force), 2.5, 1e-6);
+  bool still = true;
+  ASSERT_EQ(rig.teleop.state_table().read_latest(rig.teleop.columns().ratcheting, still), saw::Status::ok);
+  EXPECT_FALSE(still);
+  // Teleoperation resumed: moving the master back 1 cm changes the slave force by k·1 cm.
+  const double before = rig.slave.force[0];
+  rig.master.position[0] -= 0.01;
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.force[0] - before, -1.0, 1e-6);
+}
+
+TEST(CollaborativeControlForce, ScaleChangeDoesNotJumpAndTakesEffect) {
+  TeleopConfig c = basic();
+  c.limits = {100, 100};
+  Rig rig(c);
+  rig.master.position = {0.1, 0, 0};
+  rig.step(3);
+  rig.master.position = {0.11, 0, 0};  // an error of 1 cm: 1 N on the slave
+  rig.step(2);
+  ASSERT_NEAR(rig.slave.force[0], 1.0, 1e-9);
+  ASSERT_EQ(rig.op.set_scale(0.5), saw::Status::ok);
+  saw::Vec3 last = rig.slave.force;
+  double max_step = 0;
+  for (int i = 0; i < 10; ++i) {
+    rig.step(1);
+    max_step = std::max(max_step, dist(rig.slave.force, last));
+    last = rig.slave.force;
+  }
+  // Applied naively, the new S⁻¹ would step the slave force by k·0.5·0.11 m = 5.5 N.
+  EXPECT_LT(max_step, 1e-9);
+  rig.master.position[0] += 0.02;  // now 2 cm of master motion asks 1 cm of the slave
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.force[0], 2.0, 1e-9);
+}
+
+TEST(CollaborativeControlForce, AlignmentPullsTheSlaveAlongAJerkLimitedPath) {
+  TeleopConfig c = basic();
+  c.limits = {100, 100};
+  c.align = true;
+  c.slave_offset = {0, 0, 0};  // absolute mode: the slave goes where the master is
+  c.offset_limits = {0.05, 0.5, 10};
+  Rig rig(c);
+  rig.master.position = {0.05, 0, 0};
+  double max_step = 0;
+  saw::Vec3 last{};
+  for (int i = 0; i < 3000; ++i) {
+    rig.step(1);
+    max_step = std::max(max_step, dist(rig.slave.force, last));
+    last = rig.slave.force;
+  }
+  // A jump would be k·5 cm = 5 N in one cycle; the offset moves at ≤ 5 cm/s: ≤ 0.005 N/cycle.
+  EXPECT_LE(max_step, 0.005 + 1e-9);
+  EXPECT_NEAR(rig.slave.force[0], 5.0, 1e-6) << "the offset reached its configured value";
+}
+
+TEST(CollaborativeControlForce, StaleMasterFaultsWithZeroForceUntilReEnabled) {
+  TeleopConfig c = basic();
+  c.stale_timeout = 0.005;
+  Rig rig(c);
+  rig.step(3);
+  rig.master.position[0] += 0.01;
+  rig.step(1);
+  ASSERT_GT(norm(rig.slave.force), 0.5);
+  rig.step(5, false);  // the master stops publishing: 5 ms is not yet stale
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  rig.step(2, false);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
+  EXPECT_EQ(rig.teleop.fault_reason(), saw::teleop::FaultReason::master_stale);
+  EXPECT_EQ(norm(rig.slave.force), 0.0);
+  EXPECT_EQ(norm(rig.master.force), 0.0);
+  rig.step(5);  // fresh again: still faulted until someone enables
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
+  ASSERT_EQ(rig.op.state_command(saw::StateCommand::enable), saw::Status::ok);
+  rig.step(2);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_LT(norm(rig.slave.force), 1e-9);
+}
+
+TEST(CollaborativeControlForce, RejectsBadSettings) {
+  Rig rig(basic());
+  ASSERT_EQ(rig.op.set_scale(std::nan("")), saw::Status::ok);  // queued, then rejected by the task
+  ASSERT_EQ(rig.op.set_scale(-1), saw::Status::ok);
+  ASSERT_EQ(rig.op.set_gains({std::numeric_limits<double>::infinity(), 1}), saw::Status::ok);
+  ASSERT_EQ(rig.op.set_prediction({true, -0.1}), saw::Status::ok);
+  rig.step(2);
+  EXPECT_EQ(rig.teleop.rejected_commands(), 4u);
+  rig.master.position[0] = 0.01;
+  rig.step(1);
+  EXPECT_NEAR(rig.slave.force[0], 1.0, 1e-9) << "the old gains and scale still hold";
+}
+
+TEST(CollaborativeControlForce, DisableAndPauseZeroTheForces) {
+  Rig rig(basic());
+  rig.step(2);
+  ASSERT_EQ(rig.op.state_command(saw::StateCommand::pause), saw::Status::ok);
+  rig.master.position[0] = 0.02;
+  rig.step(2);
+  saw::OperatingState s;
+  ASSERT_EQ(rig.op.operating_state(s), saw::Status::ok);
+  EXPECT_EQ(s.state, saw::OperatingStateValue::paused);
+  EXPECT_EQ(norm(rig.slave.force), 0.0);
+  ASSERT_EQ(rig.op.state_command(saw::StateCommand::resume), saw::Status::ok);
+  rig.step(2);
+  EXPECT_LT(norm(rig.slave.force), 1e-9) << "resuming re-aligns the offsets";
+}
+
+// Constant-velocity master behind a 20 ms delay: the slave force reflects a 20 ms-old master
+// position unless the local model predicts it forward.
+double delayed_error(bool predict) {
+  TeleopConfig c = basic();
+  c.limits = {100, 100};
+  c.stale_timeout = 0.1;
+  c.prediction = {predict, 0.020};
+  FakeDevice master("master"), slave("slave");
+  saw::teleop::DelayTask delay("master_delay", saw::TaskConfig::periodic(1ms, 0), 0.020);
+  CollaborativeControlForce teleop("teleop", saw::TaskConfig::periodic(1ms, 0), c);
+  saw::Manager m;
+  m.add(master);
+  m.add(slave);
+  m.add(delay);
+  m.add(teleop);
+  m.connect("master_delay", "source", "master", "arm");
+  m.connect("teleop", "master", "master_delay", "arm");
+  m.connect("teleop", "slave", "slave", "arm");
+  m.start_stepped();
+  saw::testing::Stepper step{m};
+  for (int i = 0; i < 50; ++i) step({&master, &slave});  // at rest while teleoperation engages
+  const double v = 0.05;  // then 5 cm/s along x
+  master.velocity = {v, 0, 0};
+  for (int i = 0; i < 300; ++i) {
+    master.position[0] += v * 0.001;
+    step({&master, &slave});
+  }
+  // Slave force = −k·e_s = k·(d_m − d_s): how far the slave's goal has moved, in metres.
+  const double goal_moved = slave.force[0] / 100.0;
+  return master.position[0] - goal_moved;  // the goal's lag behind the real master
+}
+
+TEST(CollaborativeControlForce, EulerPredictionCompensatesTheDelay) {
+  const double lag_without = delayed_error(false);
+  const double lag_with = delayed_error(true);
+  EXPECT_NEAR(lag_without, 0.05 * 0.020, 1e-4) << "the delay shows as v·delay = 1 mm of lag";
+  EXPECT_LT(std::abs(lag_with), 0.1e-3) << "the local model predicts the master forward over the delay";
+}
+
+}  // namespace
