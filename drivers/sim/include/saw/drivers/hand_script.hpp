@@ -1,0 +1,38 @@
+// HandScript: a scripted operator's hand that drags a simulated device through a virtual spring.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace saw::drivers {
+
+struct HandSample {
+  double t = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  bool clutch = false;
+};
+
+// Target positions are relative to the device's initial tip position (the hand's origin).
+struct HandScript {
+  enum class Kind : std::uint8_t { none, line, sinusoid, csv } kind = Kind::none;
+  double stiffness = 200.0;  // N/m
+  double damping = 2.0;      // N·s/m
+  // line: from `from` to `to` in `duration` s, then hold (or back and forth).
+  Eigen::Vector3d from = Eigen::Vector3d::Zero(), to = Eigen::Vector3d::Zero();
+  double duration = 1.0;
+  bool back_and_forth = false;
+  // sinusoid: amplitude·sin(2π·frequency·t + phase)
+  Eigen::Vector3d amplitude = Eigen::Vector3d::Zero();
+  double frequency = 0.5, phase = 0.0;
+  // csv: "t,x,y,z[,clutch]" rows, loaded by load_csv() (not on an RT path).
+  std::vector<HandSample> samples;
+
+  // Throws std::runtime_error naming the file and line of a bad row.
+  static std::vector<HandSample> load_csv(const std::string& path);
+
+  // The target at time t (s since the first cycle); `cursor` keeps CSV lookups O(1) per cycle.
+  HandSample target(double t, std::size_t& cursor) const noexcept;
+};
+
+}  // namespace saw::drivers

@@ -1,0 +1,84 @@
+// SimHapticDevice: a simulated 3-DOF force-feedback device (Omni- or Falcon-like) as a periodic task.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "saw/crtk.hpp"
+#include "saw/drivers/arm_kinematics.hpp"
+#include "saw/drivers/hand_script.hpp"
+#include "saw/task.hpp"
+
+namespace saw::drivers {
+
+struct SimDeviceConfig {
+  ArmModel model = ArmModel::omni;
+  Eigen::Vector3d initial_joints = Eigen::Vector3d::Zero();  // rad (omni) or m (falcon); omni zero: elbow bent 1.2 rad
+  Eigen::Vector3d inertia = Eigen::Vector3d::Zero();         // zero: the model's default
+  Eigen::Vector3d damping = Eigen::Vector3d::Zero();         // zero: the model's default
+  Eigen::Vector3d joint_min = Eigen::Vector3d::Zero(), joint_max = Eigen::Vector3d::Zero();  // equal: defaults
+  double max_force = 0;  // N; zero: the model's default (Omni 3.3 N, Falcon 9 N)
+  bool start_enabled = true;
+  HandScript hand;
+  int substeps = 4;  // integration steps per cycle
+};
+
+// Buttons on the "sim" interface's set_button.
+struct ButtonCommand {
+  std::uint8_t button = 0;  // 0 clutch, 1 operator_present
+  bool pressed = false;
+};
+
+// Provided "arm" (CRTK): measured_cp, measured_cv, measured_js, operating_state (reads);
+// servo_cf, state_command (writes); operating_state, clutch, operator_present (events).
+// Provided "sim": set_button (write), hand_force, rejected_commands (reads).
+// A servo_cf that is not finite or exceeds max_force is rejected before it reaches the
+// dynamics (the device then applies zero force) and counted.
+class SimHapticDevice : public Task {
+ public:
+  SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config);
+
+  void run() override;
+  const SimDeviceConfig& device_config() const noexcept { return config_; }
+  std::uint64_t rejected_commands() const noexcept { return rejected_; }
+
+  struct Columns {
+    StateColumn<Pose> measured_cp;
+    StateColumn<Twist> measured_cv;
+    StateColumn<JointState> measured_js;
+    StateColumn<Vec3> hand_force, servo_force;
+  };
+  const Columns& columns() const noexcept { return columns_; }
+
+ private:
+  void servo_cf(const Wrench& w) noexcept;
+  void state_command(StateCommand c) noexcept;
+  void set_state(OperatingStateValue s) noexcept;
+  void button(std::uint8_t id, bool pressed) noexcept;
+  void integrate(double dt, const Eigen::Vector3d& hand_target) noexcept;
+  void publish() noexcept;
+
+  SimDeviceConfig config_;
+  ArmKinematics kinematics_;
+  Eigen::Vector3d q_, qd_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  // accepted servo_cf
+  Eigen::Vector3d hand_origin_ = Eigen::Vector3d::Zero();
+  TimeNs t0_ = -1;
+  std::size_t hand_cursor_ = 0;
+  bool hand_clutch_ = false;
+  std::uint64_t rejected_ = 0;
+
+  // State-table sources.
+  Pose measured_cp_{};
+  Twist measured_cv_{};
+  JointState measured_js_{};
+  OperatingState operating_state_{};
+  Vec3 hand_force_{}, servo_force_{};
+  std::uint64_t rejected_column_ = 0;
+  Columns columns_;
+
+  EventWrite<OperatingState>* state_event_ = nullptr;
+  EventWrite<ButtonEvent>* clutch_event_ = nullptr;
+  EventWrite<ButtonEvent>* operator_event_ = nullptr;
+};
+
+}  // namespace saw::drivers

@@ -1,0 +1,79 @@
+#include "saw/drivers/hand_script.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace saw::drivers {
+
+std::vector<HandSample> HandScript::load_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the hand trajectory");
+  std::vector<HandSample> out;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty() || line[0] == '#' || (number == 1 && !std::isdigit(static_cast<unsigned char>(line[0])) &&
+                                             line[0] != '-' && line[0] != '.'))
+      continue;  // comments and a header line
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) {
+      try {
+        std::size_t used = 0;
+        v.push_back(std::stod(cell, &used));
+      } catch (const std::exception&) {
+        throw std::runtime_error(path + ":" + std::to_string(number) + ": '" + cell + "' is not a number");
+      }
+    }
+    if (v.size() != 4 && v.size() != 5)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected t,x,y,z[,clutch], got " +
+                               std::to_string(v.size()) + " values");
+    if (!out.empty() && v[0] <= out.back().t)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": time must increase");
+    out.push_back({v[0], {v[1], v[2], v[3]}, v.size() == 5 && v[4] != 0});
+  }
+  if (out.empty()) throw std::runtime_error(path + ": no samples");
+  return out;
+}
+
+HandSample HandScript::target(double t, std::size_t& cursor) const noexcept {
+  HandSample s{t, Eigen::Vector3d::Zero(), false};
+  switch (kind) {
+    case Kind::none: break;
+    case Kind::line: {
+      double u = duration > 0 ? t / duration : 1.0;
+      if (back_and_forth) {
+        const double cycle = std::fmod(u, 2.0);
+        u = cycle <= 1.0 ? cycle : 2.0 - cycle;
+      }
+      u = std::clamp(u, 0.0, 1.0);
+      s.position = from + u * (to - from);
+      break;
+    }
+    case Kind::sinusoid:
+      s.position = amplitude * std::sin(2 * M_PI * frequency * t + phase);
+      break;
+    case Kind::csv: {
+      if (samples.empty()) break;
+      while (cursor + 1 < samples.size() && samples[cursor + 1].t <= t) ++cursor;
+      const HandSample& a = samples[cursor];
+      if (cursor + 1 >= samples.size() || t <= a.t) {
+        s.position = a.position;
+        s.clutch = a.clutch;
+        break;
+      }
+      const HandSample& b = samples[cursor + 1];
+      const double u = (t - a.t) / (b.t - a.t);
+      s.position = a.position + u * (b.position - a.position);
+      s.clutch = a.clutch;
+      break;
+    }
+  }
+  return s;
+}
+
+}  // namespace saw::drivers

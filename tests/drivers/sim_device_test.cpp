@@ -1,0 +1,221 @@
+// The simulated haptic devices: kinematics, dynamics, command validation, buttons, the hand.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/manager.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using saw::drivers::ArmKinematics;
+using saw::drivers::ArmModel;
+using saw::drivers::SimDeviceConfig;
+using saw::drivers::SimHapticDevice;
+
+constexpr double link = 0.133;
+
+TEST(ArmKinematics, OmniForwardKinematicsByHand) {
+  ArmKinematics k(ArmModel::omni);
+  EXPECT_TRUE(k.fk({0, 0, 0}).isApprox(Eigen::Vector3d(2 * link, 0, 0)));
+  // Elbow at +90° about y: the forearm points along −z.
+  EXPECT_TRUE(k.fk({0, 0, M_PI / 2}).isApprox(Eigen::Vector3d(link, 0, -link), 1e-12));
+  // Base yaw 90°: the straight arm points along +y.
+  EXPECT_TRUE(k.fk({M_PI / 2, 0, 0}).isApprox(Eigen::Vector3d(0, 2 * link, 0), 1e-12));
+}
+
+TEST(ArmKinematics, JacobianMatchesFiniteDifferences) {
+  for (auto model : {ArmModel::omni, ArmModel::falcon}) {
+    ArmKinematics k(model);
+    const Eigen::Vector3d q(0.3, -0.2, 0.9);
+    const Eigen::Matrix3d j = k.jacobian(q);
+    for (int c = 0; c < 3; ++c) {
+      Eigen::Vector3d dq = Eigen::Vector3d::Zero();
+      dq[c] = 1e-7;
+      const Eigen::Vector3d column = (k.fk(q + dq) - k.fk(q - dq)) / 2e-7;
+      EXPECT_TRUE(j.col(c).isApprox(column, 1e-6)) << "column " << c;
+    }
+  }
+}
+
+// A client task that commands forces and watches events.
+class Client : public saw::Task {
+ public:
+  Client() : Task("client", saw::TaskConfig::periodic(1ms, 0)) {
+    auto& r = require("arm");
+    r.add_function("measured_cp", measured_cp);
+    r.add_function("measured_cv", measured_cv);
+    r.add_function("servo_cf", servo_cf);
+    r.add_function("state_command", state_command);
+    r.add_event_handler_write<saw::ButtonEvent>("clutch", [this](const saw::ButtonEvent& b) {
+      clutch_events++;
+      clutch = b.pressed;
+    });
+    r.add_event_handler_write<saw::OperatingState>("operating_state",
+                                                   [this](const saw::OperatingState& s) { last_state = s.state; });
+    auto& s = require("sim");
+    s.add_function("set_button", set_button);
+    s.add_function("rejected_commands", rejected);
+  }
+  saw::FunctionRead<saw::Pose> measured_cp;
+  saw::FunctionRead<saw::Twist> measured_cv;
+  saw::FunctionWrite<saw::Wrench> servo_cf;
+  saw::FunctionWrite<saw::StateCommand> state_command;
+  saw::FunctionWrite<saw::drivers::ButtonCommand> set_button;
+  saw::FunctionRead<std::uint64_t> rejected;
+  int clutch_events = 0;
+  bool clutch = false;
+  saw::OperatingStateValue last_state = saw::OperatingStateValue::disabled;
+};
+
+struct Rig {
+  explicit Rig(SimDeviceConfig c) : device("dev", saw::TaskConfig::periodic(1ms, 0), std::move(c)) {
+    m.add(device);
+    m.add(client);
+    m.connect("client", "arm", "dev", "arm");
+    m.connect("client", "sim", "dev", "sim");
+    m.start_stepped();
+    m.step();  // one row published
+  }
+  void steps(int n) { m.step_until(m.simulated_time() + saw::TimeNs{n} * 1'000'000); }
+  Eigen::Vector3d position() {
+    saw::Pose p;
+    EXPECT_EQ(client.measured_cp(p), saw::Status::ok);
+    return {p.position[0], p.position[1], p.position[2]};
+  }
+  SimHapticDevice device;
+  Client client;
+  saw::Manager m;
+};
+
+TEST(SimHapticDevice, ForceMovesTheTipAlongItAndDampingStopsIt) {
+  for (auto model : {ArmModel::omni, ArmModel::falcon}) {
+    SimDeviceConfig c;
+    c.model = model;
+    Rig rig(c);
+    rig.steps(2);
+    const Eigen::Vector3d start = rig.position();
+    const saw::Vec3 f{0.5, -0.3, 0.2};
+    ASSERT_EQ(rig.client.servo_cf(saw::Wrench{f, {}}), saw::Status::ok);
+    rig.steps(20);
+    const Eigen::Vector3d moved = rig.position() - start;
+    EXPECT_GT(moved.dot(Eigen::Vector3d(f[0], f[1], f[2])), 0) << "τ = Jᵀf pushes the tip along f";
+    ASSERT_EQ(rig.client.servo_cf(saw::Wrench{}), saw::Status::ok);
+    rig.steps(5000);
+    saw::Twist v;
+    ASSERT_EQ(rig.client.measured_cv(v), saw::Status::ok);
+    EXPECT_LT(std::hypot(v.linear[0], v.linear[1], v.linear[2]), 1e-3)
+        << "damping brings it to rest (model " << static_cast<int>(model) << ")";
+  }
+}
+
+TEST(SimHapticDevice, JointLimitsHold) {
+  SimDeviceConfig c;
+  c.model = ArmModel::falcon;
+  Rig rig(c);
+  ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{5, 0, 0}, {}}), saw::Status::ok);
+  rig.steps(3000);
+  EXPECT_NEAR(rig.position().x(), 0.05, 1e-12);
+}
+
+TEST(SimHapticDevice, RejectsNonFiniteAndOversizedForcesBeforeTheDynamics) {
+  SimDeviceConfig c;
+  c.model = ArmModel::falcon;
+  Rig rig(c);
+  rig.steps(2);
+  const Eigen::Vector3d start = rig.position();
+  for (const saw::Vec3& f : {saw::Vec3{std::nan(""), 0, 0}, saw::Vec3{0, INFINITY, 0}, saw::Vec3{100, 0, 0}}) {
+    ASSERT_EQ(rig.client.servo_cf(saw::Wrench{f, {}}), saw::Status::ok);  // queued...
+    rig.steps(10);                                                         // ...and refused by the device
+  }
+  EXPECT_EQ(rig.device.rejected_commands(), 3u);
+  std::uint64_t reported = 0;
+  ASSERT_EQ(rig.client.rejected(reported), saw::Status::ok);
+  EXPECT_EQ(reported, 3u);
+  EXPECT_TRUE(rig.position().isApprox(start, 1e-12)) << "no rejected force moved the device";
+  // A good command after a bad one is applied; a bad one after a good one stops it.
+  ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{2, 0, 0}, {}}), saw::Status::ok);
+  rig.steps(10);
+  EXPECT_GT(rig.position().x(), start.x());
+}
+
+TEST(SimHapticDevice, StateCommandsAndDisabledDeviceIgnoresForces) {
+  SimDeviceConfig c;
+  c.model = ArmModel::falcon;
+  c.start_enabled = false;
+  Rig rig(c);
+  ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{2, 0, 0}, {}}), saw::Status::ok);
+  rig.steps(20);
+  EXPECT_NEAR(rig.position().x(), 0, 1e-12);
+  ASSERT_EQ(rig.client.state_command(saw::StateCommand::enable), saw::Status::ok);
+  rig.steps(20);
+  EXPECT_EQ(rig.client.last_state, saw::OperatingStateValue::enabled);
+  EXPECT_GT(rig.position().x(), 0);
+  ASSERT_EQ(rig.client.state_command(saw::StateCommand::pause), saw::Status::ok);
+  rig.steps(3);
+  EXPECT_EQ(rig.client.last_state, saw::OperatingStateValue::paused);
+}
+
+TEST(SimHapticDevice, ButtonsEmitEvents) {
+  Rig rig(SimDeviceConfig{});
+  ASSERT_EQ(rig.client.set_button({0, true}), saw::Status::ok);
+  rig.steps(3);
+  EXPECT_TRUE(rig.client.clutch);
+  ASSERT_EQ(rig.client.set_button({0, false}), saw::Status::ok);
+  rig.steps(3);
+  EXPECT_FALSE(rig.client.clutch);
+  EXPECT_EQ(rig.client.clutch_events, 2);
+}
+
+TEST(SimHapticDevice, HandDrivesASinusoid) {
+  SimDeviceConfig c;
+  c.hand.kind = saw::drivers::HandScript::Kind::sinusoid;
+  c.hand.amplitude = {0.02, 0, 0};
+  c.hand.frequency = 0.5;
+  c.hand.stiffness = 300;
+  Rig rig(c);
+  const Eigen::Vector3d origin = rig.position();
+  double max_x = -1, min_x = 1;
+  rig.steps(2000);  // settle
+  for (int i = 0; i < 2000; ++i) {
+    rig.steps(1);
+    const double x = rig.position().x() - origin.x();
+    max_x = std::max(max_x, x);
+    min_x = std::min(min_x, x);
+  }
+  EXPECT_NEAR(max_x, 0.02, 0.004);
+  EXPECT_NEAR(min_x, -0.02, 0.004);
+}
+
+TEST(SimHapticDevice, HandFollowsALineAndACsv) {
+  SimDeviceConfig line;
+  line.hand.kind = saw::drivers::HandScript::Kind::line;
+  line.hand.to = {0, 0.03, 0};
+  line.hand.duration = 1.0;
+  line.hand.stiffness = 300;
+  Rig a(line);
+  const Eigen::Vector3d origin = a.position();
+  a.steps(3000);
+  EXPECT_TRUE((a.position() - origin).isApprox(Eigen::Vector3d(0, 0.03, 0), 0.05));
+
+  const std::string path = ::testing::TempDir() + "hand.csv";
+  {
+    std::ofstream f(path);
+    f << "t,x,y,z,clutch\n0,0,0,0,0\n0.5,0,0,0.02,1\n3,0,0,0.02,0\n";
+  }
+  SimDeviceConfig csv;
+  csv.hand.kind = saw::drivers::HandScript::Kind::csv;
+  csv.hand.samples = saw::drivers::HandScript::load_csv(path);
+  csv.hand.stiffness = 300;
+  Rig b(csv);
+  const Eigen::Vector3d o = b.position();
+  b.steps(1500);
+  EXPECT_NEAR(b.position().z() - o.z(), 0.02, 0.003);
+  EXPECT_TRUE(b.client.clutch) << "the CSV's clutch column pressed the button";
+  EXPECT_THROW(saw::drivers::HandScript::load_csv(path + ".missing"), std::runtime_error);
+}
+
+}  // namespace

@@ -1,0 +1,83 @@
+// The simulated teleoperation deployment (two KDL devices, a scripted hand, delay, teleop)
+// neither allocates nor locks once running, on the stepped clock and on real threads.
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "alloc_guard.hpp"
+#include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/manager.hpp"
+#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/delay_task.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+
+struct Deployment {
+  Deployment()
+      : master("master", saw::TaskConfig::periodic(1ms, 0), master_config()),
+        slave("slave", saw::TaskConfig::periodic(1ms, 0), saw::drivers::SimDeviceConfig{}),
+        delay("master_delay", saw::TaskConfig::periodic(1ms, 0), 0.01),
+        teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config()) {
+    for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &delay, &teleop}) m.add(*c);
+    m.connect("master_delay", "source", "master", "arm");
+    m.connect("teleop", "master", "master_delay", "arm");
+    m.connect("teleop", "slave", "slave", "arm");
+  }
+  static saw::drivers::SimDeviceConfig master_config() {
+    saw::drivers::SimDeviceConfig c;
+    c.hand.kind = saw::drivers::HandScript::Kind::sinusoid;
+    c.hand.amplitude = {0.03, 0.01, 0};
+    return c;
+  }
+  static saw::teleop::TeleopConfig teleop_config() {
+    saw::teleop::TeleopConfig c;
+    c.gains = {60, 60};
+    c.prediction = {true, 0.01};
+    c.stale_timeout = 0.5;  // real threads on a busy VM: do not fault on a scheduling hiccup
+    return c;
+  }
+  saw::drivers::SimHapticDevice master, slave;
+  saw::teleop::DelayTask delay;
+  saw::teleop::CollaborativeControlForce teleop;
+  saw::Manager m;
+};
+
+double slave_travel(const Deployment& d) {
+  std::array<saw::Pose, 200> h;
+  const auto n = d.slave.state_table().read_history(d.slave.columns().measured_cp, std::span<saw::Pose>(h));
+  double lo = 1, hi = -1;
+  for (std::size_t i = 0; i < n; ++i) lo = std::min(lo, h[i].position[0]), hi = std::max(hi, h[i].position[0]);
+  return hi - lo;
+}
+
+TEST(AllocationGuard, SimulatedTeleoperationSteppedDoesNotAllocate) {
+  Deployment d;
+  d.m.start_stepped();
+  d.m.step_until(100'000'000);
+  saw::testing::guard_reset();
+  d.m.step_until(3'000'000'000);
+  const auto counts = saw::testing::guard_counts();
+  EXPECT_EQ(d.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_GT(slave_travel(d), 0.001) << "the slave should be following the master";
+  d.m.stop();
+  EXPECT_EQ(counts.allocations, 0u) << "first size " << counts.first_allocation_size;
+  EXPECT_EQ(counts.locks, 0u);
+}
+
+TEST(AllocationGuard, SimulatedTeleoperationOnThreadsDoesNotAllocate) {
+  Deployment d;
+  d.m.start();
+  saw::testing::guard_reset();
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  while (d.teleop.statistics().cycles < 500 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(5ms);
+  const auto counts = saw::testing::guard_counts();
+  d.m.stop();
+  ASSERT_GE(d.teleop.statistics().cycles, 500u);
+  EXPECT_EQ(counts.allocations, 0u) << "first size " << counts.first_allocation_size;
+  EXPECT_EQ(counts.locks, 0u);
+}
+
+}  // namespace
