@@ -75,7 +75,10 @@ class StateTable {
     return read_history_erased(c.index, out.data(), sizeof(T), out.size(), stamps);
   }
 
-  // Type-erased forms, for commands bound at run time.
+  // Type-erased forms, for commands bound at run time and for recorders.
+  Status read_tick_erased(std::uint32_t column, std::uint64_t tick, void* out, RowStamp* stamp) const noexcept {
+    return read_row(column, tick, out, stamp);
+  }
   Status read_latest_erased(std::uint32_t column, void* out, RowStamp* stamp) const noexcept;
   Status read_at_or_before_erased(std::uint32_t column, TimeNs t, void* out,
                                   RowStamp* stamp) const noexcept;

@@ -199,6 +199,9 @@ void CollaborativeControlForce::run() {
   slave_error_ = to_vec3(law.slave_error);
   slave_offset_value_ = to_vec3(o_s);
   tracking_error_ = law.slave_error.norm();
+  tracking_sum_sq_ += tracking_error_ * tracking_error_;
+  tracking_max_ = std::max(tracking_max_, tracking_error_);
+  ++enabled_cycles_;
   send_forces(law.master_force, law.slave_force);
 }
 

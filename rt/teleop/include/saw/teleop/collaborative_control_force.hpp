@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 
 #include "saw/crtk.hpp"
 #include "saw/task.hpp"
@@ -46,6 +47,12 @@ class CollaborativeControlForce : public Task {
   FaultReason fault_reason() const noexcept { return fault_; }
   std::uint64_t rejected_commands() const noexcept { return rejected_; }
   std::uint64_t refused_sends() const noexcept { return refused_sends_; }
+  // |e_s| over the cycles spent ENABLED (read after stop, or from the owning thread).
+  double tracking_rms() const noexcept {
+    return enabled_cycles_ ? std::sqrt(tracking_sum_sq_ / static_cast<double>(enabled_cycles_)) : 0.0;
+  }
+  double tracking_max() const noexcept { return tracking_max_; }
+  std::uint64_t enabled_cycles() const noexcept { return enabled_cycles_; }
 
   // State-table columns (for tests and the recorder).
   struct Columns {
@@ -75,6 +82,8 @@ class CollaborativeControlForce : public Task {
   Scale previous_scale_;
   FaultReason fault_ = FaultReason::none;
   std::uint64_t rejected_ = 0, refused_sends_ = 0;
+  double tracking_sum_sq_ = 0, tracking_max_ = 0;
+  std::uint64_t enabled_cycles_ = 0;
 
   // State-table sources.
   OperatingState state_{};

@@ -1,0 +1,104 @@
+#include "builtin_types.hpp"
+
+#include <filesystem>
+
+#include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/delay_task.hpp"
+
+namespace saw::apps {
+namespace {
+
+using namespace std::chrono_literals;
+using deploy::FactoryContext;
+using deploy::Params;
+
+Eigen::Vector3d eigen(const Vec3& v) { return {v[0], v[1], v[2]}; }
+
+TaskConfig periodic_task(const FactoryContext& ctx, const char* type) {
+  TaskConfig t = ctx.task.value_or(TaskConfig::periodic(1ms, 80));
+  if (!t.is_periodic()) ctx.params.fail(std::string(type) + " '" + ctx.name + "' needs a periodic task (task.period)");
+  return t;
+}
+
+drivers::HandScript parse_hand(Params h, const std::string& directory) {
+  using Kind = drivers::HandScript::Kind;
+  drivers::HandScript s;
+  s.kind = h.get_enum<Kind>("type", {{"none", Kind::none}, {"line", Kind::line}, {"sinusoid", Kind::sinusoid}, {"csv", Kind::csv}},
+                            Kind::none);
+  s.stiffness = h.get_in_range("stiffness", 0, 5000, s.stiffness);
+  s.damping = h.get_in_range("damping", 0, 500, s.damping);
+  s.from = eigen(h.get_or<Vec3>("from", {0, 0, 0}));
+  s.to = eigen(h.get_or<Vec3>("to", {0, 0, 0}));
+  s.duration = h.get_in_range("duration", 1e-3, 1e6, s.duration);
+  s.back_and_forth = h.get_or<bool>("back_and_forth", false);
+  s.amplitude = eigen(h.get_or<Vec3>("amplitude", {0, 0, 0}));
+  s.frequency = h.get_in_range("frequency", 0, 100, s.frequency);
+  s.phase = h.get_or<double>("phase", 0);
+  if (s.kind == Kind::csv) {
+    std::filesystem::path file = h.get<std::string>("file");
+    if (file.is_relative() && !directory.empty()) file = std::filesystem::path(directory) / file;
+    try {
+      s.samples = drivers::HandScript::load_csv(file.string());
+    } catch (const std::exception& e) {
+      h.fail_at("file", e.what());
+    }
+  }
+  return s;
+}
+
+std::unique_ptr<Component> make_sim_device(FactoryContext& ctx) {
+  Params& p = ctx.params;
+  drivers::SimDeviceConfig c;
+  c.model = p.get_enum<drivers::ArmModel>("model", {{"omni", drivers::ArmModel::omni}, {"falcon", drivers::ArmModel::falcon}},
+                                          drivers::ArmModel::omni);
+  c.initial_joints = eigen(p.get_or<Vec3>("initial_joints", {0, 0, 0}));
+  c.max_force = p.get_in_range("max_force", 0, 100, 0);
+  c.start_enabled = p.get_or<bool>("start_enabled", true);
+  c.hand = parse_hand(p.child("hand"), ctx.directory);
+  return std::make_unique<drivers::SimHapticDevice>(ctx.name, periodic_task(ctx, "sim_haptic_device"), c);
+}
+
+std::unique_ptr<Component> make_teleop(FactoryContext& ctx) {
+  Params& p = ctx.params;
+  teleop::TeleopConfig c;
+  c.scale.scale = p.get_in_range("scale", 1e-3, 1e3, 1.0);
+  c.scale.mirror = p.get_or<Vec3>("mirror", {1, 1, 1});
+  if (!c.scale.valid()) p.fail_at("mirror", "each entry must be 1 or -1");
+  Params g = p.child("gains");
+  c.gains.master = g.get_in_range("master", 0, 1e4, c.gains.master);
+  c.gains.slave = g.get_in_range("slave", 0, 1e4, c.gains.slave);
+  Params l = p.child("force_limits");
+  c.limits.master = l.get_in_range("master", 0, 100, c.limits.master);
+  c.limits.slave = l.get_in_range("slave", 0, 100, c.limits.slave);
+  c.ratchet = p.get_or<bool>("ratchet", true);
+  Params o = p.child("offset_limits");
+  c.offset_limits.velocity = o.get_in_range("velocity", 1e-6, 10, c.offset_limits.velocity);
+  c.offset_limits.acceleration = o.get_in_range("acceleration", 1e-6, 1e3, c.offset_limits.acceleration);
+  c.offset_limits.jerk = o.get_in_range("jerk", 1e-6, 1e5, c.offset_limits.jerk);
+  Params pr = p.child("prediction");
+  c.prediction.enabled = pr.get_or<bool>("enabled", false);
+  c.prediction.horizon = static_cast<double>(pr.get_or<std::chrono::nanoseconds>("horizon", 0ns).count()) * 1e-9;
+  c.stale_timeout = static_cast<double>(p.get_or<std::chrono::nanoseconds>("stale_timeout", 10ms).count()) * 1e-9;
+  c.start_enabled = p.get_or<bool>("start_enabled", true);
+  c.align = p.get_or<bool>("align", false);
+  c.slave_offset = p.get_or<Vec3>("slave_offset", {0, 0, 0});
+  return std::make_unique<teleop::CollaborativeControlForce>(ctx.name, periodic_task(ctx, "teleop"), c);
+}
+
+std::unique_ptr<Component> make_delay(FactoryContext& ctx) {
+  const auto delay = ctx.params.get<std::chrono::nanoseconds>("delay");
+  if (delay > 10s) ctx.params.fail_at("delay", "at most 10 s");
+  return std::make_unique<teleop::DelayTask>(ctx.name, periodic_task(ctx, "delay"),
+                                             static_cast<double>(delay.count()) * 1e-9);
+}
+
+}  // namespace
+
+void register_builtin_types(deploy::ComponentRegistry& registry) {
+  registry.add("sim_haptic_device", make_sim_device, "simulated 3-DOF haptic device (Omni- or Falcon-like), KDL");
+  registry.add("teleop", make_teleop, "collaborative force teleoperation between a master and a slave");
+  registry.add("delay", make_delay, "re-publishes a device's measured_cp/cv `delay` late");
+}
+
+}  // namespace saw::apps

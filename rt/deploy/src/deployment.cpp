@@ -1,0 +1,172 @@
+#include "saw/deploy/deployment.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace saw::deploy {
+namespace {
+
+std::optional<TaskConfig> parse_task(Params& p) {
+  if (!p.has("task")) {
+    (void)p.child("task");
+    return std::nullopt;
+  }
+  Params t = p.child("task");
+  TaskConfig c;
+  c.period = t.get_or<std::chrono::nanoseconds>("period", std::chrono::nanoseconds(0));
+  c.priority = static_cast<int>(t.get_in_range("priority", 0, 99, 0));
+  c.cpu = static_cast<int>(t.get_in_range("cpu", -1, 1023, -1));
+  if (c.period.count() != 0 && c.period < std::chrono::microseconds(10))
+    t.fail_at("period", "a period under 10 us is not supported");
+  return c;
+}
+
+}  // namespace
+
+Deployment parse_deployment(const std::string& yaml_text, const std::string& file, const ComponentRegistry& registry) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(file, e.mark.line + 1, e.mark.column + 1, "", "YAML syntax: " + e.msg);
+  }
+  Params top(root, file, "");
+  Deployment d;
+  d.file_ = file;
+  const std::string directory = std::filesystem::path(file).parent_path().string();
+  Params head = top.child("deployment");
+  d.name_ = head.get_or<std::string>("name", std::filesystem::path(file).stem().string());
+  d.clock_ = head.get_enum<Clock>("clock", {{"real", Clock::real}, {"stepped", Clock::stepped}}, Clock::real);
+
+  // Components: each built by its registered factory from its own parameters.
+  top.mark_used("components");  // a list: walked below
+  const YAML::Node list = root["components"];
+  if (!list.IsDefined() || !list.IsSequence() || list.size() == 0)
+    top.fail_at("components", "expected a non-empty list of components");
+  std::vector<Params> all_params;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    Params entry(list[i], file, "components[" + std::to_string(i) + "]");
+    const auto name = entry.get<std::string>("name");
+    const auto type = entry.get<std::string>("type");
+    const Factory* factory = registry.find(type);
+    if (factory == nullptr) entry.fail_at("type", "unknown component type '" + type + "' (known: " + registry.type_list() + ")");
+    if (d.manager_->find(name) != nullptr) entry.fail_at("name", "a component named '" + name + "' exists already");
+    auto task = parse_task(entry);
+    Params params = entry.child("params");
+    FactoryContext ctx{name, task, params, directory};
+    std::unique_ptr<Component> component;
+    try {
+      component = (*factory)(ctx);
+    } catch (const ConfigError&) {
+      throw;
+    } catch (const std::exception& e) {
+      entry.fail_at("params", e.what());
+    }
+    entry.check_all_used();
+    d.manager_->add(std::move(component));
+  }
+
+  // Connections, checked by the manager (names and types); its message is kept whole.
+  top.mark_used("connections");
+  const YAML::Node connections = root["connections"];
+  if (connections.IsDefined() && !connections.IsNull()) {
+    if (!connections.IsSequence()) top.fail_at("connections", "expected a list of connections");
+    for (std::size_t i = 0; i < connections.size(); ++i) {
+      Params c(connections[i], file, "connections[" + std::to_string(i) + "]");
+      const auto client = c.get<std::string>("client"), required = c.get<std::string>("required");
+      const auto server = c.get<std::string>("server"), provided = c.get<std::string>("provided");
+      c.check_all_used();
+      try {
+        d.manager_->connect(client, required, server, provided);
+      } catch (const ConnectError& e) {
+        c.fail(e.what());
+      }
+    }
+  }
+
+  // Recording: the columns must exist and be of a type the recorder can write.
+  if (top.has("record")) {
+    Params r = top.child("record");
+    RecordSpec spec;
+    spec.file = r.get_or<std::string>("file", "");
+    if (!spec.file.empty() && std::filesystem::path(spec.file).is_relative() && !directory.empty())
+      spec.file = (std::filesystem::path(directory) / spec.file).string();
+    spec.decimation = static_cast<int>(r.get_in_range("decimation", 1, 1e6, 1));
+    const YAML::Node cols = root["record"]["columns"];
+    r.mark_used("columns");
+    if (!cols.IsDefined() || !cols.IsSequence() || cols.size() == 0) r.fail_at("columns", "expected a list of component.column");
+    for (const auto& n : cols) {
+      const auto text = n.as<std::string>();
+      const auto dot = text.find('.');
+      const auto [line, column] = location(n);
+      const Component* comp = dot == std::string::npos ? nullptr : d.manager_->find(text.substr(0, dot));
+      const int index = comp == nullptr ? -1 : comp->state_table().find_column(text.substr(dot + 1));
+      if (index < 0) throw ConfigError(file, line, column, "record.columns", "no state-table column '" + text + "'");
+      if (format_for(comp->state_table().column_type(static_cast<std::uint32_t>(index))) == nullptr)
+        throw ConfigError(file, line, column, "record.columns",
+                          "'" + text + "' has a type the recorder cannot write: " +
+                              std::string(comp->state_table().column_type(static_cast<std::uint32_t>(index)).name));
+      spec.columns.push_back(text);
+    }
+    const auto [line, column] = location(root["record"]);
+    d.record_line_ = line;
+    d.record_column_ = column;
+    d.record_ = spec;
+  }
+  top.check_all_used();
+  return d;
+}
+
+Deployment load_deployment(const std::string& path, const ComponentRegistry& registry) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, 0, 0, "", "cannot read the deployment file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_deployment(ss.str(), path, registry);
+}
+
+void Deployment::set_record_file(std::string path) {
+  if (!record_) throw ConfigError(file_, 0, 0, "record", "--record needs a 'record:' section naming the columns");
+  record_->file = std::move(path);
+}
+
+void Deployment::start() {
+  if (record_ && !record_->file.empty()) {
+    std::vector<Recorder::Column> columns;
+    for (const auto& text : record_->columns) {
+      const auto dot = text.find('.');
+      const Component* c = manager_->find(text.substr(0, dot));
+      const auto index = static_cast<std::uint32_t>(c->state_table().find_column(text.substr(dot + 1)));
+      columns.push_back({c, index, format_for(c->state_table().column_type(index)), text});
+    }
+    recorder_ = std::make_unique<Recorder>(record_->file, std::move(columns), record_->decimation);
+  }
+  if (clock_ == Clock::stepped) {
+    manager_->start_stepped();
+  } else {
+    manager_->start();
+    if (recorder_) recorder_->start_thread();
+  }
+}
+
+void Deployment::run_for(double seconds) {
+  if (clock_ == Clock::stepped) {
+    const TimeNs end = manager_->simulated_time() + static_cast<TimeNs>(seconds * 1e9);
+    // Poll the recorder often enough that the ring (default 256 rows) never laps it.
+    while (manager_->simulated_time() < end) {
+      manager_->step_until(std::min(end, manager_->simulated_time() + 50'000'000));
+      if (recorder_) recorder_->poll();
+    }
+  } else {
+    std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  }
+}
+
+void Deployment::stop() {
+  manager_->stop();
+  if (recorder_) recorder_->stop();
+}
+
+}  // namespace saw::deploy
