@@ -4,6 +4,6 @@ set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 tools/bootstrap.sh
-cmake --preset release -DSAW_WERROR=ON >/dev/null
+cmake --preset release >/dev/null
 cmake --build --preset release
 ctest --preset release --timeout 300 "$@"

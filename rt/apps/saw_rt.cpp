@@ -59,9 +59,12 @@ int main(int argc, char** argv) {
   double duration = 0;
   bool stepped = false, list = false;
   app.add_option("config", config, "deployment file (YAML)");
-  app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")->check(CLI::NonNegativeNumber);
+  app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
+      ->check(CLI::NonNegativeNumber)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.add_flag("--stepped", stepped, "simulated clock, as fast as possible (needs --duration)");
-  app.add_option("--record", record, "CSV file for the deployment's record: columns");
+  app.add_option("--record", record, "CSV file for the deployment's record: columns")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.add_flag("--list-types", list, "list the component types and exit");
   CLI11_PARSE(app, argc, argv);
 
