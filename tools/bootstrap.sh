@@ -45,3 +45,14 @@ if [ ! -f "$ruckig_dir/CMakeLists.txt" ]; then
     { echo "bootstrap: checksum mismatch for $tarball" >&2; rm -f "$tarball"; exit 1; }
   tar -xzf "$tarball" -C "$cache"
 fi
+
+# A Python venv for the tools (plots, experiment scripts), rebuilt when requirements change.
+venv="$root/.venv"
+stamp="$venv/.requirements.sha256"
+want=$(sha256sum "$root/tools/requirements.txt" | cut -d' ' -f1)
+if [ ! -x "$venv/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  echo "bootstrap: creating the tools venv (.venv)"
+  python3 -m venv "$venv"
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "$root/tools/requirements.txt"
+  echo "$want" > "$stamp"
+fi

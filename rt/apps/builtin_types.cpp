@@ -78,7 +78,8 @@ std::unique_ptr<Component> make_teleop(FactoryContext& ctx) {
   c.offset_limits.jerk = o.get_in_range("jerk", 1e-6, 1e5, c.offset_limits.jerk);
   Params pr = p.child("prediction");
   c.prediction.enabled = pr.get_or<bool>("enabled", false);
-  c.prediction.horizon = static_cast<double>(pr.get_or<std::chrono::nanoseconds>("horizon", 0ns).count()) * 1e-9;
+  c.prediction.master_horizon = static_cast<double>(pr.get_or<std::chrono::nanoseconds>("master", 0ns).count()) * 1e-9;
+  c.prediction.slave_horizon = static_cast<double>(pr.get_or<std::chrono::nanoseconds>("slave", 0ns).count()) * 1e-9;
   c.stale_timeout = static_cast<double>(p.get_or<std::chrono::nanoseconds>("stale_timeout", 10ms).count()) * 1e-9;
   c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.align = p.get_or<bool>("align", false);

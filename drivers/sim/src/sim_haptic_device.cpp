@@ -12,7 +12,7 @@ Vec3 to_vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 SimDeviceConfig with_defaults(SimDeviceConfig c) {
   const bool omni = c.model == ArmModel::omni;
   if (c.inertia.isZero()) c.inertia = omni ? Eigen::Vector3d(2e-4, 2e-4, 1e-4) : Eigen::Vector3d(0.1, 0.1, 0.1);
-  if (c.damping.isZero()) c.damping = omni ? Eigen::Vector3d(2e-3, 2e-3, 1e-3) : Eigen::Vector3d(1.0, 1.0, 1.0);
+  if (c.damping.isZero()) c.damping = omni ? Eigen::Vector3d(2e-2, 2e-2, 1e-2) : Eigen::Vector3d(1.0, 1.0, 1.0);
   if (c.joint_min == c.joint_max) {
     c.joint_min = omni ? Eigen::Vector3d(-1.7, -1.2, -0.2) : Eigen::Vector3d(-0.05, -0.05, -0.05);
     c.joint_max = omni ? Eigen::Vector3d(1.7, 1.75, 2.6) : Eigen::Vector3d(0.05, 0.05, 0.05);

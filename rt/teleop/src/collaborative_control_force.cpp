@@ -50,7 +50,8 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
     config_.limits = l;
   });
   p.add_command_write<Prediction>("set_prediction", [this](const Prediction& pr) {
-    if (!finite(pr.horizon) || pr.horizon < 0 || pr.horizon > 1.0) return void(++rejected_);
+    const auto bad = [](double h) { return !finite(h) || h < 0 || h > 1.0; };
+    if (bad(pr.master_horizon) || bad(pr.slave_horizon)) return void(++rejected_);
     config_.prediction = pr;
   });
   p.add_command_write<Vec3>("set_slave_offset", [this](const Vec3& o) {
@@ -122,11 +123,11 @@ bool CollaborativeControlForce::read_inputs(Input& master, Input& slave) noexcep
   return true;
 }
 
-Eigen::Vector3d CollaborativeControlForce::predict(const Input& in) const noexcept {
-  if (!config_.prediction.enabled || config_.prediction.horizon <= 0) return in.position;
+Eigen::Vector3d CollaborativeControlForce::predict(const Input& in, double horizon) const noexcept {
+  if (!config_.prediction.enabled || horizon <= 0) return in.position;
   // Eq. 7, x(t) = x(t−1) + δt·ẋ(t−1), stepped over the horizon with the last known velocity.
   const double dt = seconds(config());
-  const auto steps = static_cast<int>(std::lround(config_.prediction.horizon / dt));
+  const auto steps = static_cast<int>(std::lround(horizon / dt));
   Eigen::Vector3d x = in.position;
   for (int i = 0; i < steps; ++i) x += dt * in.velocity;
   return x;
@@ -143,7 +144,8 @@ void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master, con
 }
 
 void CollaborativeControlForce::snap_offsets(const Input& master, const Input& slave) noexcept {
-  slave_offset_.reset(cancelling_slave_offset(predict(master), master_offset_, predict(slave), config_.scale));
+  slave_offset_.reset(cancelling_slave_offset(predict(master, config_.prediction.master_horizon), master_offset_,
+                                               predict(slave, config_.prediction.slave_horizon), config_.scale));
 }
 
 void CollaborativeControlForce::run() {
@@ -164,7 +166,8 @@ void CollaborativeControlForce::run() {
     send_forces(zero, zero);
     return;
   }
-  const Eigen::Vector3d p_m = predict(master), p_s = predict(slave);
+  const Eigen::Vector3d p_m = predict(master, config_.prediction.master_horizon);
+  const Eigen::Vector3d p_s = predict(slave, config_.prediction.slave_horizon);
   if (snap_pending_) {
     snap_offsets(master, slave);
     if (config_.align) slave_offset_.set_target(to_eigen(config_.slave_offset));

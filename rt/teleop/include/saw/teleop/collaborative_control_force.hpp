@@ -11,9 +11,12 @@
 
 namespace saw::teleop {
 
+// The local model predicts only the inputs that arrive late: a side's horizon is the delay of
+// the link its positions come over (0 for a device beside this task).
 struct Prediction {
   bool enabled = false;
-  double horizon = 0.0;  // s: how far ahead the local model predicts (the link's delay)
+  double master_horizon = 0.0;  // s
+  double slave_horizon = 0.0;   // s
 };
 
 struct TeleopConfig {
@@ -71,7 +74,7 @@ class CollaborativeControlForce : public Task {
   void handle_state_command(StateCommand c) noexcept;
   void set_operating_state(OperatingStateValue s) noexcept;
   void send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept;
-  Eigen::Vector3d predict(const Input& in) const noexcept;
+  Eigen::Vector3d predict(const Input& in, double horizon) const noexcept;
   void snap_offsets(const Input& master, const Input& slave) noexcept;
 
   TeleopConfig config_;

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Reproduces the paper's Fig. 7 (tracking with delay, with and without prediction) into docs/.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+tools/bootstrap.sh
+cmake --preset release >/dev/null
+cmake --build --preset release --target saw-rt
+exec .venv/bin/python tools/experiments/fig7.py "$@"
