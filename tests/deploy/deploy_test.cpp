@@ -8,7 +8,10 @@
 
 #include "builtin_types.hpp"
 #include "saw/deploy/deployment.hpp"
+#include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
+
+#include <cmath>
 
 namespace {
 
@@ -141,6 +144,62 @@ TEST(SawRt, GoodFileRunsAndPrintsItsSummary) {
   EXPECT_EQ(run(path + " --duration 0.5", out), 0) << out;  // stepped per the file
   EXPECT_TRUE(std::regex_search(out, std::regex(R"(teleop +1\.00ms +500 )"))) << out;
   EXPECT_NE(out.find("tracking error"), std::string::npos) << out;
+}
+
+}  // namespace
+
+namespace {
+
+// The shipped deployment, on the stepped clock: the slave tracks the master.
+TEST(Integration, ShippedTeleopSimTracksInSteppedMode) {
+  auto d = saw::deploy::load_deployment(SAW_SOURCE_DIR "/config/teleop-sim.yaml", registry());
+  d.set_clock(saw::deploy::Clock::stepped);
+  d.start();
+  d.run_for(5.0);
+  d.stop();
+  auto* t = d.find<saw::teleop::CollaborativeControlForce>("teleop");
+  ASSERT_NE(t, nullptr);
+  EXPECT_EQ(t->operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_EQ(t->enabled_cycles(), 5001u);
+  EXPECT_LT(t->tracking_rms(), 1e-3);
+  EXPECT_GT(t->tracking_rms(), 0.0) << "the master does move";
+}
+
+// With 20 ms of delay on the master's positions, the local model removes most of the error.
+double delayed_rms(bool predict) {
+  std::string text = good;
+  text.replace(text.find("connections:"), std::string("connections:").size(),
+               "  - {name: master_delay, type: delay, task: {period: 1ms}, params: {delay: 20ms}}\nconnections:\n"
+               "  - {client: master_delay, required: source, server: master, provided: arm}");
+  text.replace(text.find("required: master, server: master"), std::string("required: master, server: master").size(),
+               "required: master, server: master_delay");
+  text.replace(text.find("gains: {master: 100, slave: 100}"), std::string("gains: {master: 100, slave: 100}").size(),
+               std::string("gains: {master: 0, slave: 300}, stale_timeout: 100ms, prediction: {enabled: ") +
+                   (predict ? "true" : "false") + ", master: 20ms}");
+  auto d = saw::deploy::parse_deployment(text, "cfg.yaml", registry());
+  const auto* master = d.find<saw::drivers::SimHapticDevice>("master");
+  const auto* slave = d.find<saw::drivers::SimHapticDevice>("slave");
+  d.start();
+  // The real positions, not the teleop's (delayed) view of them.
+  double sum = 0;
+  int n = 0;
+  for (int i = 0; i < 6000; ++i) {
+    d.manager().step();
+    saw::Pose m, s;
+    if (i < 2000 || master->state_table().read_latest(master->columns().measured_cp, m) != saw::Status::ok ||
+        slave->state_table().read_latest(slave->columns().measured_cp, s) != saw::Status::ok)
+      continue;
+    sum += std::pow(m.position[0] - s.position[0], 2);
+    ++n;
+  }
+  d.stop();
+  return std::sqrt(sum / n);
+}
+
+TEST(Integration, PredictionReducesTheTrackingErrorOfADelayedMaster) {
+  const double without = delayed_rms(false), with = delayed_rms(true);
+  EXPECT_GT(without, 0.5e-3) << "20 ms of delay on a 2 cm, 0.5 Hz sinusoid shows";
+  EXPECT_LT(with, 0.5 * without);
 }
 
 }  // namespace

@@ -271,3 +271,19 @@ TEST(CollaborativeControlForce, EulerPredictionCompensatesTheDelay) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(CollaborativeControlForce, WaitsForInputsAtStartUpThenFaultsIfTheyNeverCome) {
+  TeleopConfig c = basic();
+  c.stale_timeout = 0.005;
+  Rig rig(c);
+  rig.step(4, false);  // the master has published nothing yet: not a fault, not yet
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_EQ(norm(rig.slave.force), 0.0);
+  rig.step(3, false);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
+  EXPECT_EQ(rig.teleop.fault_reason(), saw::teleop::FaultReason::master_missing);
+}
+
+}  // namespace

@@ -152,12 +152,16 @@ void CollaborativeControlForce::run() {
   Input master, slave;
   const bool inputs_ok = read_inputs(master, slave);
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  if (start_time_ < 0) start_time_ = now();
   if (!inputs_ok) {
     // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
-    if (state_.state == OperatingStateValue::enabled) set_operating_state(OperatingStateValue::fault);
+    // At start-up, inputs may simply not be published yet: wait up to stale_timeout for them.
+    const bool starting = !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(config_.stale_timeout * 1e9);
+    if (state_.state == OperatingStateValue::enabled && !starting) set_operating_state(OperatingStateValue::fault);
     send_forces(zero, zero);
     return;
   }
+  inputs_seen_ = true;
   if (state_.state != OperatingStateValue::enabled || clutched_) {
     // Forces off; keep the offset cancelling so that enabling or releasing the clutch cannot jump.
     snap_offsets(master, slave);

@@ -82,6 +82,8 @@ class CollaborativeControlForce : public Task {
   Eigen::Vector3d master_offset_ = Eigen::Vector3d::Zero();
   bool clutched_ = false, ratcheting_ = false, snap_pending_ = true;
   bool rescale_pending_ = false;
+  bool inputs_seen_ = false;  // a producer that has not published yet is not a fault, for a while
+  TimeNs start_time_ = -1;
   Scale previous_scale_;
   FaultReason fault_ = FaultReason::none;
   std::uint64_t rejected_ = 0, refused_sends_ = 0;
