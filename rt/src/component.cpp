@@ -22,6 +22,8 @@ Component::Component(std::string name, std::size_t state_rows)
 Component::~Component() = default;
 
 ProvidedInterface& Component::provide(std::string name) {
+  if (lifecycle() != Lifecycle::constructed)
+    throw std::logic_error("component '" + name_ + "': provided interface '" + name + "' added after start");
   if (provided(name) != nullptr)
     throw std::invalid_argument("component '" + name_ + "': provided interface '" + name + "' added twice");
   provided_.push_back(std::make_unique<ProvidedInterface>(*this, std::move(name)));
@@ -29,6 +31,8 @@ ProvidedInterface& Component::provide(std::string name) {
 }
 
 RequiredInterface& Component::require(std::string name) {
+  if (lifecycle() != Lifecycle::constructed)
+    throw std::logic_error("component '" + name_ + "': required interface '" + name + "' added after start");
   if (required(name) != nullptr)
     throw std::invalid_argument("component '" + name_ + "': required interface '" + name + "' added twice");
   required_.push_back(std::make_unique<RequiredInterface>(*this, std::move(name)));
