@@ -1,0 +1,88 @@
+// The shared-memory bridge's segment layout: header, state mirror, per-client slots.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "saw/cache_line.hpp"
+#include "saw/spsc_ring.hpp"
+
+namespace saw::bridge {
+
+inline constexpr std::uint64_t segment_magic = 0x3147445242574153ULL;  // "SAWBRDG1", little endian
+inline constexpr std::uint32_t layout_version = 1;  // any change below bumps this
+
+enum class SegmentState : std::uint32_t { initializing = 0, ready = 1, closed = 2 };
+
+// Fixed-width, standard-layout, address-free: the same bytes in every process.
+struct alignas(cache_line) SegmentHeader {
+  std::uint64_t magic;
+  std::uint32_t layout_version;
+  std::uint32_t header_size;
+  std::uint64_t interface_hash;  // of the exported interface: names, kinds, type names and sizes
+  std::uint64_t total_size;
+  std::uint64_t mirror_offset, mirror_words;
+  std::uint64_t slots_offset, slot_stride;
+  std::uint32_t slot_count, ring_capacity, command_slot_size, event_slot_size;
+  char component[64];
+  alignas(cache_line) std::atomic<std::int32_t> owner_pid;
+  std::atomic<std::uint32_t> state;
+  std::atomic<std::int64_t> heartbeat;  // owner's CLOCK_MONOTONIC ns, refreshed every cycle
+};
+
+// One client's slot: claimed by compare-and-swap of owner_pid from 0, reclaimed when that
+// process is gone. Both rings' storage follows the slot header. A claim resets the rings and
+// bumps `generation`: a consumer holding a view of the slot's rings must compare generations
+// before each drain and rebuild its view when they differ.
+struct alignas(cache_line) ClientSlot {
+  std::atomic<std::int32_t> owner_pid;
+  std::atomic<std::uint32_t> generation;  // bumped on every claim: a stale view can tell
+  SpscRingControl commands;               // client → server
+  SpscRingControl events;                 // server → client
+};
+
+struct LayoutParams {
+  std::string component;
+  std::uint64_t interface_hash = 0;
+  std::size_t mirror_bytes = 0;
+  std::uint32_t slot_count = 8;
+  std::uint32_t ring_capacity = 64;
+  std::size_t command_payload = 64;  // largest command argument
+  std::size_t event_payload = 64;    // largest event argument
+};
+
+// Offsets and sizes for a segment with these parameters.
+struct Layout {
+  std::uint64_t mirror_offset, mirror_words, slots_offset, slot_stride, total_size;
+  std::uint32_t command_slot_size, event_slot_size;
+  static Layout of(const LayoutParams& p);
+};
+
+// Writes a fresh header (state initializing, owner = this process) into zeroed memory.
+void initialize(void* memory, const LayoutParams& p, const Layout& l, std::int32_t owner_pid);
+
+// Checks a mapping before anything is read from it: "" if sound, else what is wrong, naming
+// the values found and expected (bad magic, other layout version, truncated file).
+std::string validate(const void* memory, std::size_t size);
+
+// Views into a validated mapping.
+SegmentHeader& header(void* memory) noexcept;
+std::atomic<std::uint64_t>* mirror(void* memory) noexcept;
+ClientSlot& slot(void* memory, std::uint32_t index) noexcept;
+SpscRing command_ring(void* memory, std::uint32_t index);
+SpscRing event_ring(void* memory, std::uint32_t index);
+
+// The state mirror: one seqlocked block (fence-free, as the state table's rows). One writer.
+void mirror_write(void* memory, const void* data, std::size_t size) noexcept;
+// False if the writer was mid-update on every try.
+bool mirror_read(void* memory, void* data, std::size_t size) noexcept;
+
+// Claims a free slot (or one whose owner died) for `pid`; returns its index or -1 if all taken.
+int claim_slot(void* memory, std::int32_t pid) noexcept;
+void release_slot(void* memory, std::uint32_t index, std::int32_t pid) noexcept;
+// Frees the slots of processes that are gone; returns how many.
+std::uint32_t reclaim_dead_slots(void* memory) noexcept;
+
+}  // namespace saw::bridge

@@ -1,0 +1,48 @@
+// ShmSegment: a named POSIX shared-memory mapping, created by its owner or attached by peers.
+#pragma once
+
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+
+namespace saw::bridge {
+
+class BridgeError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Set-up only (never on an RT path): every call may block or allocate.
+class ShmSegment {
+ public:
+  // Creates /name of `size` bytes, zero-filled. A segment left by a dead owner is replaced;
+  // one whose owner is alive is an error naming that pid (read from the first 4 bytes' owner
+  // field is the caller's business: `owner_alive` decides).
+  static ShmSegment create(const std::string& name, std::size_t size, bool (*owner_alive)(const void* mapping, std::size_t size));
+  // Maps an existing /name read-write; throws if absent.
+  static ShmSegment attach(const std::string& name);
+
+  ShmSegment(ShmSegment&& other) noexcept;
+  ShmSegment& operator=(ShmSegment&& other) noexcept;
+  ~ShmSegment();
+
+  void* data() const noexcept { return data_; }
+  std::size_t size() const noexcept { return size_; }
+  const std::string& name() const noexcept { return name_; }
+  bool owner() const noexcept { return owner_; }
+
+ private:
+  ShmSegment(std::string name, void* data, std::size_t size, bool owner) noexcept
+      : name_(std::move(name)), data_(data), size_(size), owner_(owner) {}
+  void release() noexcept;
+
+  std::string name_;
+  void* data_ = nullptr;
+  std::size_t size_ = 0;
+  bool owner_ = false;  // the owner unlinks the name when it goes
+};
+
+// True if a process with this pid exists (kill(pid, 0)).
+bool process_alive(int pid) noexcept;
+
+}  // namespace saw::bridge
