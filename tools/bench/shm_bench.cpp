@@ -1,0 +1,177 @@
+// saw-bench-shm: round trips between two processes over shared memory — the floors for the
+// bridge (issue 4): a bare futex ping-pong, a spinning atomic ping-pong, and the bridge's own
+// command ring + event ring (spinning, and sleeping on a futex), measured in one run.
+#include <CLI/CLI.hpp>
+#include <linux/futex.h>
+#include <sys/mman.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstring>
+
+#include "saw/bridge/layout.hpp"
+#include "saw/bridge/shm_segment.hpp"
+#include "saw/clock.hpp"
+#include "saw/rt_thread.hpp"
+#include "stats.hpp"
+
+namespace {
+
+using saw::TimeNs;
+
+void futex_wait(std::atomic<std::uint32_t>& a, std::uint32_t expected) {
+  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&a), FUTEX_WAIT, expected, nullptr, nullptr, 0);
+}
+void futex_wake(std::atomic<std::uint32_t>& a) {
+  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&a), FUTEX_WAKE, 1, nullptr, nullptr, 0);
+}
+
+// Two words in a shared anonymous mapping: ping (parent → child) and pong (child → parent).
+struct PingPong {
+  alignas(64) std::atomic<std::uint32_t> ping{0};
+  alignas(64) std::atomic<std::uint32_t> pong{0};
+};
+
+template <class Child, class Parent>
+std::vector<std::int64_t> two_processes(int n, int cpu_parent, int cpu_child, Child child, Parent parent) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (cpu_child >= 0) (void)saw::rt::set_affinity(cpu_child);
+    child(n);
+    _exit(0);
+  }
+  if (cpu_parent >= 0) (void)saw::rt::set_affinity(cpu_parent);
+  std::vector<std::int64_t> samples(static_cast<std::size_t>(n));
+  parent(n, samples);
+  waitpid(pid, nullptr, 0);
+  return samples;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"saw-bench-shm: shared-memory round trips between two processes"};
+  int n = 10000, reps = 5;
+  bool markdown = false;
+  app.add_option("--calls", n, "round trips per repetition");
+  app.add_option("--reps", reps, "repetitions");
+  app.add_flag("--markdown", markdown, "Markdown table");
+  CLI11_PARSE(app, argc, argv);
+  const int ncpu = static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN));
+  const int cpu_a = ncpu > 1 ? 0 : -1, cpu_b = ncpu > 1 ? 1 : -1;
+  std::printf("# saw-bench-shm: %d × %d round trips between two processes on CPUs %d and %d\n", reps, n, cpu_a, cpu_b);
+
+  auto* pp = static_cast<PingPong*>(
+      mmap(nullptr, sizeof(PingPong), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0));
+  std::vector<std::int64_t> futex_all, spin_all, ring_spin_all, ring_futex_all;
+
+  // The bridge segment: one slot; commands carry a sequence number, events echo it back.
+  const saw::bridge::LayoutParams params{"bench", 1, 8, 1, 64, 16, 16};
+  const auto layout = saw::bridge::Layout::of(params);
+  auto seg = saw::bridge::ShmSegment::create("/saw.bench." + std::to_string(getpid()), layout.total_size, nullptr);
+  saw::bridge::initialize(seg.data(), params, layout, getpid());
+  (void)saw::bridge::claim_slot(seg.data(), getpid());
+
+  for (int r = 0; r < reps; ++r) {
+    new (pp) PingPong{};
+    auto futex = two_processes(
+        n, cpu_a, cpu_b,
+        [&](int count) {
+          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
+            while (pp->ping.load(std::memory_order_acquire) != i) futex_wait(pp->ping, i - 1);
+            pp->pong.store(i, std::memory_order_release);
+            futex_wake(pp->pong);
+          }
+        },
+        [&](int count, std::vector<std::int64_t>& out) {
+          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
+            const TimeNs t0 = saw::monotonic_now();
+            pp->ping.store(i, std::memory_order_release);
+            futex_wake(pp->ping);
+            while (pp->pong.load(std::memory_order_acquire) != i) futex_wait(pp->pong, i - 1);
+            out[i - 1] = saw::monotonic_now() - t0;
+          }
+        });
+    new (pp) PingPong{};
+    auto spin = two_processes(
+        n, cpu_a, cpu_b,
+        [&](int count) {
+          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
+            while (pp->ping.load(std::memory_order_acquire) != i) {
+            }
+            pp->pong.store(i, std::memory_order_release);
+          }
+        },
+        [&](int count, std::vector<std::int64_t>& out) {
+          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
+            const TimeNs t0 = saw::monotonic_now();
+            pp->ping.store(i, std::memory_order_release);
+            while (pp->pong.load(std::memory_order_acquire) != i) {
+            }
+            out[i - 1] = saw::monotonic_now() - t0;
+          }
+        });
+    // The bridge's rings: the parent (client) pushes a command, the child (server) answers with
+    // an event. Spinning first, then sleeping on the futex words beside the rings.
+    for (bool sleep : {false, true}) {
+      new (pp) PingPong{};
+      void* mem = seg.data();
+      auto rings = two_processes(
+          n, cpu_a, cpu_b,
+          [&](int count) {
+            auto in = saw::bridge::command_ring(mem, 0);
+            auto out = saw::bridge::event_ring(mem, 0);
+            for (int i = 0; i < count; ++i) {
+              const std::byte* s;
+              while ((s = in.front()) == nullptr)
+                if (sleep) futex_wait(pp->ping, pp->ping.load(std::memory_order_acquire));
+              std::uint64_t v;
+              std::memcpy(&v, s, sizeof v);
+              in.pop();
+              std::byte* e;
+              while ((e = out.try_reserve()) == nullptr) {
+              }
+              std::memcpy(e, &v, sizeof v);
+              out.commit();
+              if (sleep) {
+                pp->pong.fetch_add(1, std::memory_order_release);
+                futex_wake(pp->pong);
+              }
+            }
+          },
+          [&](int count, std::vector<std::int64_t>& samples) {
+            auto out = saw::bridge::command_ring(mem, 0);
+            auto in = saw::bridge::event_ring(mem, 0);
+            for (int i = 0; i < count; ++i) {
+              const TimeNs t0 = saw::monotonic_now();
+              std::byte* c;
+              while ((c = out.try_reserve()) == nullptr) {
+              }
+              const auto v = static_cast<std::uint64_t>(i);
+              std::memcpy(c, &v, sizeof v);
+              out.commit();
+              if (sleep) {
+                pp->ping.fetch_add(1, std::memory_order_release);
+                futex_wake(pp->ping);
+              }
+              const std::byte* e;
+              while ((e = in.front()) == nullptr)
+                if (sleep) futex_wait(pp->pong, pp->pong.load(std::memory_order_acquire));
+              in.pop();
+              samples[static_cast<std::size_t>(i)] = saw::monotonic_now() - t0;
+            }
+          });
+      (sleep ? ring_futex_all : ring_spin_all).insert((sleep ? ring_futex_all : ring_spin_all).end(), rings.begin(), rings.end());
+    }
+    futex_all.insert(futex_all.end(), futex.begin(), futex.end());
+    spin_all.insert(spin_all.end(), spin.begin(), spin.end());
+  }
+  saw::bench::print_header(markdown);
+  saw::bench::print_row(markdown, "bare futex ping-pong (round trip)", saw::bench::summarize(futex_all));
+  saw::bench::print_row(markdown, "shared atomic spin ping-pong (round trip)", saw::bench::summarize(spin_all));
+  saw::bench::print_row(markdown, "bridge rings, spinning (command + event)", saw::bench::summarize(ring_spin_all));
+  saw::bench::print_row(markdown, "bridge rings, futex sleep (command + event)", saw::bench::summarize(ring_futex_all));
+  return 0;
+}
