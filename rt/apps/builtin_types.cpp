@@ -2,6 +2,8 @@
 
 #include <filesystem>
 
+#include "saw/eigen.hpp"
+
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
 #include "saw/teleop/delay_task.hpp"
@@ -13,7 +15,6 @@ using namespace std::chrono_literals;
 using deploy::FactoryContext;
 using deploy::Params;
 
-Eigen::Vector3d eigen(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
 TaskConfig periodic_task(const FactoryContext& ctx, const char* type) {
   TaskConfig t = ctx.task.value_or(TaskConfig::periodic(1ms, 80));
@@ -28,11 +29,11 @@ drivers::HandScript parse_hand(Params h, const std::string& directory) {
                             Kind::none);
   s.stiffness = h.get_in_range("stiffness", 0, 5000, s.stiffness);
   s.damping = h.get_in_range("damping", 0, 500, s.damping);
-  s.from = eigen(h.get_or<Vec3>("from", {0, 0, 0}));
-  s.to = eigen(h.get_or<Vec3>("to", {0, 0, 0}));
+  s.from = to_eigen(h.get_or<Vec3>("from", {0, 0, 0}));
+  s.to = to_eigen(h.get_or<Vec3>("to", {0, 0, 0}));
   s.duration = h.get_in_range("duration", 1e-3, 1e6, s.duration);
   s.back_and_forth = h.get_or<bool>("back_and_forth", false);
-  s.amplitude = eigen(h.get_or<Vec3>("amplitude", {0, 0, 0}));
+  s.amplitude = to_eigen(h.get_or<Vec3>("amplitude", {0, 0, 0}));
   s.frequency = h.get_in_range("frequency", 0, 100, s.frequency);
   s.phase = h.get_or<double>("phase", 0);
   if (s.kind == Kind::csv) {
@@ -52,7 +53,7 @@ std::unique_ptr<Component> make_sim_device(FactoryContext& ctx) {
   drivers::SimDeviceConfig c;
   c.model = p.get_enum<drivers::ArmModel>("model", {{"omni", drivers::ArmModel::omni}, {"falcon", drivers::ArmModel::falcon}},
                                           drivers::ArmModel::omni);
-  c.initial_joints = eigen(p.get_or<Vec3>("initial_joints", {0, 0, 0}));
+  c.initial_joints = to_eigen(p.get_or<Vec3>("initial_joints", {0, 0, 0}));
   c.max_force = p.get_in_range("max_force", 0, 100, 0);
   c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.hand = parse_hand(p.child("hand"), ctx.directory);

@@ -3,10 +3,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "saw/eigen.hpp"
+
 namespace saw::drivers {
 namespace {
-
-Vec3 to_vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 // Fills the model's defaults where the configuration left zeros.
 SimDeviceConfig with_defaults(SimDeviceConfig c) {

@@ -2,11 +2,11 @@
 
 #include <cmath>
 
+#include "saw/eigen.hpp"
+
 namespace saw::teleop {
 namespace {
 
-Eigen::Vector3d to_eigen(const Vec3& v) { return {v[0], v[1], v[2]}; }
-Vec3 to_vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 bool finite(double x) { return std::isfinite(x); }
 double seconds(const TaskConfig& t) { return static_cast<double>(t.period.count()) * 1e-9; }
 
