@@ -20,7 +20,8 @@ Layout Layout::of(const LayoutParams& p) {
   l.mirror_offset = align_up(sizeof(SegmentHeader), cache_line);
   l.mirror_words = 1 + (p.mirror_bytes + 7) / 8;  // seq word + data
   l.slots_offset = align_up(l.mirror_offset + l.mirror_words * 8, cache_line);
-  l.slot_stride = align_up(sizeof(ClientSlot) + capacity * (l.command_slot_size + l.event_slot_size), cache_line);
+  l.slot_stride =
+      align_up(sizeof(ClientSlot) + capacity * (l.command_slot_size + l.event_slot_size), cache_line);
   l.total_size = l.slots_offset + l.slot_stride * p.slot_count;
   return l;
 }
@@ -51,7 +52,8 @@ void initialize(void* memory, const LayoutParams& p, const Layout& l, std::int32
 
 std::string validate(const void* memory, std::size_t size) {
   if (size < sizeof(SegmentHeader))
-    return "truncated: " + std::to_string(size) + " bytes, a header needs " + std::to_string(sizeof(SegmentHeader));
+    return "truncated: " + std::to_string(size) + " bytes, a header needs " +
+           std::to_string(sizeof(SegmentHeader));
   const auto* h = static_cast<const SegmentHeader*>(memory);
   if (h->magic != segment_magic) {
     char found[32];
@@ -59,12 +61,14 @@ std::string validate(const void* memory, std::size_t size) {
     return std::string("not a sawrt bridge segment (magic ") + found + ")";
   }
   if (h->layout_version != layout_version)
-    return "layout version " + std::to_string(h->layout_version) + " in the segment, this process speaks version " +
-           std::to_string(layout_version);
+    return "layout version " + std::to_string(h->layout_version) +
+           " in the segment, this process speaks version " + std::to_string(layout_version);
   if (h->header_size != sizeof(SegmentHeader))
-    return "header of " + std::to_string(h->header_size) + " bytes, expected " + std::to_string(sizeof(SegmentHeader));
+    return "header of " + std::to_string(h->header_size) + " bytes, expected " +
+           std::to_string(sizeof(SegmentHeader));
   if (h->total_size > size)
-    return "truncated: " + std::to_string(size) + " bytes mapped, the header says " + std::to_string(h->total_size);
+    return "truncated: " + std::to_string(size) + " bytes mapped, the header says " +
+           std::to_string(h->total_size);
   const Layout l = Layout::of({"", 0, (h->mirror_words - 1) * 8, h->slot_count, h->ring_capacity,
                                h->command_slot_size - 16u, h->event_slot_size - 16u});
   if (l.total_size != h->total_size || l.slots_offset != h->slots_offset || l.slot_stride != h->slot_stride)
@@ -75,12 +79,14 @@ std::string validate(const void* memory, std::size_t size) {
 SegmentHeader& header(void* memory) noexcept { return *static_cast<SegmentHeader*>(memory); }
 
 std::atomic<std::uint64_t>* mirror(void* memory) noexcept {
-  return reinterpret_cast<std::atomic<std::uint64_t>*>(static_cast<std::byte*>(memory) + header(memory).mirror_offset);
+  return reinterpret_cast<std::atomic<std::uint64_t>*>(static_cast<std::byte*>(memory) +
+                                                       header(memory).mirror_offset);
 }
 
 ClientSlot& slot(void* memory, std::uint32_t index) noexcept {
   const auto& h = header(memory);
-  return *reinterpret_cast<ClientSlot*>(static_cast<std::byte*>(memory) + h.slots_offset + index * h.slot_stride);
+  return *reinterpret_cast<ClientSlot*>(static_cast<std::byte*>(memory) + h.slots_offset +
+                                        index * h.slot_stride);
 }
 
 namespace {
@@ -99,7 +105,8 @@ SpscRing command_ring(void* memory, std::uint32_t index) {
 
 SpscRing event_ring(void* memory, std::uint32_t index) {
   const auto& h = header(memory);
-  return SpscRing(&slot(memory, index).events, ring_storage(memory, index, true), h.ring_capacity, h.event_slot_size);
+  return SpscRing(&slot(memory, index).events, ring_storage(memory, index, true), h.ring_capacity,
+                  h.event_slot_size);
 }
 
 void mirror_write(void* memory, const void* data, std::size_t size) noexcept {
@@ -159,7 +166,9 @@ std::uint32_t reclaim_dead_slots(void* memory) noexcept {
   for (std::uint32_t i = 0; i < h.slot_count; ++i) {
     auto& s = slot(memory, i);
     std::int32_t pid = s.owner_pid.load(std::memory_order_acquire);
-    if (pid != 0 && !process_alive(pid) && s.owner_pid.compare_exchange_strong(pid, 0, std::memory_order_acq_rel)) ++n;
+    if (pid != 0 && !process_alive(pid) &&
+        s.owner_pid.compare_exchange_strong(pid, 0, std::memory_order_acq_rel))
+      ++n;
   }
   return n;
 }

@@ -2,9 +2,8 @@
 
 #include <filesystem>
 
-#include "saw/eigen.hpp"
-
 #include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/eigen.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
 #include "saw/teleop/delay_task.hpp"
 
@@ -15,18 +14,19 @@ using namespace std::chrono_literals;
 using deploy::FactoryContext;
 using deploy::Params;
 
-
 TaskConfig periodic_task(const FactoryContext& ctx, const char* type) {
   TaskConfig t = ctx.task.value_or(TaskConfig::periodic(1ms, 80));
-  if (!t.is_periodic()) ctx.params.fail(std::string(type) + " '" + ctx.name + "' needs a periodic task (task.period)");
+  if (!t.is_periodic())
+    ctx.params.fail(std::string(type) + " '" + ctx.name + "' needs a periodic task (task.period)");
   return t;
 }
 
 drivers::HandScript parse_hand(Params h, const std::string& directory) {
   using Kind = drivers::HandScript::Kind;
   drivers::HandScript s;
-  s.kind = h.get_enum<Kind>("type", {{"none", Kind::none}, {"line", Kind::line}, {"sinusoid", Kind::sinusoid}, {"csv", Kind::csv}},
-                            Kind::none);
+  s.kind = h.get_enum<Kind>(
+      "type", {{"none", Kind::none}, {"line", Kind::line}, {"sinusoid", Kind::sinusoid}, {"csv", Kind::csv}},
+      Kind::none);
   s.stiffness = h.get_in_range("stiffness", 0, 5000, s.stiffness);
   s.damping = h.get_in_range("damping", 0, 500, s.damping);
   s.from = to_eigen(h.get_or<Vec3>("from", {0, 0, 0}));
@@ -51,8 +51,9 @@ drivers::HandScript parse_hand(Params h, const std::string& directory) {
 std::unique_ptr<Component> make_sim_device(FactoryContext& ctx) {
   Params& p = ctx.params;
   drivers::SimDeviceConfig c;
-  c.model = p.get_enum<drivers::ArmModel>("model", {{"omni", drivers::ArmModel::omni}, {"falcon", drivers::ArmModel::falcon}},
-                                          drivers::ArmModel::omni);
+  c.model = p.get_enum<drivers::ArmModel>(
+      "model", {{"omni", drivers::ArmModel::omni}, {"falcon", drivers::ArmModel::falcon}},
+      drivers::ArmModel::omni);
   c.initial_joints = to_eigen(p.get_or<Vec3>("initial_joints", {0, 0, 0}));
   c.max_force = p.get_in_range("max_force", 0, 100, 0);
   c.start_enabled = p.get_or<bool>("start_enabled", true);
@@ -79,9 +80,12 @@ std::unique_ptr<Component> make_teleop(FactoryContext& ctx) {
   c.offset_limits.jerk = o.get_in_range("jerk", 1e-6, 1e5, c.offset_limits.jerk);
   Params pr = p.child("prediction");
   c.prediction.enabled = pr.get_or<bool>("enabled", false);
-  c.prediction.master_horizon = static_cast<double>(pr.get_or<std::chrono::nanoseconds>("master", 0ns).count()) * 1e-9;
-  c.prediction.slave_horizon = static_cast<double>(pr.get_or<std::chrono::nanoseconds>("slave", 0ns).count()) * 1e-9;
-  c.stale_timeout = static_cast<double>(p.get_or<std::chrono::nanoseconds>("stale_timeout", 10ms).count()) * 1e-9;
+  c.prediction.master_horizon =
+      static_cast<double>(pr.get_or<std::chrono::nanoseconds>("master", 0ns).count()) * 1e-9;
+  c.prediction.slave_horizon =
+      static_cast<double>(pr.get_or<std::chrono::nanoseconds>("slave", 0ns).count()) * 1e-9;
+  c.stale_timeout =
+      static_cast<double>(p.get_or<std::chrono::nanoseconds>("stale_timeout", 10ms).count()) * 1e-9;
   c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.align = p.get_or<bool>("align", false);
   c.slave_offset = p.get_or<Vec3>("slave_offset", {0, 0, 0});
@@ -98,7 +102,8 @@ std::unique_ptr<Component> make_delay(FactoryContext& ctx) {
 }  // namespace
 
 void register_builtin_types(deploy::ComponentRegistry& registry) {
-  registry.add("sim_haptic_device", make_sim_device, "simulated 3-DOF haptic device (Omni- or Falcon-like), KDL");
+  registry.add("sim_haptic_device", make_sim_device,
+               "simulated 3-DOF haptic device (Omni- or Falcon-like), KDL");
   registry.add("teleop", make_teleop, "collaborative force teleoperation between a master and a slave");
   registry.add("delay", make_delay, "re-publishes a device's measured_cp/cv `delay` late");
 }

@@ -1,6 +1,5 @@
 // saw-rt: the RT host. Loads a YAML deployment, validates all of it, runs it, prints a summary.
 #include <CLI/CLI.hpp>
-
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -28,19 +27,22 @@ void print_summary(saw::deploy::Deployment& d, double seconds) {
     const auto s = t->statistics();
     const auto& h = t->wakeup_histogram();
     std::printf("  %-14s %6.2fms %10llu %9llu %9llu %7.1fus %7.1fus %7.1fus %7.1fus\n", t->name().c_str(),
-                static_cast<double>(t->config().period.count()) * 1e-6, static_cast<unsigned long long>(s.cycles),
-                static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_periods),
-                static_cast<double>(h.min()) / 1e3, h.mean() / 1e3, static_cast<double>(h.percentile(0.99)) / 1e3,
+                static_cast<double>(t->config().period.count()) * 1e-6,
+                static_cast<unsigned long long>(s.cycles), static_cast<unsigned long long>(s.overruns),
+                static_cast<unsigned long long>(s.missed_periods), static_cast<double>(h.min()) / 1e3,
+                h.mean() / 1e3, static_cast<double>(h.percentile(0.99)) / 1e3,
                 static_cast<double>(h.max()) / 1e3);
   }
   for (saw::Component* c : d.components()) {
     if (const auto* t = dynamic_cast<saw::teleop::CollaborativeControlForce*>(c))
-      std::printf("  %s: %s, tracking error |e_s| RMS %.3f mm, max %.3f mm over %llu enabled cycles; "
-                  "rejected settings %llu, refused force commands %llu\n",
-                  t->name().c_str(), std::string(saw::to_string(t->operating_state())).c_str(), t->tracking_rms() * 1e3,
-                  t->tracking_max() * 1e3, static_cast<unsigned long long>(t->enabled_cycles()),
-                  static_cast<unsigned long long>(t->rejected_commands()),
-                  static_cast<unsigned long long>(t->refused_sends()));
+      std::printf(
+          "  %s: %s, tracking error |e_s| RMS %.3f mm, max %.3f mm over %llu enabled cycles; "
+          "rejected settings %llu, refused force commands %llu\n",
+          t->name().c_str(), std::string(saw::to_string(t->operating_state())).c_str(),
+          t->tracking_rms() * 1e3, t->tracking_max() * 1e3,
+          static_cast<unsigned long long>(t->enabled_cycles()),
+          static_cast<unsigned long long>(t->rejected_commands()),
+          static_cast<unsigned long long>(t->refused_sends()));
     if (const auto* s = dynamic_cast<saw::drivers::SimHapticDevice*>(c))
       if (s->rejected_commands() != 0)
         std::printf("  %s: %llu force commands rejected (non-finite or over the limit)\n", s->name().c_str(),
@@ -71,7 +73,8 @@ int main(int argc, char** argv) {
   saw::deploy::ComponentRegistry registry;
   saw::apps::register_builtin_types(registry);
   if (list) {
-    for (const auto& [name, entry] : registry.types()) std::printf("%-20s %s\n", name.c_str(), entry.second.c_str());
+    for (const auto& [name, entry] : registry.types())
+      std::printf("%-20s %s\n", name.c_str(), entry.second.c_str());
     return 0;
   }
   if (config.empty()) {
@@ -98,8 +101,8 @@ int main(int argc, char** argv) {
   if (d->clock() == saw::deploy::Clock::stepped) {
     d->run_for(duration);
   } else {
-    while (!stop_requested.load() &&
-           (duration <= 0 || std::chrono::steady_clock::now() - started < std::chrono::duration<double>(duration)))
+    while (!stop_requested.load() && (duration <= 0 || std::chrono::steady_clock::now() - started <
+                                                           std::chrono::duration<double>(duration)))
       std::this_thread::sleep_for(20ms);
   }
   d->stop();

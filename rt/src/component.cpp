@@ -6,10 +6,14 @@ namespace saw {
 
 std::string_view to_string(Lifecycle l) {
   switch (l) {
-    case Lifecycle::constructed: return "constructed";
-    case Lifecycle::ready: return "ready";
-    case Lifecycle::active: return "active";
-    case Lifecycle::finished: return "finished";
+    case Lifecycle::constructed:
+      return "constructed";
+    case Lifecycle::ready:
+      return "ready";
+    case Lifecycle::active:
+      return "active";
+    case Lifecycle::finished:
+      return "finished";
   }
   return "?";
 }

@@ -16,8 +16,8 @@ void check_setup(const Component& owner, const std::string& iface, const std::st
 void ProvidedInterface::check_new_name(const std::string& name, bool event) const {
   check_setup(owner_, name_, name);
   if (event ? find_event(name) != nullptr : find_command(name) != nullptr)
-    throw std::invalid_argument("component '" + owner_.name() + "' provided interface '" + name_ +
-                                "': '" + name + "' added twice");
+    throw std::invalid_argument("component '" + owner_.name() + "' provided interface '" + name_ + "': '" +
+                                name + "' added twice");
 }
 
 void ProvidedInterface::add(Command c) {
@@ -40,8 +40,8 @@ EventBase* ProvidedInterface::find_event(std::string_view name) const noexcept {
 void RequiredInterface::check_new_name(const std::string& name, bool handler) const {
   check_setup(owner_, name_, name);
   const auto twice = [&] {
-    throw std::invalid_argument("component '" + owner_.name() + "' required interface '" + name_ + "': '" + name +
-                                "' added twice");
+    throw std::invalid_argument("component '" + owner_.name() + "' required interface '" + name_ + "': '" +
+                                name + "' added twice");
   };
   if (!handler)
     for (const auto& f : functions_)

@@ -44,7 +44,8 @@ void write_cyclictest_histogram(std::ostream& os, std::span<const LatencyHistogr
     std::snprintf(buf, sizeof buf, "%06zu", i);
     os << buf;
     for (const auto* h : hs) {
-      std::snprintf(buf, sizeof buf, " %06llu", static_cast<unsigned long long>(i < h->bins() ? h->count(i) : 0));
+      std::snprintf(buf, sizeof buf, " %06llu",
+                    static_cast<unsigned long long>(i < h->bins() ? h->count(i) : 0));
       os << buf;
     }
     os << '\n';

@@ -59,11 +59,22 @@ std::string format_log_record(const LogRecord& r) {
       const LogArg& a = r.args[next++];
       char buf[64];
       switch (a.kind) {
-        case LogArg::Kind::i64: std::snprintf(buf, sizeof buf, "%" PRId64, a.i); break;
-        case LogArg::Kind::u64: std::snprintf(buf, sizeof buf, "%" PRIu64, a.u); break;
-        case LogArg::Kind::f64: std::snprintf(buf, sizeof buf, "%g", a.f); break;
-        case LogArg::Kind::text: out += a.s != nullptr ? a.s : "(null)"; buf[0] = '\0'; break;
-        case LogArg::Kind::none: std::snprintf(buf, sizeof buf, "{}"); break;
+        case LogArg::Kind::i64:
+          std::snprintf(buf, sizeof buf, "%" PRId64, a.i);
+          break;
+        case LogArg::Kind::u64:
+          std::snprintf(buf, sizeof buf, "%" PRIu64, a.u);
+          break;
+        case LogArg::Kind::f64:
+          std::snprintf(buf, sizeof buf, "%g", a.f);
+          break;
+        case LogArg::Kind::text:
+          out += a.s != nullptr ? a.s : "(null)";
+          buf[0] = '\0';
+          break;
+        case LogArg::Kind::none:
+          std::snprintf(buf, sizeof buf, "{}");
+          break;
       }
       out += buf;
       ++p;

@@ -23,8 +23,10 @@ Manager::Manager(ManagerOptions options) : options_(options) {}
 Manager::~Manager() { stop(); }
 
 void Manager::add(Component& c) {
-  if (state_ != ManagerState::idle) throw ConnectError("add " + quoted(c.name()) + ": manager already started");
-  if (find(c.name()) != nullptr) throw ConnectError("add: a component named " + quoted(c.name()) + " exists already");
+  if (state_ != ManagerState::idle)
+    throw ConnectError("add " + quoted(c.name()) + ": manager already started");
+  if (find(c.name()) != nullptr)
+    throw ConnectError("add: a component named " + quoted(c.name()) + " exists already");
   components_.push_back(&c);
 }
 
@@ -63,15 +65,16 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
     throw ConnectError(what + "component " + quoted(server_name) + " has no provided interface " +
                        quoted(provided_name) + " (it has " +
                        names_of(server.provided_interfaces(), [](const auto& p) { return p->name(); }) + ")");
-  if (req->is_connected()) throw ConnectError(what + "the required interface is already connected to " + req->connected_to());
+  if (req->is_connected())
+    throw ConnectError(what + "the required interface is already connected to " + req->connected_to());
 
   // Check everything first, so a failed connect changes nothing; report every problem at once.
   std::string errors;
   const auto check = [&](const std::string& name, const Signature& want, Need need, const Signature* have) {
     if (have == nullptr) {
       if (need == Need::required)
-        errors += "\n  " + quoted(name) + ": the client requires " + to_string(want) + ", the server provides no such " +
-                  (is_event(want.kind) ? "event" : "command");
+        errors += "\n  " + quoted(name) + ": the client requires " + to_string(want) +
+                  ", the server provides no such " + (is_event(want.kind) ? "event" : "command");
     } else if (!(*have == want)) {
       errors += "\n  " + quoted(name) + ": the client expects " + to_string(want) + ", the server provides " +
                 to_string(*have);
@@ -100,9 +103,10 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
   }
   Mailbox* commands = nullptr;
   if (any_queued && server.has_thread()) {
-    mailboxes_.push_back(std::make_unique<Mailbox>(std::string(client_name) + "." + std::string(required_name) +
-                                                       " -> " + std::string(server_name) + "." + std::string(provided_name),
-                                                   prov->mailbox_capacity(), max_arg));
+    mailboxes_.push_back(
+        std::make_unique<Mailbox>(std::string(client_name) + "." + std::string(required_name) + " -> " +
+                                      std::string(server_name) + "." + std::string(provided_name),
+                                  prov->mailbox_capacity(), max_arg));
     commands = mailboxes_.back().get();
     server.add_inbound(commands);
   }
@@ -131,10 +135,10 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
     }
   Mailbox* events = nullptr;
   if (any_events && client.has_thread()) {
-    mailboxes_.push_back(std::make_unique<Mailbox>(std::string(server_name) + "." + std::string(provided_name) +
-                                                       " events -> " + std::string(client_name) + "." +
-                                                       std::string(required_name),
-                                                   req->event_capacity(), max_arg));
+    mailboxes_.push_back(std::make_unique<Mailbox>(
+        std::string(server_name) + "." + std::string(provided_name) + " events -> " +
+            std::string(client_name) + "." + std::string(required_name),
+        req->event_capacity(), max_arg));
     events = mailboxes_.back().get();
     client.add_inbound(events);
   }
@@ -202,11 +206,13 @@ void Manager::start() {
   first_wakeup_.store(monotonic_now() + lead, std::memory_order_release);
   first_wakeup_.notify_all();
   for (auto* t : tasks)
-    if (!t->rt_setup_error().empty()) rt_warnings_.push_back("task '" + t->name() + "': " + t->rt_setup_error());
+    if (!t->rt_setup_error().empty())
+      rt_warnings_.push_back("task '" + t->name() + "': " + t->rt_setup_error());
   if (!rt_warnings_.empty()) {
     std::string msg = "sawrt WARNING: running without full real-time guarantees:";
     for (const auto& w : rt_warnings_) msg += "\n  - " + w;
-    std::fprintf(stderr, "%s\n  (run as root, or grant rtprio and memlock limits; see docs/deploy.md)\n", msg.c_str());
+    std::fprintf(stderr, "%s\n  (run as root, or grant rtprio and memlock limits; see docs/deploy.md)\n",
+                 msg.c_str());
   }
   state_ = ManagerState::running;
 }
@@ -242,7 +248,8 @@ TimeNs Manager::step() {
   for (auto& s : stepped_) {
     if (s.next != next) continue;
     s.task->step(next);
-    const TimeNs period = s.task->config().is_periodic() ? s.task->config().period.count() : continuous_period_;
+    const TimeNs period =
+        s.task->config().is_periodic() ? s.task->config().period.count() : continuous_period_;
     s.next += period;
   }
   return sim_time_;

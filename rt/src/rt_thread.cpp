@@ -1,12 +1,11 @@
 #include "saw/rt_thread.hpp"
 
+#include <alloca.h>
 #include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
 #include <unistd.h>
-
-#include <alloca.h>
 
 #include <atomic>
 #include <cerrno>
@@ -41,7 +40,8 @@ void prefault_stack(std::size_t bytes) {
   // Touch the pages the loop may use so the first overrun is not a page fault.
   // Atomic stores, so the compiler cannot drop them as dead.
   auto* p = static_cast<std::uint8_t*>(alloca(bytes));
-  for (std::size_t i = 0; i < bytes; i += 4096) std::atomic_ref<std::uint8_t>(p[i]).store(0, std::memory_order_relaxed);
+  for (std::size_t i = 0; i < bytes; i += 4096)
+    std::atomic_ref<std::uint8_t>(p[i]).store(0, std::memory_order_relaxed);
 }
 
 DmaLatencyHold::DmaLatencyHold() {

@@ -15,7 +15,7 @@ SpscRing::SpscRing(std::size_t capacity, std::size_t slot_size)
       slot_size_(round_slot_size(slot_size)),
       owned_(true),
       control_(new SpscRingControl),
-      storage_(static_cast<std::byte*>(::operator new((mask_ + 1) * slot_size_, std::align_val_t{64}))) {
+      storage_(static_cast<std::byte*>(::operator new ((mask_ + 1) * slot_size_, std::align_val_t{64}))) {
   if (slot_size == 0) throw std::invalid_argument("SpscRing: slot size must not be zero");
 }
 
@@ -23,7 +23,8 @@ SpscRing::SpscRing(SpscRingControl* control, std::byte* storage, std::size_t cap
     : mask_(capacity - 1), slot_size_(slot_size), owned_(false), control_(control), storage_(storage) {
   if (capacity < 2 || !std::has_single_bit(capacity) || slot_size == 0 || slot_size % slot_alignment != 0 ||
       reinterpret_cast<std::uintptr_t>(storage) % slot_alignment != 0)
-    throw std::invalid_argument("SpscRing view: capacity must be a power of two, slots 16-aligned multiples of 16");
+    throw std::invalid_argument(
+        "SpscRing view: capacity must be a power of two, slots 16-aligned multiples of 16");
   // The indices may already be in use (a process re-attaching): start from where they are.
   cached_tail_ = control_->tail.load(std::memory_order_acquire);
   cached_head_ = control_->head.load(std::memory_order_acquire);
@@ -31,7 +32,7 @@ SpscRing::SpscRing(SpscRingControl* control, std::byte* storage, std::size_t cap
 
 SpscRing::~SpscRing() {
   if (!owned_) return;
-  ::operator delete(storage_, std::align_val_t{64});
+  ::operator delete (storage_, std::align_val_t{64});
   delete control_;
 }
 

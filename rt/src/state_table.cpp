@@ -48,8 +48,7 @@ void StateTable::advance(TimeNs time) noexcept {
   r[seq_word].store(seq + 1, std::memory_order_relaxed);
   r[tick_word].store(tick, std::memory_order_release);
   r[time_word].store(static_cast<std::uint64_t>(time), std::memory_order_release);
-  for (std::size_t w = header_words; w < row_words_; ++w)
-    r[w].store(scratch_[w], std::memory_order_release);
+  for (std::size_t w = header_words; w < row_words_; ++w) r[w].store(scratch_[w], std::memory_order_release);
   r[seq_word].store(seq + 2, std::memory_order_release);
   written_.store(tick + 1, std::memory_order_release);
 }
@@ -85,8 +84,7 @@ Status StateTable::read_row(std::uint32_t column, std::uint64_t tick, void* out,
   return Status::busy;
 }
 
-Status StateTable::read_latest_erased(std::uint32_t column, void* out,
-                                      RowStamp* stamp) const noexcept {
+Status StateTable::read_latest_erased(std::uint32_t column, void* out, RowStamp* stamp) const noexcept {
   for (int attempt = 0; attempt < max_read_attempts; ++attempt) {
     const auto n = written_.load(std::memory_order_acquire);
     if (n == 0) return Status::no_data;

@@ -59,7 +59,8 @@ void Task::account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t over
   stats_.missed_periods = missed;
   stats_.last_compute = compute;
   if (compute > stats_.max_compute) stats_.max_compute = compute;
-  stats_.mean_compute += (static_cast<double>(compute) - stats_.mean_compute) / static_cast<double>(stats_.cycles);
+  stats_.mean_compute +=
+      (static_cast<double>(compute) - stats_.mean_compute) / static_cast<double>(stats_.cycles);
   stats_.last_wakeup = scheduled;
 }
 

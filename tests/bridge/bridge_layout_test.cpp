@@ -1,6 +1,6 @@
 // The bridge's shared-memory layout between real processes: rings, mirror, slots, bad segments.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,7 +15,9 @@ namespace {
 
 using namespace saw::bridge;
 
-std::string unique_name(const char* what) { return "/saw.test." + std::string(what) + "." + std::to_string(getpid()); }
+std::string unique_name(const char* what) {
+  return "/saw.test." + std::string(what) + "." + std::to_string(getpid());
+}
 
 bool owner_alive(const void* mapping, std::size_t size) {
   if (!validate(mapping, size).empty()) return false;
@@ -24,7 +26,9 @@ bool owner_alive(const void* mapping, std::size_t size) {
 
 struct Fixture {
   explicit Fixture(const char* what, LayoutParams p = {"server", 42, 64, 4, 64, 40, 40})
-      : params(std::move(p)), layout(Layout::of(params)), seg(ShmSegment::create(unique_name(what), layout.total_size, owner_alive)) {
+      : params(std::move(p)),
+        layout(Layout::of(params)),
+        seg(ShmSegment::create(unique_name(what), layout.total_size, owner_alive)) {
     initialize(seg.data(), params, layout, getpid());
   }
   LayoutParams params;
@@ -66,7 +70,8 @@ TEST(BridgeLayout, ACommandRingCarriesEveryRecordBetweenProcessesInOrder) {
   int status = 0;
   bool exited = false;
   while (slot(f.seg.data(), 0).owner_pid.load() != child)
-    if (waitpid(child, &status, WNOHANG) == child) FAIL() << "the client died before claiming, status " << status;
+    if (waitpid(child, &status, WNOHANG) == child)
+      FAIL() << "the client died before claiming, status " << status;
   auto ring = command_ring(f.seg.data(), 0);
   std::uint64_t torn = 0;
   for (std::uint64_t k = 0; k < n;) {
@@ -120,7 +125,8 @@ TEST(BridgeLayout, TheMirrorIsNeverTornAcrossProcesses) {
 
 TEST(BridgeLayout, SlotsAreClaimedOnceAndReclaimedFromDeadProcesses) {
   Fixture f("slots", {"server", 1, 8, 2, 8, 16, 16});
-  EXPECT_EQ(in_child([&] { return claim_slot(f.seg.data(), getpid()); }), 0);  // the child dies holding slot 0
+  EXPECT_EQ(in_child([&] { return claim_slot(f.seg.data(), getpid()); }),
+            0);  // the child dies holding slot 0
   EXPECT_EQ(claim_slot(f.seg.data(), getpid()), 1);
   EXPECT_EQ(claim_slot(f.seg.data(), getpid()), -1) << "all taken";
   const auto generation = slot(f.seg.data(), 0).generation.load();
@@ -179,7 +185,8 @@ TEST(BridgeLayout, ASegmentLeftByADeadOwnerIsTakenOverALiveOneIsNot) {
   {
     ShmSegment taken = ShmSegment::create(name, l.total_size, owner_alive);
     initialize(taken.data(), p, l, getpid());
-    EXPECT_THROW(ShmSegment::create(name, l.total_size, owner_alive), BridgeError) << "its owner (this process) lives";
+    EXPECT_THROW(ShmSegment::create(name, l.total_size, owner_alive), BridgeError)
+        << "its owner (this process) lives";
   }
   EXPECT_THROW(ShmSegment::attach(name), BridgeError) << "the owner unlinks the name when it goes";
 }

@@ -54,8 +54,8 @@ class Client : public saw::Task {
       clutch_events++;
       clutch = b.pressed;
     });
-    r.add_event_handler_write<saw::OperatingState>("operating_state",
-                                                   [this](const saw::OperatingState& s) { last_state = s.state; });
+    r.add_event_handler_write<saw::OperatingState>(
+        "operating_state", [this](const saw::OperatingState& s) { last_state = s.state; });
     auto& s = require("sim");
     s.add_function("set_button", set_button);
     s.add_function("rejected_commands", rejected);
@@ -127,9 +127,10 @@ TEST(SimHapticDevice, RejectsNonFiniteAndOversizedForcesBeforeTheDynamics) {
   Rig rig(c);
   rig.steps(2);
   const Eigen::Vector3d start = rig.position();
-  for (const saw::Vec3& f : {saw::Vec3{std::nan(""), 0, 0}, saw::Vec3{0, INFINITY, 0}, saw::Vec3{100, 0, 0}}) {
+  for (const saw::Vec3& f :
+       {saw::Vec3{std::nan(""), 0, 0}, saw::Vec3{0, INFINITY, 0}, saw::Vec3{100, 0, 0}}) {
     ASSERT_EQ(rig.client.servo_cf(saw::Wrench{f, {}}), saw::Status::ok);  // queued...
-    rig.steps(10);                                                         // ...and refused by the device
+    rig.steps(10);                                                        // ...and refused by the device
   }
   EXPECT_EQ(rig.device.rejected_commands(), 3u);
   std::uint64_t reported = 0;

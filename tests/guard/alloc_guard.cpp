@@ -26,7 +26,8 @@ std::atomic<std::size_t> first_size{0};
 
 void note_allocation(std::size_t size) noexcept {
   if (!saw::in_rt_context()) return;
-  if (allocations.fetch_add(1, std::memory_order_relaxed) == 0) first_size.store(size, std::memory_order_relaxed);
+  if (allocations.fetch_add(1, std::memory_order_relaxed) == 0)
+    first_size.store(size, std::memory_order_relaxed);
 }
 
 using MutexLockFn = int (*)(pthread_mutex_t*);

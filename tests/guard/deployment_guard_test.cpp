@@ -20,7 +20,8 @@ struct Deployment {
         slave("slave", saw::TaskConfig::periodic(1ms, 0), saw::drivers::SimDeviceConfig{}),
         delay("master_delay", saw::TaskConfig::periodic(1ms, 0), 0.01),
         teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config()) {
-    for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &delay, &teleop}) m.add(*c);
+    for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &delay, &teleop})
+      m.add(*c);
     m.connect("master_delay", "source", "master", "arm");
     m.connect("teleop", "master", "master_delay", "arm");
     m.connect("teleop", "slave", "slave", "arm");
@@ -48,7 +49,8 @@ double slave_travel(const Deployment& d) {
   std::array<saw::Pose, 200> h;
   const auto n = d.slave.state_table().read_history(d.slave.columns().measured_cp, std::span<saw::Pose>(h));
   double lo = 1, hi = -1;
-  for (std::size_t i = 0; i < n; ++i) lo = std::min(lo, h[i].position[0]), hi = std::max(hi, h[i].position[0]);
+  for (std::size_t i = 0; i < n; ++i)
+    lo = std::min(lo, h[i].position[0]), hi = std::max(hi, h[i].position[0]);
   return hi - lo;
 }
 

@@ -48,7 +48,8 @@ class Device : public saw::Task {
 class Helper : public saw::Component {
  public:
   Helper() : Component("helper") {
-    provide("math").add_command_qualified_read<double, double>("square", [](const double& q, double& r) { r = q * q; });
+    provide("math").add_command_qualified_read<double, double>("square",
+                                                               [](const double& q, double& r) { r = q * q; });
   }
 };
 
@@ -121,7 +122,8 @@ TEST(AllocationGuard, PeriodicTasksServeEverythingWithoutAllocatingOrLocking) {
   EXPECT_GE(controller.beats_.load(), 200u);
   EXPECT_GE(device.pings_.load(), 200u);
   EXPECT_GE(controller.ok_reads_.load(), 200u);
-  EXPECT_EQ(counts.allocations, 0u) << "an RT thread allocated (first size " << counts.first_allocation_size << ")";
+  EXPECT_EQ(counts.allocations, 0u) << "an RT thread allocated (first size " << counts.first_allocation_size
+                                    << ")";
   EXPECT_EQ(counts.locks, 0u) << "an RT thread locked a mutex";
 }
 

@@ -75,13 +75,16 @@ TEST(StateTableStress, ReadersOnlyEverSeeWholeRows) {
 
   // Write at least rows_to_write rows, and on until every reader has done real work (readers
   // may be scheduled late on a loaded machine); bounded, so a broken reader cannot hang CI.
-  const auto readers_busy = [&] { return reads.load() >= 1000 && history_reads.load() >= 100 && time_reads.load() >= 1000; };
+  const auto readers_busy = [&] {
+    return reads.load() >= 1000 && history_reads.load() >= 100 && time_reads.load() >= 1000;
+  };
   std::uint64_t last_k = 0;
   for (std::uint64_t k = 1; k <= rows_to_write || (!readers_busy() && k <= 100 * rows_to_write); ++k) {
     last_k = k;
     source.k = k;
     source.not_k = ~k;
-    for (std::size_t i = 0; i < source.values.size(); ++i) source.values[i] = static_cast<double>(k) + static_cast<double>(i);
+    for (std::size_t i = 0; i < source.values.size(); ++i)
+      source.values[i] = static_cast<double>(k) + static_cast<double>(i);
     counter = k;
     table.advance(static_cast<saw::TimeNs>(k - 1) * 10);
   }
@@ -90,8 +93,8 @@ TEST(StateTableStress, ReadersOnlyEverSeeWholeRows) {
 
   EXPECT_EQ(torn.load(), 0u);
   EXPECT_EQ(backwards.load(), 0u);
-  EXPECT_TRUE(readers_busy()) << "reads " << reads.load() << ", history " << history_reads.load() << ", by time "
-                              << time_reads.load();
+  EXPECT_TRUE(readers_busy()) << "reads " << reads.load() << ", history " << history_reads.load()
+                              << ", by time " << time_reads.load();
   Sample last;
   ASSERT_EQ(table.read_latest(col, last), saw::Status::ok);
   EXPECT_EQ(last.k, last_k);

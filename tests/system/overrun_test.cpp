@@ -21,7 +21,8 @@ class SlowOnce : public saw::Task {
     const auto n = cycles_.fetch_add(1, std::memory_order_relaxed) + 1;
     // The previous cycle's scheduled wake-up, from this task's own statistics row.
     saw::TaskStatistics s;
-    if (n <= static_cast<int>(wakeups_.size()) && state_table().read_latest(statistics_column(), s) == saw::Status::ok)
+    if (n <= static_cast<int>(wakeups_.size()) &&
+        state_table().read_latest(statistics_column(), s) == saw::Status::ok)
       wakeups_[static_cast<std::size_t>(n - 1)] = s.last_wakeup;
     if (n == 20) {  // busy for 3.5 periods: at least 3 wake-ups must be skipped
       const auto until = saw::monotonic_now() + 7 * period / 2;
@@ -39,7 +40,8 @@ TEST(Overrun, InjectedSlowCycleSkipsWholePeriodsAndKeepsPhase) {
   m.add(task);
   m.start();
   const auto deadline = std::chrono::steady_clock::now() + 20s;
-  while (task.cycles_.load() < 60 && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(2ms);
+  while (task.cycles_.load() < 60 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(2ms);
   m.stop();
   ASSERT_GE(task.cycles_.load(), 60);
   const auto s = task.statistics();

@@ -30,7 +30,8 @@ class Counter : public saw::Task {
   m.add(c);
   m.start();
   const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (c.cycles_.load() < 50 && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(2ms);
+  while (c.cycles_.load() < 50 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(2ms);
   m.stop();
   std::fprintf(stderr, "cycles-ok=%d\n", c.cycles_.load() >= 50 ? 1 : 0);
   std::_Exit(m.rt_warnings().empty() ? 4 : 0);

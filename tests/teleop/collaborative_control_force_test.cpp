@@ -1,19 +1,20 @@
 // The teleoperation task against fake devices, on the stepped clock: clutch, ratchet, faults,
 // jerk-limited offsets, run-time settings, delay and prediction.
+#include "saw/teleop/collaborative_control_force.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "fake_device.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
 #include "saw/teleop/delay_task.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
-using saw::testing::FakeDevice;
 using saw::teleop::CollaborativeControlForce;
 using saw::teleop::TeleopConfig;
+using saw::testing::FakeDevice;
 
 double norm(const saw::Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 double dist(const saw::Vec3& a, const saw::Vec3& b) { return norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]}); }
@@ -252,7 +253,7 @@ double delayed_error(bool predict) {
   m.start_stepped();
   saw::testing::Stepper step{m};
   for (int i = 0; i < 50; ++i) step({&master, &slave});  // at rest while teleoperation engages
-  const double v = 0.05;  // then 5 cm/s along x
+  const double v = 0.05;                                 // then 5 cm/s along x
   master.velocity = {v, 0, 0};
   for (int i = 0; i < 300; ++i) {
     master.position[0] += v * 0.001;

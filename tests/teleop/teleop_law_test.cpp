@@ -1,7 +1,7 @@
 // The control law (paper eqs. 1-6) read consistently: errors, saturation, mirroring, ratchet.
-#include <gtest/gtest.h>
-
 #include "saw/teleop/teleop_law.hpp"
+
+#include <gtest/gtest.h>
 
 namespace {
 
@@ -41,8 +41,8 @@ TEST(TeleopLaw, SaturationLimitsMagnitudeAndKeepsDirection) {
   EXPECT_NEAR(limited.norm(), 2.0, 1e-12);
   EXPECT_TRUE(limited.normalized().isApprox(f.normalized()));
   EXPECT_TRUE(saturate(f, 6.0).isApprox(f));
-  const auto out = compute_law(Vector3d(0.1, 0, 0), Vector3d::Zero(), Vector3d::Zero(), Vector3d::Zero(), Scale{},
-                               {100, 100}, {3, 2});
+  const auto out = compute_law(Vector3d(0.1, 0, 0), Vector3d::Zero(), Vector3d::Zero(), Vector3d::Zero(),
+                               Scale{}, {100, 100}, {3, 2});
   EXPECT_NEAR(out.master_force.norm(), 3.0, 1e-12);
   EXPECT_NEAR(out.slave_force.norm(), 2.0, 1e-12);
   EXPECT_TRUE(out.master_saturated && out.slave_saturated);
@@ -52,7 +52,8 @@ TEST(TeleopLaw, MirroredScaleFlipsTheSlaveGoal) {
   const Scale s{0.5, {-1, 1, 1}};  // devices face each other along x
   const Vector3d o_s = cancelling_slave_offset(Vector3d::Zero(), Vector3d::Zero(), Vector3d::Zero(), s);
   // The master moves +2 cm in x and +2 cm in y: the slave is pulled toward −1 cm x, +1 cm y.
-  const auto out = compute_law(Vector3d(0.02, 0.02, 0), Vector3d::Zero(), Vector3d::Zero(), o_s, s, {100, 100}, {10, 10});
+  const auto out =
+      compute_law(Vector3d(0.02, 0.02, 0), Vector3d::Zero(), Vector3d::Zero(), o_s, s, {100, 100}, {10, 10});
   EXPECT_LT(out.slave_force.x(), 0);
   EXPECT_GT(out.slave_force.y(), 0);
   EXPECT_TRUE(out.slave_error.isApprox(Vector3d(0.01, -0.01, 0)));

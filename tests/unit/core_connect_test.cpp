@@ -31,12 +31,14 @@ std::string connect_error(saw::Component& client) {
 }
 
 void expect_names(const std::string& msg, std::initializer_list<const char*> parts) {
-  for (const char* p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "missing '" << p << "' in: " << msg;
+  for (const char* p : parts)
+    EXPECT_NE(msg.find(p), std::string::npos) << "missing '" << p << "' in: " << msg;
 }
 
 TEST(Connect, TypeMismatchNamesEverything) {
   Asker<saw::FunctionWrite<float>> a("push");
-  expect_names(connect_error(a), {"'asker'", "'r'", "'server'", "'p'", "'push'", "write command<float>", "write command<int>"});
+  expect_names(connect_error(a),
+               {"'asker'", "'r'", "'server'", "'p'", "'push'", "write command<float>", "write command<int>"});
 }
 
 TEST(Connect, KindMismatch) {
@@ -52,7 +54,9 @@ TEST(Connect, QualifiedReadResultMismatch) {
 TEST(Connect, EventTypeMismatch) {
   class E : public saw::Task {
    public:
-    E() : Task("asker", one_ms()) { require("r").add_event_handler_write<double>("value", [](const double&) {}); }
+    E() : Task("asker", one_ms()) {
+      require("r").add_event_handler_write<double>("value", [](const double&) {});
+    }
   } e;
   expect_names(connect_error(e), {"'value'", "write event<double>", "write event<int>"});
 }

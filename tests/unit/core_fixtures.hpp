@@ -34,7 +34,8 @@ class Server : public Base {
 
 class Client : public Task {
  public:
-  explicit Client(std::string name = "client") : Task(std::move(name), TaskConfig::periodic(std::chrono::milliseconds(1), 0)) {
+  explicit Client(std::string name = "client")
+      : Task(std::move(name), TaskConfig::periodic(std::chrono::milliseconds(1), 0)) {
     auto& r = require("r");
     r.add_function("bump", bump);
     r.add_function("push", push);

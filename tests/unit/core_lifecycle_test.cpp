@@ -50,8 +50,7 @@ TEST(Lifecycle, RealThreadsExchangeCommandsAndEvents) {
   m.start();
   const auto deadline = std::chrono::steady_clock::now() + 10s;
   Vec v;
-  while (std::chrono::steady_clock::now() < deadline &&
-         (client.position(v) != saw::Status::ok || v.x < 50))
+  while (std::chrono::steady_clock::now() < deadline && (client.position(v) != saw::Status::ok || v.x < 50))
     std::this_thread::sleep_for(2ms);
   m.stop();
   EXPECT_GE(v.x, 50);
@@ -134,7 +133,8 @@ TEST(Log, FormatsArgumentsAndCountsDrops) {
   EXPECT_NE(s.find("warning src: a -3 b 4 c 2.5 d text"), std::string::npos) << s;
   const auto dropped = saw::log_ring().dropped();
   std::size_t accepted = 0;
-  for (std::size_t i = 0; i < saw::LogRing::capacity + 10; ++i) accepted += saw::log(saw::LogLevel::info, "s", "{}", i);
+  for (std::size_t i = 0; i < saw::LogRing::capacity + 10; ++i)
+    accepted += saw::log(saw::LogLevel::info, "s", "{}", i);
   EXPECT_EQ(accepted, saw::LogRing::capacity);
   EXPECT_EQ(saw::log_ring().dropped() - dropped, 10u);
   ASSERT_TRUE(saw::log_ring().pop(r));

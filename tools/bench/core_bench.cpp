@@ -1,9 +1,9 @@
 // saw-bench-core: the paper's "Local 1P" qualified read and the core's other costs, with the
 // timer's own overhead and a cisst-style relative-sleep loop measured beside them.
-#include <CLI/CLI.hpp>
 #include <sys/utsname.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <cstdio>
 #include <random>
@@ -48,7 +48,8 @@ class Server : public saw::Task {
     // Wake-ups skipped so far (from this task's own statistics row, one cycle old), so that the
     // drift figure counts grid periods, not only the cycles that ran.
     saw::TaskStatistics st;
-    if (state_table().read_latest(statistics_column(), st) == saw::Status::ok) missed_.store(st.missed_periods);
+    if (state_table().read_latest(statistics_column(), st) == saw::Status::ok)
+      missed_.store(st.missed_periods);
     last_wake_.store(now(), std::memory_order_relaxed);
     cycles_.store(n, std::memory_order_release);
   }
@@ -116,7 +117,8 @@ int main(int argc, char** argv) {
   app.add_option("--calls", calls, "calls per repetition");
   app.add_option("--reps", reps, "repetitions");
   app.add_option("--drift-cycles", drift_cycles, "cycles of the drift measurement");
-  app.add_option("--priority", priority, "SCHED_FIFO priority of the server (0: none)")->check(CLI::Range(0, 99));
+  app.add_option("--priority", priority, "SCHED_FIFO priority of the server (0: none)")
+      ->check(CLI::Range(0, 99));
   app.add_flag("--quick", quick, "1,000 calls × 2, 500 drift cycles (smoke run)");
   app.add_flag("--markdown", markdown, "print tables as Markdown");
   CLI11_PARSE(app, argc, argv);
@@ -126,8 +128,8 @@ int main(int argc, char** argv) {
   uname(&u);
   const int ncpu = static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN));
   const int server_cpu = ncpu > 1 ? 1 : -1, client_cpu = ncpu > 1 ? 0 : -1;
-  std::printf("# saw-bench-core: kernel %s %s, %d CPUs, server SCHED_FIFO %d on CPU %d, caller on CPU %d\n", u.release,
-              u.version, ncpu, priority, server_cpu, client_cpu);
+  std::printf("# saw-bench-core: kernel %s %s, %d CPUs, server SCHED_FIFO %d on CPU %d, caller on CPU %d\n",
+              u.release, u.version, ncpu, priority, server_cpu, client_cpu);
 
   Server server(saw::TaskConfig::periodic(1ms, priority, server_cpu), static_cast<std::size_t>(stamps));
   Client client;
@@ -205,15 +207,19 @@ int main(int argc, char** argv) {
   std::printf("\nwrite calls refused (queue full): %llu\n", static_cast<unsigned long long>(write_refused));
   const auto s = server.statistics();
   const auto& h = server.wakeup_histogram();
-  std::printf("drift: %llu grid periods (%llu cycles run, %llu skipped after overruns) took %.6f s, ideal %.6f s: "
-              "error %+.3f periods, grid rate %.3f Hz\n",
-              static_cast<unsigned long long>(periods), static_cast<unsigned long long>(c1 - c0),
-              static_cast<unsigned long long>(m1 - m0), measured, ideal, (measured - ideal) / 1e-3,
-              static_cast<double>(periods) / measured);
-  std::printf("baseline, sleep 1 ms relative to each wake-up (cisst-style), same priority: %.3f Hz\n", baseline_rate);
-  std::printf("server task: overruns %llu, missed periods %llu, wake-up latency us: min %.1f mean %.1f p99 %.1f max %.1f\n",
-              static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_periods),
-              static_cast<double>(h.min()) / 1e3, h.mean() / 1e3, static_cast<double>(h.percentile(0.99)) / 1e3,
-              static_cast<double>(h.max()) / 1e3);
+  std::printf(
+      "drift: %llu grid periods (%llu cycles run, %llu skipped after overruns) took %.6f s, ideal %.6f s: "
+      "error %+.3f periods, grid rate %.3f Hz\n",
+      static_cast<unsigned long long>(periods), static_cast<unsigned long long>(c1 - c0),
+      static_cast<unsigned long long>(m1 - m0), measured, ideal, (measured - ideal) / 1e-3,
+      static_cast<double>(periods) / measured);
+  std::printf("baseline, sleep 1 ms relative to each wake-up (cisst-style), same priority: %.3f Hz\n",
+              baseline_rate);
+  std::printf(
+      "server task: overruns %llu, missed periods %llu, wake-up latency us: min %.1f mean %.1f p99 %.1f max "
+      "%.1f\n",
+      static_cast<unsigned long long>(s.overruns), static_cast<unsigned long long>(s.missed_periods),
+      static_cast<double>(h.min()) / 1e3, h.mean() / 1e3, static_cast<double>(h.percentile(0.99)) / 1e3,
+      static_cast<double>(h.max()) / 1e3);
   return sink == 12345.678 ? 1 : 0;
 }

@@ -1,13 +1,13 @@
 // saw-bench-shm: round trips between two processes over shared memory — the floors for the
 // bridge (issue 4): a bare futex ping-pong, a spinning atomic ping-pong, and the bridge's own
 // command ring + event ring (spinning, and sleeping on a futex), measured in one run.
-#include <CLI/CLI.hpp>
 #include <linux/futex.h>
 #include <sys/mman.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <cstring>
 
@@ -64,7 +64,8 @@ int main(int argc, char** argv) {
   if (!dma.error().empty()) std::printf("# warning: %s\n", dma.error().c_str());
   const int ncpu = static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN));
   const int cpu_a = ncpu > 1 ? 0 : -1, cpu_b = ncpu > 1 ? 1 : -1;
-  std::printf("# saw-bench-shm: %d × %d round trips between two processes on CPUs %d and %d\n", reps, n, cpu_a, cpu_b);
+  std::printf("# saw-bench-shm: %d × %d round trips between two processes on CPUs %d and %d\n", reps, n,
+              cpu_a, cpu_b);
 
   auto* pp = static_cast<PingPong*>(
       mmap(nullptr, sizeof(PingPong), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0));
@@ -73,7 +74,8 @@ int main(int argc, char** argv) {
   // The bridge segment: one slot; commands carry a sequence number, events echo it back.
   const saw::bridge::LayoutParams params{"bench", 1, 8, 1, 64, 16, 16};
   const auto layout = saw::bridge::Layout::of(params);
-  auto seg = saw::bridge::ShmSegment::create("/saw.bench." + std::to_string(getpid()), layout.total_size, nullptr);
+  auto seg =
+      saw::bridge::ShmSegment::create("/saw.bench." + std::to_string(getpid()), layout.total_size, nullptr);
   saw::bridge::initialize(seg.data(), params, layout, getpid());
   (void)saw::bridge::claim_slot(seg.data(), getpid());
 
@@ -174,15 +176,19 @@ int main(int argc, char** argv) {
               samples[static_cast<std::size_t>(i)] = saw::monotonic_now() - t0;
             }
           });
-      (sleep ? ring_futex_all : ring_spin_all).insert((sleep ? ring_futex_all : ring_spin_all).end(), rings.begin(), rings.end());
+      (sleep ? ring_futex_all : ring_spin_all)
+          .insert((sleep ? ring_futex_all : ring_spin_all).end(), rings.begin(), rings.end());
     }
     futex_all.insert(futex_all.end(), futex.begin(), futex.end());
     spin_all.insert(spin_all.end(), spin.begin(), spin.end());
   }
   saw::bench::print_header(markdown);
   saw::bench::print_row(markdown, "bare futex ping-pong (round trip)", saw::bench::summarize(futex_all));
-  saw::bench::print_row(markdown, "shared atomic spin ping-pong (round trip)", saw::bench::summarize(spin_all));
-  saw::bench::print_row(markdown, "bridge rings, spinning (command + event)", saw::bench::summarize(ring_spin_all));
-  saw::bench::print_row(markdown, "bridge rings, futex sleep (command + event)", saw::bench::summarize(ring_futex_all));
+  saw::bench::print_row(markdown, "shared atomic spin ping-pong (round trip)",
+                        saw::bench::summarize(spin_all));
+  saw::bench::print_row(markdown, "bridge rings, spinning (command + event)",
+                        saw::bench::summarize(ring_spin_all));
+  saw::bench::print_row(markdown, "bridge rings, futex sleep (command + event)",
+                        saw::bench::summarize(ring_futex_all));
   return 0;
 }

@@ -34,15 +34,16 @@ inline Summary summarize(std::vector<std::int64_t>& samples) {
 
 inline void print_row(bool markdown, const std::string& name, const Summary& s) {
   if (markdown)
-    std::printf("| %s | %.3f | %.3f | %.3f | %.3f | %zu |\n", name.c_str(), s.median_us, s.p99_us, s.p999_us, s.max_us,
-                s.n);
+    std::printf("| %s | %.3f | %.3f | %.3f | %.3f | %zu |\n", name.c_str(), s.median_us, s.p99_us, s.p999_us,
+                s.max_us, s.n);
   else
-    std::printf("%-44s median %9.3f  p99 %9.3f  p99.9 %9.3f  max %10.3f us  (n=%zu)\n", name.c_str(), s.median_us,
-                s.p99_us, s.p999_us, s.max_us, s.n);
+    std::printf("%-44s median %9.3f  p99 %9.3f  p99.9 %9.3f  max %10.3f us  (n=%zu)\n", name.c_str(),
+                s.median_us, s.p99_us, s.p999_us, s.max_us, s.n);
 }
 
 inline void print_header(bool markdown) {
-  if (markdown) std::printf("| case | median µs | p99 µs | p99.9 µs | max µs | n |\n|---|---|---|---|---|---|\n");
+  if (markdown)
+    std::printf("| case | median µs | p99 µs | p99.9 µs | max µs | n |\n|---|---|---|---|---|---|\n");
 }
 
 }  // namespace saw::bench

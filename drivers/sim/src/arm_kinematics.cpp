@@ -21,9 +21,9 @@ KDL::Chain make_chain(ArmModel model) {
   KDL::Chain c;
   if (model == ArmModel::omni) {
     constexpr double link = 0.133;
-    c.addSegment(Segment(Joint(Joint::RotZ), Frame(Vector(0, 0, 0))));       // base yaw
-    c.addSegment(Segment(Joint(Joint::RotY), Frame(Vector(link, 0, 0))));    // shoulder pitch
-    c.addSegment(Segment(Joint(Joint::RotY), Frame(Vector(link, 0, 0))));    // elbow pitch
+    c.addSegment(Segment(Joint(Joint::RotZ), Frame(Vector(0, 0, 0))));     // base yaw
+    c.addSegment(Segment(Joint(Joint::RotY), Frame(Vector(link, 0, 0))));  // shoulder pitch
+    c.addSegment(Segment(Joint(Joint::RotY), Frame(Vector(link, 0, 0))));  // elbow pitch
   } else {
     c.addSegment(Segment(Joint(Joint::TransX), Frame::Identity()));
     c.addSegment(Segment(Joint(Joint::TransY), Frame::Identity()));

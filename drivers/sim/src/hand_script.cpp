@@ -15,8 +15,9 @@ std::vector<HandSample> HandScript::load_csv(const std::string& path) {
   int number = 0;
   while (std::getline(in, line)) {
     ++number;
-    if (line.empty() || line[0] == '#' || (number == 1 && !std::isdigit(static_cast<unsigned char>(line[0])) &&
-                                             line[0] != '-' && line[0] != '.'))
+    if (line.empty() || line[0] == '#' ||
+        (number == 1 && !std::isdigit(static_cast<unsigned char>(line[0])) && line[0] != '-' &&
+         line[0] != '.'))
       continue;  // comments and a header line
     std::stringstream ss(line);
     std::string cell;
@@ -43,7 +44,8 @@ std::vector<HandSample> HandScript::load_csv(const std::string& path) {
 HandSample HandScript::target(double t, std::size_t& cursor) const noexcept {
   HandSample s{t, Eigen::Vector3d::Zero(), false};
   switch (kind) {
-    case Kind::none: break;
+    case Kind::none:
+      break;
     case Kind::line: {
       double u = duration > 0 ? t / duration : 1.0;
       if (back_and_forth) {

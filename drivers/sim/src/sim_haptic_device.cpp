@@ -11,8 +11,10 @@ namespace {
 // Fills the model's defaults where the configuration left zeros.
 SimDeviceConfig with_defaults(SimDeviceConfig c) {
   const bool omni = c.model == ArmModel::omni;
-  if (c.inertia.isZero()) c.inertia = omni ? Eigen::Vector3d(2e-4, 2e-4, 1e-4) : Eigen::Vector3d(0.1, 0.1, 0.1);
-  if (c.damping.isZero()) c.damping = omni ? Eigen::Vector3d(2e-2, 2e-2, 1e-2) : Eigen::Vector3d(1.0, 1.0, 1.0);
+  if (c.inertia.isZero())
+    c.inertia = omni ? Eigen::Vector3d(2e-4, 2e-4, 1e-4) : Eigen::Vector3d(0.1, 0.1, 0.1);
+  if (c.damping.isZero())
+    c.damping = omni ? Eigen::Vector3d(2e-2, 2e-2, 1e-2) : Eigen::Vector3d(1.0, 1.0, 1.0);
   if (c.joint_min == c.joint_max) {
     c.joint_min = omni ? Eigen::Vector3d(-1.7, -1.2, -0.2) : Eigen::Vector3d(-0.05, -0.05, -0.05);
     c.joint_max = omni ? Eigen::Vector3d(1.7, 1.75, 2.6) : Eigen::Vector3d(0.05, 0.05, 0.05);
@@ -30,11 +32,13 @@ SimDeviceConfig with_defaults(SimDeviceConfig c) {
 
 SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config)
     : Task(std::move(name), task), config_(with_defaults(std::move(config))), kinematics_(config_.model) {
-  if (!task.is_periodic()) throw std::invalid_argument("SimHapticDevice '" + this->name() + "' must be periodic");
+  if (!task.is_periodic())
+    throw std::invalid_argument("SimHapticDevice '" + this->name() + "' must be periodic");
   q_ = config_.initial_joints.cwiseMax(config_.joint_min).cwiseMin(config_.joint_max);
   hand_origin_ = kinematics_.fk(q_);
   measured_js_.size = 3;
-  operating_state_.state = config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
+  operating_state_.state =
+      config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
   publish();
 
   auto& st = state_table();
@@ -54,7 +58,8 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   clutch_event_ = &arm.add_event_write<ButtonEvent>("clutch");
   operator_event_ = &arm.add_event_write<ButtonEvent>("operator_present");
   auto& sim = provide("sim");
-  sim.add_command_write<ButtonCommand>("set_button", [this](const ButtonCommand& b) { button(b.button, b.pressed); });
+  sim.add_command_write<ButtonCommand>("set_button",
+                                       [this](const ButtonCommand& b) { button(b.button, b.pressed); });
   sim.add_command_read("hand_force", columns_.hand_force);
   sim.add_command_read("rejected_commands", st.add_column("rejected_commands", &rejected_column_));
 }
@@ -78,8 +83,12 @@ void SimHapticDevice::set_state(OperatingStateValue s) noexcept {
 
 void SimHapticDevice::state_command(StateCommand c) noexcept {
   switch (c) {
-    case StateCommand::enable: set_state(OperatingStateValue::enabled); break;
-    case StateCommand::disable: set_state(OperatingStateValue::disabled); break;
+    case StateCommand::enable:
+      set_state(OperatingStateValue::enabled);
+      break;
+    case StateCommand::disable:
+      set_state(OperatingStateValue::disabled);
+      break;
     case StateCommand::pause:
       if (operating_state_.state == OperatingStateValue::enabled) set_state(OperatingStateValue::paused);
       break;

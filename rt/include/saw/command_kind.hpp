@@ -26,19 +26,22 @@ struct Signature {
 inline std::string to_string(const Signature& s) {
   const auto n = [](TypeInfo t) { return std::string(t.name); };
   switch (s.kind) {
-    case CommandKind::void_command: return "void command";
-    case CommandKind::write: return "write command<" + n(s.arg) + ">";
-    case CommandKind::read: return "read command<" + n(s.arg) + ">";
+    case CommandKind::void_command:
+      return "void command";
+    case CommandKind::write:
+      return "write command<" + n(s.arg) + ">";
+    case CommandKind::read:
+      return "read command<" + n(s.arg) + ">";
     case CommandKind::qualified_read:
       return "qualified read command<" + n(s.arg) + " -> " + n(s.result) + ">";
-    case CommandKind::void_event: return "void event";
-    case CommandKind::write_event: return "write event<" + n(s.arg) + ">";
+    case CommandKind::void_event:
+      return "void event";
+    case CommandKind::write_event:
+      return "write event<" + n(s.arg) + ">";
   }
   return "?";
 }
 
-inline bool is_event(CommandKind k) {
-  return k == CommandKind::void_event || k == CommandKind::write_event;
-}
+inline bool is_event(CommandKind k) { return k == CommandKind::void_event || k == CommandKind::write_event; }
 
 }  // namespace saw

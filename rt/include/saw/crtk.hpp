@@ -51,21 +51,30 @@ enum class StateCommand : std::uint8_t { enable, disable, pause, resume, home };
 
 constexpr std::string_view to_string(OperatingStateValue s) {
   switch (s) {
-    case OperatingStateValue::disabled: return "DISABLED";
-    case OperatingStateValue::enabled: return "ENABLED";
-    case OperatingStateValue::paused: return "PAUSED";
-    case OperatingStateValue::fault: return "FAULT";
+    case OperatingStateValue::disabled:
+      return "DISABLED";
+    case OperatingStateValue::enabled:
+      return "ENABLED";
+    case OperatingStateValue::paused:
+      return "PAUSED";
+    case OperatingStateValue::fault:
+      return "FAULT";
   }
   return "?";
 }
 
 constexpr std::string_view to_string(StateCommand c) {
   switch (c) {
-    case StateCommand::enable: return "enable";
-    case StateCommand::disable: return "disable";
-    case StateCommand::pause: return "pause";
-    case StateCommand::resume: return "resume";
-    case StateCommand::home: return "home";
+    case StateCommand::enable:
+      return "enable";
+    case StateCommand::disable:
+      return "disable";
+    case StateCommand::pause:
+      return "pause";
+    case StateCommand::resume:
+      return "resume";
+    case StateCommand::home:
+      return "home";
   }
   return "?";
 }

@@ -12,8 +12,8 @@ namespace saw {
 struct FunctionBinding {
   Mailbox* mailbox = nullptr;  // queued void/write: the server's mailbox for this connection
   std::uint32_t target = 0;
-  Invoker direct{};                   // void/write to a server without a thread: run now
-  const Command* command = nullptr;   // read, qualified read
+  Invoker direct{};                  // void/write to a server without a thread: run now
+  const Command* command = nullptr;  // read, qualified read
 };
 
 // Call these from the client component's own thread: each connection's mailbox has one producer.
@@ -27,8 +27,14 @@ class FunctionBase {
   bool is_bound() const noexcept { return bound_; }
 
   // For connect/disconnect only.
-  void bind(const FunctionBinding& b) noexcept { binding_ = b; bound_ = true; }
-  void unbind() noexcept { binding_ = {}; bound_ = false; }
+  void bind(const FunctionBinding& b) noexcept {
+    binding_ = b;
+    bound_ = true;
+  }
+  void unbind() noexcept {
+    binding_ = {};
+    bound_ = false;
+  }
 
  protected:
   Status queue(const void* arg, std::size_t size) const noexcept {

@@ -22,8 +22,9 @@ class LatencyHistogram {
     auto& cell = us < bins_ ? counts_[us] : overflows_;
     bump(cell);
     bump(total_);
-    sum_ns_.store(sum_ns_.load(std::memory_order_relaxed) + static_cast<std::uint64_t>(latency < 0 ? 0 : latency),
-                  std::memory_order_relaxed);
+    sum_ns_.store(
+        sum_ns_.load(std::memory_order_relaxed) + static_cast<std::uint64_t>(latency < 0 ? 0 : latency),
+        std::memory_order_relaxed);
     if (latency > max_.load(std::memory_order_relaxed)) max_.store(latency, std::memory_order_relaxed);
     if (latency < min_.load(std::memory_order_relaxed)) min_.store(latency, std::memory_order_relaxed);
   }

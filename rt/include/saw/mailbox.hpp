@@ -28,8 +28,7 @@ class Mailbox {
   Status push(std::uint32_t target, const void* payload, std::size_t size) noexcept {
     std::byte* slot = ring_.try_reserve();
     if (slot == nullptr) {
-      full_count_.store(full_count_.load(std::memory_order_relaxed) + 1,
-                        std::memory_order_relaxed);
+      full_count_.store(full_count_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
       return Status::queue_full;
     }
     std::memcpy(slot, &target, sizeof target);
@@ -42,9 +41,7 @@ class Mailbox {
   std::size_t drain() noexcept;
 
   std::uint64_t full_count() const noexcept { return full_count_.load(std::memory_order_relaxed); }
-  std::uint64_t executed_count() const noexcept {
-    return executed_.load(std::memory_order_relaxed);
-  }
+  std::uint64_t executed_count() const noexcept { return executed_.load(std::memory_order_relaxed); }
   std::size_t capacity() const noexcept { return ring_.capacity(); }
   std::size_t pending() const noexcept { return ring_.size_approx(); }
 

@@ -24,9 +24,9 @@ class ConnectError : public std::runtime_error {
 enum class ManagerState : std::uint8_t { idle, running, stepping, stopped };
 
 struct ManagerOptions {
-  bool lock_memory = true;        // mlockall when any task is real-time
-  bool hold_dma_latency = true;   // /dev/cpu_dma_latency = 0 while running
-  bool drain_log = true;          // a non-RT thread prints the RT log to stderr
+  bool lock_memory = true;       // mlockall when any task is real-time
+  bool hold_dma_latency = true;  // /dev/cpu_dma_latency = 0 while running
+  bool drain_log = true;         // a non-RT thread prints the RT log to stderr
 };
 
 class Manager {

@@ -28,8 +28,8 @@ class Pacer {
     return missed;
   }
 
-  std::uint64_t overruns() const noexcept { return overruns_; }        // cycles that ran late
-  std::uint64_t missed_periods() const noexcept { return missed_; }    // wake-ups skipped
+  std::uint64_t overruns() const noexcept { return overruns_; }      // cycles that ran late
+  std::uint64_t missed_periods() const noexcept { return missed_; }  // wake-ups skipped
 
  private:
   TimeNs next_;

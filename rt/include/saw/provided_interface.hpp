@@ -21,7 +21,7 @@ class Component;
 struct Command {
   std::string name;
   Signature signature;
-  std::function<void(const void* arg)> execute;           // void, write
+  std::function<void(const void* arg)> execute;            // void, write
   std::function<Status(const void* arg, void* out)> read;  // read (arg unused), qualified read
   const StateTable* table = nullptr;                       // read commands backed by a column
   std::uint32_t column = 0;

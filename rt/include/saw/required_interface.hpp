@@ -47,12 +47,14 @@ class RequiredInterface {
 
   template <class F>
   void add_event_handler_void(std::string name, F&& f, Need need = Need::required) {
-    add_handler({std::move(name), {CommandKind::void_event}, need,
-                 [f = std::forward<F>(f)](const void*) { f(); }});
+    add_handler(
+        {std::move(name), {CommandKind::void_event}, need, [f = std::forward<F>(f)](const void*) { f(); }});
   }
   template <Plain T, class F>
   void add_event_handler_write(std::string name, F&& f, Need need = Need::required) {
-    add_handler({std::move(name), {CommandKind::write_event, type_info_of<T>()}, need,
+    add_handler({std::move(name),
+                 {CommandKind::write_event, type_info_of<T>()},
+                 need,
                  [f = std::forward<F>(f)](const void* a) { f(*static_cast<const T*>(a)); }});
   }
 

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+
 #include "saw/cache_line.hpp"
 
 namespace saw {
@@ -74,9 +75,7 @@ class SpscRing {
   }
 
  private:
-  std::byte* slot(std::uint64_t index) const noexcept {
-    return storage_ + (index & mask_) * slot_size_;
-  }
+  std::byte* slot(std::uint64_t index) const noexcept { return storage_ + (index & mask_) * slot_size_; }
 
   std::size_t mask_;
   std::size_t slot_size_;

@@ -64,8 +64,7 @@ class StateTable {
   }
   // The newest row whose time is at or before t.
   template <Plain T>
-  Status read_at_or_before(StateColumn<T> c, TimeNs t, T& out,
-                           RowStamp* stamp = nullptr) const noexcept {
+  Status read_at_or_before(StateColumn<T> c, TimeNs t, T& out, RowStamp* stamp = nullptr) const noexcept {
     return read_at_or_before_erased(c.index, t, &out, stamp);
   }
   // Up to out.size() most recent values, oldest first; returns how many were written.
@@ -76,14 +75,14 @@ class StateTable {
   }
 
   // Type-erased forms, for commands bound at run time and for recorders.
-  Status read_tick_erased(std::uint32_t column, std::uint64_t tick, void* out, RowStamp* stamp) const noexcept {
+  Status read_tick_erased(std::uint32_t column, std::uint64_t tick, void* out,
+                          RowStamp* stamp) const noexcept {
     return read_row(column, tick, out, stamp);
   }
   Status read_latest_erased(std::uint32_t column, void* out, RowStamp* stamp) const noexcept;
-  Status read_at_or_before_erased(std::uint32_t column, TimeNs t, void* out,
-                                  RowStamp* stamp) const noexcept;
-  std::size_t read_history_erased(std::uint32_t column, void* out, std::size_t stride,
-                                  std::size_t n, std::span<RowStamp> stamps) const noexcept;
+  Status read_at_or_before_erased(std::uint32_t column, TimeNs t, void* out, RowStamp* stamp) const noexcept;
+  std::size_t read_history_erased(std::uint32_t column, void* out, std::size_t stride, std::size_t n,
+                                  std::span<RowStamp> stamps) const noexcept;
 
   // Number of rows written so far; the newest row's tick is rows_written() - 1.
   std::uint64_t rows_written() const noexcept { return written_.load(std::memory_order_acquire); }
@@ -106,8 +105,7 @@ class StateTable {
   static constexpr std::size_t seq_word = 0, tick_word = 1, time_word = 2, header_words = 3;
 
   std::uint32_t add_column_erased(std::string name, TypeInfo type, const void* source);
-  Status read_row(std::uint32_t column, std::uint64_t tick, void* out,
-                  RowStamp* stamp) const noexcept;
+  Status read_row(std::uint32_t column, std::uint64_t tick, void* out, RowStamp* stamp) const noexcept;
   // Time of row `tick`, or -1 if that row is gone or being written.
   bool row_time(std::uint64_t tick, TimeNs& time) const noexcept;
   std::atomic<std::uint64_t>* row(std::uint64_t tick) const noexcept {

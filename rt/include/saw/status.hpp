@@ -19,14 +19,22 @@ enum class Status : std::uint8_t {
 
 constexpr std::string_view to_string(Status s) {
   switch (s) {
-    case Status::ok: return "ok";
-    case Status::queue_full: return "queue_full";
-    case Status::disconnected: return "disconnected";
-    case Status::no_data: return "no_data";
-    case Status::overwritten: return "overwritten";
-    case Status::busy: return "busy";
-    case Status::timeout: return "timeout";
-    case Status::invalid: return "invalid";
+    case Status::ok:
+      return "ok";
+    case Status::queue_full:
+      return "queue_full";
+    case Status::disconnected:
+      return "disconnected";
+    case Status::no_data:
+      return "no_data";
+    case Status::overwritten:
+      return "overwritten";
+    case Status::busy:
+      return "busy";
+    case Status::timeout:
+      return "timeout";
+    case Status::invalid:
+      return "invalid";
   }
   return "unknown";
 }

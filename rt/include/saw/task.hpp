@@ -15,7 +15,7 @@ struct TaskConfig {
   int priority = 0;                    // SCHED_FIFO 1..99; 0: SCHED_OTHER
   int cpu = -1;                        // pinned CPU, -1: any
   std::size_t stack_prefault = 256 * 1024;
-  std::size_t histogram_bins = 1000;   // 1 µs each
+  std::size_t histogram_bins = 1000;  // 1 µs each
 
   static TaskConfig periodic(std::chrono::nanoseconds period, int priority = 80, int cpu = -1) {
     return {period, priority, cpu};
@@ -33,7 +33,7 @@ struct TaskStatistics {
   TimeNs last_wakeup_latency = 0, max_wakeup_latency = 0;
   TimeNs last_compute = 0, max_compute = 0;
   double mean_compute = 0;
-  TimeNs last_wakeup = 0;            // scheduled time of the last wake-up
+  TimeNs last_wakeup = 0;  // scheduled time of the last wake-up
 };
 
 class Task : public Component {
@@ -62,7 +62,8 @@ class Task : public Component {
   void thread_main(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running);
   void periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) noexcept;
   void continuous_loop(const std::atomic<bool>& running) noexcept;
-  void account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t overruns, std::uint64_t missed) noexcept;
+  void account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t overruns,
+               std::uint64_t missed) noexcept;
 
   TaskConfig config_;
   LatencyHistogram histogram_;

@@ -9,8 +9,8 @@ namespace saw {
 
 // Values that cross a mailbox, a state table or a process boundary are copied as bytes.
 template <class T>
-concept Plain = std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T> &&
-                std::is_default_constructible_v<T>;
+concept Plain =
+    std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T> && std::is_default_constructible_v<T>;
 
 template <class T>
 constexpr std::string_view type_name() {

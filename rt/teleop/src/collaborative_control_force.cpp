@@ -32,7 +32,8 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
   p.add_command_read("master_force", columns_.master_force);
   p.add_command_read("slave_force", columns_.slave_force);
   p.add_command_read("tracking_error", columns_.tracking_error);
-  p.add_command_write<StateCommand>("state_command", [this](const StateCommand& c) { handle_state_command(c); });
+  p.add_command_write<StateCommand>("state_command",
+                                    [this](const StateCommand& c) { handle_state_command(c); });
   p.add_command_write<double>("set_scale", [this](const double& s) {
     Scale next = config_.scale;
     next.scale = s;
@@ -87,7 +88,9 @@ void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
       snap_pending_ = true;
       set_operating_state(OperatingStateValue::enabled);
       break;
-    case StateCommand::disable: set_operating_state(OperatingStateValue::disabled); break;
+    case StateCommand::disable:
+      set_operating_state(OperatingStateValue::disabled);
+      break;
     case StateCommand::pause:
       if (state_.state == OperatingStateValue::enabled) set_operating_state(OperatingStateValue::paused);
       break;
@@ -97,7 +100,8 @@ void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
         set_operating_state(OperatingStateValue::enabled);
       }
       break;
-    case StateCommand::home: break;  // nothing to home: the devices home themselves
+    case StateCommand::home:
+      break;  // nothing to home: the devices home themselves
   }
 }
 
@@ -133,7 +137,8 @@ Eigen::Vector3d CollaborativeControlForce::predict(const Input& in, double horiz
   return x;
 }
 
-void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept {
+void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master,
+                                            const Eigen::Vector3d& f_slave) noexcept {
   Wrench w;
   w.force = to_vec3(f_master);
   if (master_cf_(w) != Status::ok) ++refused_sends_;
@@ -144,8 +149,9 @@ void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master, con
 }
 
 void CollaborativeControlForce::snap_offsets(const Input& master, const Input& slave) noexcept {
-  slave_offset_.reset(cancelling_slave_offset(predict(master, config_.prediction.master_horizon), master_offset_,
-                                               predict(slave, config_.prediction.slave_horizon), config_.scale));
+  slave_offset_.reset(
+      cancelling_slave_offset(predict(master, config_.prediction.master_horizon), master_offset_,
+                              predict(slave, config_.prediction.slave_horizon), config_.scale));
 }
 
 void CollaborativeControlForce::run() {
@@ -156,8 +162,10 @@ void CollaborativeControlForce::run() {
   if (!inputs_ok) {
     // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
     // At start-up, inputs may simply not be published yet: wait up to stale_timeout for them.
-    const bool starting = !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(config_.stale_timeout * 1e9);
-    if (state_.state == OperatingStateValue::enabled && !starting) set_operating_state(OperatingStateValue::fault);
+    const bool starting =
+        !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(config_.stale_timeout * 1e9);
+    if (state_.state == OperatingStateValue::enabled && !starting)
+      set_operating_state(OperatingStateValue::fault);
     send_forces(zero, zero);
     return;
   }
@@ -189,15 +197,17 @@ void CollaborativeControlForce::run() {
     rescale_pending_ = false;
   }
   const Eigen::Vector3d& o_s = slave_offset_.update();
-  const LawOutput law = compute_law(p_m, master_offset_, p_s, o_s, config_.scale, config_.gains, config_.limits);
+  const LawOutput law =
+      compute_law(p_m, master_offset_, p_s, o_s, config_.scale, config_.gains, config_.limits);
   // Ratchet: at a force limit, slip the offset target so the error returns to the limit; the
   // offset follows the jerk-limited trajectory, the saturated force holds meanwhile.
   ratcheting_ = false;
   if (config_.ratchet) {
-    const LawOutput at_target =
-        compute_law(p_m, master_offset_, p_s, slave_offset_.target(), config_.scale, config_.gains, config_.limits);
+    const LawOutput at_target = compute_law(p_m, master_offset_, p_s, slave_offset_.target(), config_.scale,
+                                            config_.gains, config_.limits);
     if (at_target.master_saturated || at_target.slave_saturated) {
-      slave_offset_.set_target(slave_offset_.target() + ratchet_shift(at_target, config_.scale, config_.gains, config_.limits));
+      slave_offset_.set_target(slave_offset_.target() +
+                               ratchet_shift(at_target, config_.scale, config_.gains, config_.limits));
       ratcheting_ = true;
     }
     ratcheting_ = ratcheting_ || slave_offset_.moving();

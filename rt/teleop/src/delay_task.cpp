@@ -7,7 +7,8 @@ namespace {
 std::size_t rows_for(TaskConfig task, double delay_seconds) {
   const double period = static_cast<double>(task.period.count()) * 1e-9;
   if (period <= 0) throw std::invalid_argument("DelayTask must be periodic");
-  if (!(delay_seconds >= 0) || delay_seconds > 10) throw std::invalid_argument("DelayTask delay must be 0..10 s");
+  if (!(delay_seconds >= 0) || delay_seconds > 10)
+    throw std::invalid_argument("DelayTask delay must be 0..10 s");
   // History must reach back `delay`, with margin for the row being written and the lookup.
   return static_cast<std::size_t>(delay_seconds / period) + 16;
 }
@@ -29,7 +30,8 @@ DelayTask::DelayTask(std::string name, TaskConfig task, double delay_seconds)
   r.add_function("measured_cp", read_cp_);
   r.add_function("measured_cv", read_cv_);
   r.add_function("servo_cf", write_cf_, Need::optional);
-  r.add_event_handler_write<ButtonEvent>("clutch", [this](const ButtonEvent& b) { (void)(*clutch_)(b); }, Need::optional);
+  r.add_event_handler_write<ButtonEvent>(
+      "clutch", [this](const ButtonEvent& b) { (void)(*clutch_)(b); }, Need::optional);
   r.add_event_handler_write<ButtonEvent>(
       "operator_present", [this](const ButtonEvent& b) { (void)(*operator_present_)(b); }, Need::optional);
 }

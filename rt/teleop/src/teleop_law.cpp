@@ -24,15 +24,15 @@ Eigen::Vector3d saturate(const Eigen::Vector3d& f, double limit) {
 LawOutput compute_law(const Eigen::Vector3d& p_master, const Eigen::Vector3d& o_master,
                       const Eigen::Vector3d& p_slave, const Eigen::Vector3d& o_slave, const Scale& s,
                       const Gains& k, const ForceLimits& lim) {
-  const Eigen::Vector3d d_m = p_master + o_master;                                // (1)
-  const Eigen::Vector3d d_s = p_slave + o_slave;                                  // (2)
+  const Eigen::Vector3d d_m = p_master + o_master;  // (1)
+  const Eigen::Vector3d d_s = p_slave + o_slave;    // (2)
   LawOutput out;
-  out.master_error = d_m - s.slave_to_master().cwiseProduct(d_s);                 // (3)
-  out.slave_error = d_s - s.master_to_slave().cwiseProduct(d_m);                  // (4)
+  out.master_error = d_m - s.slave_to_master().cwiseProduct(d_s);  // (3)
+  out.slave_error = d_s - s.master_to_slave().cwiseProduct(d_m);   // (4)
   const Eigen::Vector3d f_m = -k.master * out.master_error;
   const Eigen::Vector3d f_s = -k.slave * out.slave_error;
-  out.master_force = saturate(f_m, lim.master);                                   // (5)
-  out.slave_force = saturate(f_s, lim.slave);                                     // (6)
+  out.master_force = saturate(f_m, lim.master);  // (5)
+  out.slave_force = saturate(f_s, lim.slave);    // (6)
   out.master_saturated = f_m.norm() > lim.master;
   out.slave_saturated = f_s.norm() > lim.slave;
   return out;

@@ -12,7 +12,7 @@
 namespace saw::bridge {
 
 inline constexpr std::uint64_t segment_magic = 0x3147445242574153ULL;  // "SAWBRDG1", little endian
-inline constexpr std::uint32_t layout_version = 1;  // any change below bumps this
+inline constexpr std::uint32_t layout_version = 1;                     // any change below bumps this
 
 enum class SegmentState : std::uint32_t { initializing = 0, ready = 1, closed = 2 };
 

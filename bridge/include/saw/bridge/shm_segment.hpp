@@ -18,7 +18,8 @@ class ShmSegment {
   // Creates /name of `size` bytes, zero-filled. A segment left by a dead owner is replaced;
   // one whose owner is alive is an error naming that pid (read from the first 4 bytes' owner
   // field is the caller's business: `owner_alive` decides).
-  static ShmSegment create(const std::string& name, std::size_t size, bool (*owner_alive)(const void* mapping, std::size_t size));
+  static ShmSegment create(const std::string& name, std::size_t size,
+                           bool (*owner_alive)(const void* mapping, std::size_t size));
   // Maps an existing /name read-write; throws if absent.
   static ShmSegment attach(const std::string& name);
 

@@ -12,10 +12,12 @@ namespace saw::drivers {
 
 struct SimDeviceConfig {
   ArmModel model = ArmModel::omni;
-  Eigen::Vector3d initial_joints = Eigen::Vector3d::Zero();  // rad (omni) or m (falcon); omni zero: elbow bent 1.2 rad
-  Eigen::Vector3d inertia = Eigen::Vector3d::Zero();         // zero: the model's default
-  Eigen::Vector3d damping = Eigen::Vector3d::Zero();         // zero: the model's default
-  Eigen::Vector3d joint_min = Eigen::Vector3d::Zero(), joint_max = Eigen::Vector3d::Zero();  // equal: defaults
+  Eigen::Vector3d initial_joints =
+      Eigen::Vector3d::Zero();  // rad (omni) or m (falcon); omni zero: elbow bent 1.2 rad
+  Eigen::Vector3d inertia = Eigen::Vector3d::Zero();  // zero: the model's default
+  Eigen::Vector3d damping = Eigen::Vector3d::Zero();  // zero: the model's default
+  Eigen::Vector3d joint_min = Eigen::Vector3d::Zero(),
+                  joint_max = Eigen::Vector3d::Zero();  // equal: defaults
   double max_force = 0;  // N; zero: the model's default (Omni 3.3 N, Falcon 9 N)
   bool start_enabled = true;
   HandScript hand;
