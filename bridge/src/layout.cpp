@@ -17,7 +17,8 @@ Layout Layout::of(const LayoutParams& p) {
   l.command_slot_size = static_cast<std::uint32_t>(SpscRing::round_slot_size(16 + p.command_payload));
   l.event_slot_size = static_cast<std::uint32_t>(SpscRing::round_slot_size(16 + p.event_payload));
   const std::uint64_t capacity = SpscRing::round_capacity(p.ring_capacity);
-  l.mirror_offset = align_up(sizeof(SegmentHeader), cache_line);
+  l.manifest_offset = align_up(sizeof(SegmentHeader), cache_line);
+  l.mirror_offset = align_up(l.manifest_offset + p.manifest_count * sizeof(ManifestEntry), cache_line);
   l.mirror_words = 1 + (p.mirror_bytes + 7) / 8;  // seq word + data
   l.slots_offset = align_up(l.mirror_offset + l.mirror_words * 8, cache_line);
   l.slot_stride =
@@ -33,6 +34,8 @@ void initialize(void* memory, const LayoutParams& p, const Layout& l, std::int32
   h->header_size = sizeof(SegmentHeader);
   h->interface_hash = p.interface_hash;
   h->total_size = l.total_size;
+  h->manifest_offset = l.manifest_offset;
+  h->manifest_count = p.manifest_count;
   h->mirror_offset = l.mirror_offset;
   h->mirror_words = l.mirror_words;
   h->slots_offset = l.slots_offset;
@@ -42,6 +45,7 @@ void initialize(void* memory, const LayoutParams& p, const Layout& l, std::int32
   h->command_slot_size = l.command_slot_size;
   h->event_slot_size = l.event_slot_size;
   std::strncpy(h->component, p.component.c_str(), sizeof h->component - 1);
+  std::strncpy(h->interface, p.interface.c_str(), sizeof h->interface - 1);
   auto* words = mirror(memory);
   for (std::uint64_t i = 0; i < l.mirror_words; ++i) new (&words[i]) std::atomic<std::uint64_t>(0);
   for (std::uint32_t i = 0; i < p.slot_count; ++i) new (&slot(memory, i)) ClientSlot{};
@@ -69,14 +73,25 @@ std::string validate(const void* memory, std::size_t size) {
   if (h->total_size > size)
     return "truncated: " + std::to_string(size) + " bytes mapped, the header says " +
            std::to_string(h->total_size);
-  const Layout l = Layout::of({"", 0, (h->mirror_words - 1) * 8, h->slot_count, h->ring_capacity,
-                               h->command_slot_size - 16u, h->event_slot_size - 16u});
-  if (l.total_size != h->total_size || l.slots_offset != h->slots_offset || l.slot_stride != h->slot_stride)
+  LayoutParams p;
+  p.manifest_count = static_cast<std::uint32_t>(h->manifest_count);
+  p.mirror_bytes = (h->mirror_words - 1) * 8;
+  p.slot_count = h->slot_count;
+  p.ring_capacity = h->ring_capacity;
+  p.command_payload = h->command_slot_size - 16u;
+  p.event_payload = h->event_slot_size - 16u;
+  const Layout l = Layout::of(p);
+  if (h->manifest_count > 4096 || l.manifest_offset != h->manifest_offset || l.total_size != h->total_size ||
+      l.slots_offset != h->slots_offset || l.slot_stride != h->slot_stride)
     return "inconsistent layout: offsets do not match the sizes the header gives";
   return {};
 }
 
 SegmentHeader& header(void* memory) noexcept { return *static_cast<SegmentHeader*>(memory); }
+
+ManifestEntry* manifest(void* memory) noexcept {
+  return reinterpret_cast<ManifestEntry*>(static_cast<std::byte*>(memory) + header(memory).manifest_offset);
+}
 
 std::atomic<std::uint64_t>* mirror(void* memory) noexcept {
   return reinterpret_cast<std::atomic<std::uint64_t>*>(static_cast<std::byte*>(memory) +
@@ -135,6 +150,18 @@ bool mirror_read(void* memory, void* data, std::size_t size) noexcept {
     if (w[0].load(std::memory_order_relaxed) == s1) return true;
   }
   return false;
+}
+
+std::unique_ptr<SpscRing> make_command_ring(void* memory, std::uint32_t index) {
+  const auto& h = header(memory);
+  return std::make_unique<SpscRing>(&slot(memory, index).commands, ring_storage(memory, index, false),
+                                    h.ring_capacity, h.command_slot_size);
+}
+
+std::unique_ptr<SpscRing> make_event_ring(void* memory, std::uint32_t index) {
+  const auto& h = header(memory);
+  return std::make_unique<SpscRing>(&slot(memory, index).events, ring_storage(memory, index, true),
+                                    h.ring_capacity, h.event_slot_size);
 }
 
 int claim_slot(void* memory, std::int32_t pid) noexcept {

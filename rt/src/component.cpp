@@ -66,6 +66,7 @@ void Component::cycle(TimeNs time) noexcept {
   process_mailboxes();
   run();
   state_table_.advance(time);
+  for (CycleHook* h : hooks_) h->after_cycle(*this, time);
 }
 
 }  // namespace saw

@@ -5,6 +5,15 @@ namespace saw {
 Mailbox::Mailbox(std::string name, std::size_t capacity, std::size_t max_payload)
     : name_(std::move(name)), ring_(capacity, header_size + max_payload) {}
 
+Mailbox::Mailbox(std::string name, SpscRingControl* control, std::byte* storage, std::size_t capacity,
+                 std::size_t slot_size)
+    : name_(std::move(name)), ring_(control, storage, capacity, slot_size) {}
+
+void Mailbox::set_target(std::uint32_t index, Invoker target) {
+  if (index >= targets_.size()) targets_.resize(index + 1, Invoker{[](void*, const void*) {}, nullptr});
+  targets_[index] = target;
+}
+
 std::uint32_t Mailbox::add_target(Invoker target) {
   targets_.push_back(target);
   return static_cast<std::uint32_t>(targets_.size() - 1);
@@ -20,7 +29,8 @@ std::size_t Mailbox::drain() noexcept {
     if (slot == nullptr) break;
     std::uint32_t target = 0;
     std::memcpy(&target, slot, sizeof target);
-    targets_[target](slot + header_size);
+    if (target < targets_.size())
+      targets_[target](slot + header_size);  // (the index may come from another process)
     ring_.pop();
     ++n;
   }

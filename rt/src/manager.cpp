@@ -54,6 +54,12 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
                            quoted(server_name) + "." + quoted(provided_name) + ": ";
   if (state_ != ManagerState::idle) throw ConnectError(what + "the manager has already started");
   Component& client = get(client_name);
+  if (find(server_name) == nullptr)
+    for (auto& r : resolvers_)
+      if (auto proxy = r->resolve(server_name)) {
+        add(std::move(proxy));
+        break;
+      }
   Component& server = get(server_name);
   RequiredInterface* req = client.required(required_name);
   if (req == nullptr)
@@ -119,6 +125,8 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
     } else if (commands != nullptr) {
       b.mailbox = commands;
       b.target = commands->add_target(c->invoker());
+    } else if (c->forward) {
+      b.forward = c;
     } else {
       b.direct = c->invoker();
     }
@@ -134,6 +142,23 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
       max_arg = std::max(max_arg, h->signature.arg.size);
     }
   Mailbox* events = nullptr;
+  if (Mailbox* remote = server.remote_events(); any_events && remote != nullptr) {
+    // The server is in another process: its events arrive in the proxy's ring, numbered as the
+    // proxy's provided events; the client's thread drains that ring.
+    if (!client.has_thread())
+      throw ConnectError(what + "a client without a thread cannot receive events from another process");
+    for (const auto& h : req->handlers()) {
+      const auto& evs = prov->events();
+      for (std::size_t i = 0; i < evs.size(); ++i)
+        if (evs[i]->name() == h->name) {
+          remote->set_target(static_cast<std::uint32_t>(i), h->invoker());
+          h->bound = true;
+        }
+    }
+    client.add_inbound(remote);
+    req->set_connected_to(std::string(server_name) + "." + std::string(provided_name));
+    return;
+  }
   if (any_events && client.has_thread()) {
     mailboxes_.push_back(std::make_unique<Mailbox>(
         std::string(server_name) + "." + std::string(provided_name) + " events -> " +

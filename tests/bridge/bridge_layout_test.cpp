@@ -19,13 +19,26 @@ std::string unique_name(const char* what) {
   return "/saw.test." + std::string(what) + "." + std::to_string(getpid());
 }
 
+LayoutParams make(const char* component, std::size_t mirror, std::uint32_t slots, std::uint32_t capacity,
+                  std::size_t payload) {
+  LayoutParams p;
+  p.component = component;
+  p.interface = "p";
+  p.interface_hash = 42;
+  p.mirror_bytes = mirror;
+  p.slot_count = slots;
+  p.ring_capacity = capacity;
+  p.command_payload = p.event_payload = payload;
+  return p;
+}
+
 bool owner_alive(const void* mapping, std::size_t size) {
   if (!validate(mapping, size).empty()) return false;
   return process_alive(static_cast<const SegmentHeader*>(mapping)->owner_pid.load());
 }
 
 struct Fixture {
-  explicit Fixture(const char* what, LayoutParams p = {"server", 42, 64, 4, 64, 40, 40})
+  explicit Fixture(const char* what, LayoutParams p = make("server", 64, 4, 64, 40))
       : params(std::move(p)),
         layout(Layout::of(params)),
         seg(ShmSegment::create(unique_name(what), layout.total_size, owner_alive)) {
@@ -124,7 +137,7 @@ TEST(BridgeLayout, TheMirrorIsNeverTornAcrossProcesses) {
 }
 
 TEST(BridgeLayout, SlotsAreClaimedOnceAndReclaimedFromDeadProcesses) {
-  Fixture f("slots", {"server", 1, 8, 2, 8, 16, 16});
+  Fixture f("slots", make("server", 8, 2, 8, 16));
   EXPECT_EQ(in_child([&] { return claim_slot(f.seg.data(), getpid()); }),
             0);  // the child dies holding slot 0
   EXPECT_EQ(claim_slot(f.seg.data(), getpid()), 1);
@@ -172,7 +185,7 @@ TEST(BridgeLayout, BadSegmentsAreRefusedWithAClearReason) {
 
 TEST(BridgeLayout, ASegmentLeftByADeadOwnerIsTakenOverALiveOneIsNot) {
   const auto name = unique_name("owner");
-  const LayoutParams p{"server", 1, 8, 1, 8, 16, 16};
+  const LayoutParams p = make("server", 8, 1, 8, 16);
   const Layout l = Layout::of(p);
   // A child creates the segment and dies without unlinking it.
   ASSERT_EQ(in_child([&] {

@@ -72,7 +72,12 @@ int main(int argc, char** argv) {
   std::vector<std::int64_t> futex_all, spin_all, ring_spin_all, ring_futex_all;
 
   // The bridge segment: one slot; commands carry a sequence number, events echo it back.
-  const saw::bridge::LayoutParams params{"bench", 1, 8, 1, 64, 16, 16};
+  saw::bridge::LayoutParams params;
+  params.component = "bench";
+  params.mirror_bytes = 8;
+  params.slot_count = 1;
+  params.ring_capacity = 64;
+  params.command_payload = params.event_payload = 16;
   const auto layout = saw::bridge::Layout::of(params);
   auto seg =
       saw::bridge::ShmSegment::create("/saw.bench." + std::to_string(getpid()), layout.total_size, nullptr);

@@ -51,6 +51,17 @@ class Component {
   // One cycle of work, called by the component's task after its mailboxes are drained.
   virtual void run() {}
 
+  // A proxy of a component in another process returns the mailbox its events arrive in.
+  virtual Mailbox* remote_events() noexcept { return nullptr; }
+
+  // Called at the end of every cycle, after the state-table row (the bridge's exporter uses
+  // it to publish state and take remote commands). Setup only; each must be RT-safe.
+  struct CycleHook {
+    virtual ~CycleHook() = default;
+    virtual void after_cycle(Component& c, TimeNs time) noexcept = 0;
+  };
+  void add_cycle_hook(CycleHook* h) { hooks_.push_back(h); }
+
   // For tasks and the manager.
   void add_inbound(Mailbox* m) { inbound_.push_back(m); }
   std::size_t process_mailboxes() noexcept;
@@ -65,6 +76,7 @@ class Component {
   std::vector<std::unique_ptr<RequiredInterface>> required_;
   StateTable state_table_;
   std::vector<Mailbox*> inbound_;
+  std::vector<CycleHook*> hooks_;
   TimeNs cycle_time_ = 0;
 };
 

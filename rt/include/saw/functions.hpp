@@ -13,6 +13,7 @@ struct FunctionBinding {
   Mailbox* mailbox = nullptr;  // queued void/write: the server's mailbox for this connection
   std::uint32_t target = 0;
   Invoker direct{};                  // void/write to a server without a thread: run now
+  const Command* forward = nullptr;  // void/write to a proxy: hand on now, with its status
   const Command* command = nullptr;  // read, qualified read
 };
 
@@ -40,6 +41,7 @@ class FunctionBase {
   Status queue(const void* arg, std::size_t size) const noexcept {
     if (!bound_) return Status::disconnected;
     if (binding_.mailbox != nullptr) return binding_.mailbox->push(binding_.target, arg, size);
+    if (binding_.forward != nullptr) return binding_.forward->forward(arg);
     binding_.direct(arg);
     return Status::ok;
   }

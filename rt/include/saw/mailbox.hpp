@@ -18,11 +18,18 @@ namespace saw {
 class Mailbox {
  public:
   Mailbox(std::string name, std::size_t capacity, std::size_t max_payload);
+  // Over a ring placed elsewhere (shared memory); see SpscRing's view constructor.
+  Mailbox(std::string name, SpscRingControl* control, std::byte* storage, std::size_t capacity,
+          std::size_t slot_size);
+  static constexpr std::size_t header_bytes() { return header_size; }
 
   const std::string& name() const noexcept { return name_; }
 
   // Setup: adds a call target and returns its index in this mailbox.
   std::uint32_t add_target(Invoker target);
+  // Setup: replaces the call target at `index` (for targets numbered by someone else).
+  void set_target(std::uint32_t index, Invoker target);
+  std::size_t target_count() const noexcept { return targets_.size(); }
 
   // Producer side. Never blocks: a full mailbox is an error, counted.
   Status push(std::uint32_t target, const void* payload, std::size_t size) noexcept {

@@ -21,6 +21,14 @@ class ConnectError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Finds components that live elsewhere (another process, another host) and returns a local
+// proxy for them, or nullptr. connect() asks each resolver for a server it does not know.
+class RemoteResolver {
+ public:
+  virtual ~RemoteResolver() = default;
+  virtual std::unique_ptr<Component> resolve(std::string_view name) = 0;
+};
+
 enum class ManagerState : std::uint8_t { idle, running, stepping, stopped };
 
 struct ManagerOptions {
@@ -40,6 +48,7 @@ class Manager {
   void add(Component& c);
   Component& add(std::unique_ptr<Component> c);
   Component* find(std::string_view name) const noexcept;
+  void add_resolver(std::unique_ptr<RemoteResolver> r) { resolvers_.push_back(std::move(r)); }
 
   // Binds client.required to server.provided by name and type. Throws ConnectError naming
   // both components, both interfaces, the command and both types on any mismatch.
@@ -72,6 +81,7 @@ class Manager {
   std::vector<Component*> components_;
   std::vector<std::unique_ptr<Component>> owned_;
   std::vector<std::unique_ptr<Mailbox>> mailboxes_;
+  std::vector<std::unique_ptr<RemoteResolver>> resolvers_;
   std::atomic<bool> running_{false};
   std::atomic<TimeNs> first_wakeup_{0};
   ManagerState state_ = ManagerState::idle;

@@ -23,7 +23,10 @@ struct Command {
   Signature signature;
   std::function<void(const void* arg)> execute;            // void, write
   std::function<Status(const void* arg, void* out)> read;  // read (arg unused), qualified read
-  const StateTable* table = nullptr;                       // read commands backed by a column
+  // A proxy's void/write command (the server is in another process): hands the argument on
+  // at once, in the caller's thread, and says whether it was taken.
+  std::function<Status(const void* arg)> forward;
+  const StateTable* table = nullptr;  // read commands backed by a column
   std::uint32_t column = 0;
 
   Invoker invoker() {
@@ -144,6 +147,15 @@ class ProvidedInterface {
   template <Plain T>
   EventWrite<T>& add_event_write(std::string name) {
     return add_event<EventWrite<T>>(std::move(name));
+  }
+
+  // For proxies, which rebuild an interface from a description: a command as it is, and an
+  // event of a given signature that something else emits.
+  void add_command(Command c) { add(std::move(c)); }
+  EventBase& add_event_remote(std::string name, Signature s) {
+    check_new_name(name, true);
+    events_.push_back(std::make_unique<EventBase>(std::move(name), s));
+    return *events_.back();
   }
 
   // Slots in each client's command mailbox.

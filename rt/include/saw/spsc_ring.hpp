@@ -40,6 +40,11 @@ class SpscRing {
   SpscRing& operator=(const SpscRing&) = delete;
 
   std::size_t capacity() const noexcept { return mask_ + 1; }
+  // A view whose indices were reset by someone else (a shared slot re-claimed): reload them.
+  void resync() noexcept {
+    cached_tail_ = control_->tail.load(std::memory_order_acquire);
+    cached_head_ = control_->head.load(std::memory_order_acquire);
+  }
   std::size_t slot_size() const noexcept { return slot_size_; }
 
   // Producer: a free slot to fill, or nullptr when the ring is full. Publish with commit().

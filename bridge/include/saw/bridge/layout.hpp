@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "saw/cache_line.hpp"
@@ -23,10 +24,12 @@ struct alignas(cache_line) SegmentHeader {
   std::uint32_t header_size;
   std::uint64_t interface_hash;  // of the exported interface: names, kinds, type names and sizes
   std::uint64_t total_size;
+  std::uint64_t manifest_offset, manifest_count;
   std::uint64_t mirror_offset, mirror_words;
   std::uint64_t slots_offset, slot_stride;
   std::uint32_t slot_count, ring_capacity, command_slot_size, event_slot_size;
   char component[64];
+  char interface[64];
   alignas(cache_line) std::atomic<std::int32_t> owner_pid;
   std::atomic<std::uint32_t> state;
   std::atomic<std::int64_t> heartbeat;  // owner's CLOCK_MONOTONIC ns, refreshed every cycle
@@ -43,8 +46,21 @@ struct alignas(cache_line) ClientSlot {
   SpscRingControl events;                 // server → client
 };
 
+// One exported command or event, in the order the manifest gives them (their wire index).
+struct ManifestEntry {
+  char name[48];
+  std::uint8_t kind;  // saw::CommandKind
+  std::uint8_t reserved[3];
+  std::uint32_t arg_size, result_size;
+  std::uint32_t mirror_offset;  // read commands: where the value sits in the state mirror
+  char arg_type[96];
+  char result_type[96];
+};
+
 struct LayoutParams {
   std::string component;
+  std::string interface;
+  std::uint32_t manifest_count = 0;
   std::uint64_t interface_hash = 0;
   std::size_t mirror_bytes = 0;
   std::uint32_t slot_count = 8;
@@ -55,7 +71,7 @@ struct LayoutParams {
 
 // Offsets and sizes for a segment with these parameters.
 struct Layout {
-  std::uint64_t mirror_offset, mirror_words, slots_offset, slot_stride, total_size;
+  std::uint64_t manifest_offset, mirror_offset, mirror_words, slots_offset, slot_stride, total_size;
   std::uint32_t command_slot_size, event_slot_size;
   static Layout of(const LayoutParams& p);
 };
@@ -69,10 +85,13 @@ std::string validate(const void* memory, std::size_t size);
 
 // Views into a validated mapping.
 SegmentHeader& header(void* memory) noexcept;
+ManifestEntry* manifest(void* memory) noexcept;
 std::atomic<std::uint64_t>* mirror(void* memory) noexcept;
 ClientSlot& slot(void* memory, std::uint32_t index) noexcept;
 SpscRing command_ring(void* memory, std::uint32_t index);
 SpscRing event_ring(void* memory, std::uint32_t index);
+std::unique_ptr<SpscRing> make_command_ring(void* memory, std::uint32_t index);
+std::unique_ptr<SpscRing> make_event_ring(void* memory, std::uint32_t index);
 
 // The state mirror: one seqlocked block (fence-free, as the state table's rows). One writer.
 void mirror_write(void* memory, const void* data, std::size_t size) noexcept;

@@ -1,0 +1,175 @@
+#include "saw/bridge/exporter.hpp"
+
+#include <unistd.h>
+
+#include <cstring>
+
+namespace saw::bridge {
+namespace {
+
+void copy_name(char* dst, std::size_t n, std::string_view src) {
+  const auto k = std::min(n - 1, src.size());
+  std::memcpy(dst, src.data(), k);
+  dst[k] = '\0';
+}
+
+bool owner_alive(const void* mapping, std::size_t size) {
+  return validate(mapping, size).empty() &&
+         process_alive(static_cast<const SegmentHeader*>(mapping)->owner_pid.load(std::memory_order_acquire));
+}
+
+std::uint64_t fnv1a(std::uint64_t h, std::string_view s) {
+  for (char c : s) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
+  return h;
+}
+
+}  // namespace
+
+Exporter::Exporter(Component& component, const std::string& provided, std::uint32_t slots,
+                   std::uint32_t ring_capacity)
+    : segment_([&] {
+        ProvidedInterface* p = component.provided(provided);
+        if (p == nullptr)
+          throw BridgeError("export: component '" + component.name() + "' has no provided interface '" +
+                            provided + "'");
+        LayoutParams lp;
+        lp.component = component.name();
+        lp.interface = provided;
+        std::size_t mirror = 0, command_payload = 8, event_payload = 8;
+        for (const auto& c : p->commands()) {
+          if (c->signature.kind == CommandKind::qualified_read) continue;
+          ++lp.manifest_count;
+          if (c->signature.kind == CommandKind::read)
+            mirror += (c->signature.arg.size + 7) / 8 * 8;
+          else
+            command_payload = std::max(command_payload, c->signature.arg.size);
+        }
+        for (const auto& e : p->events()) {
+          ++lp.manifest_count;
+          event_payload = std::max(event_payload, e->signature().arg.size);
+        }
+        lp.mirror_bytes = mirror;
+        lp.slot_count = slots;
+        lp.ring_capacity = ring_capacity;
+        lp.command_payload = command_payload;
+        lp.event_payload = event_payload;
+        const Layout l = Layout::of(lp);
+        ShmSegment s = ShmSegment::create("/saw." + component.name(), l.total_size, owner_alive);
+        initialize(s.data(), lp, l, static_cast<std::int32_t>(getpid()));
+        return s;
+      }()) {
+  ProvidedInterface& p = *component.provided(provided);
+  void* mem = segment_.data();
+  ManifestEntry* m = manifest(mem);
+  std::uint32_t index = 0, offset = 0;
+  std::uint64_t hash = 14695981039346656037ULL;
+  const auto describe = [&](const std::string& name, const Signature& sig) {
+    ManifestEntry& e = m[index];
+    copy_name(e.name, sizeof e.name, name);
+    e.kind = static_cast<std::uint8_t>(sig.kind);
+    e.arg_size = static_cast<std::uint32_t>(sig.arg.size);
+    e.result_size = static_cast<std::uint32_t>(sig.result.size);
+    copy_name(e.arg_type, sizeof e.arg_type, sig.arg.name);
+    copy_name(e.result_type, sizeof e.result_type, sig.result.name);
+    hash = fnv1a(fnv1a(fnv1a(hash, name), sig.arg.name),
+                 std::to_string(e.kind) + ":" + std::to_string(e.arg_size));
+  };
+  for (const auto& c : p.commands()) {
+    if (c->signature.kind == CommandKind::qualified_read) continue;
+    describe(c->name, c->signature);
+    if (c->signature.kind == CommandKind::read) {
+      m[index].mirror_offset = offset;
+      reads_.push_back({c.get(), offset, static_cast<std::uint32_t>(c->signature.arg.size)});
+      offset += static_cast<std::uint32_t>((c->signature.arg.size + 7) / 8 * 8);
+    }
+    commands_.push_back(c.get());
+    ++index;
+  }
+  for (const auto& e : p.events()) {
+    describe(e->name(), e->signature());
+    // Events travel with their ordinal among events, which is how the proxy's mailbox numbers them.
+    const auto ordinal = static_cast<std::uint32_t>(taps_.size());
+    taps_.push_back(std::make_unique<EventTap>(
+        EventTap{this, ordinal, static_cast<std::uint32_t>(e->signature().arg.size)}));
+    Observer o;
+    o.direct = {[](void* self, const void* arg) {
+                  auto* t = static_cast<EventTap*>(self);
+                  t->exporter->emit(t->index, arg, t->size);
+                },
+                taps_.back().get()};
+    e->add_observer(o);
+    ++index;
+  }
+  staging_.resize(offset + 8);
+  header(mem).interface_hash = hash;
+  for (std::uint32_t i = 0; i < header(mem).slot_count; ++i) {
+    Slot s;
+    s.commands = make_command_ring(mem, i);
+    s.events = make_event_ring(mem, i);
+    slots_.push_back(std::move(s));
+  }
+  component.add_cycle_hook(this);
+  header(mem).heartbeat.store(monotonic_now(), std::memory_order_relaxed);
+  header(mem).state.store(static_cast<std::uint32_t>(SegmentState::ready), std::memory_order_release);
+}
+
+Exporter::~Exporter() {
+  if (segment_.data() != nullptr)
+    header(segment_.data())
+        .state.store(static_cast<std::uint32_t>(SegmentState::closed), std::memory_order_release);
+}
+
+void Exporter::emit(std::uint32_t index, const void* arg, std::size_t size) noexcept {
+  void* mem = segment_.data();
+  for (std::uint32_t i = 0; i < slots_.size(); ++i) {
+    ClientSlot& s = slot(mem, i);
+    if (s.owner_pid.load(std::memory_order_acquire) == 0) continue;
+    Slot& view = slots_[i];
+    const auto g = s.generation.load(std::memory_order_acquire);
+    if (g != view.generation) {
+      view.commands->resync();
+      view.events->resync();
+      view.generation = g;
+    }
+    std::byte* rec = view.events->try_reserve();
+    if (rec == nullptr) {
+      ++events_refused_;
+      continue;
+    }
+    std::memcpy(rec, &index, sizeof index);
+    if (size != 0) std::memcpy(rec + Mailbox::header_bytes(), arg, size);
+    view.events->commit();
+  }
+}
+
+void Exporter::after_cycle(Component&, TimeNs) noexcept {
+  void* mem = segment_.data();
+  header(mem).heartbeat.store(monotonic_now(), std::memory_order_release);
+  for (const Read& r : reads_) (void)r.command->read(nullptr, staging_.data() + r.offset);
+  if (!reads_.empty()) mirror_write(mem, staging_.data(), staging_.size() - 8);
+  for (std::uint32_t i = 0; i < slots_.size(); ++i) {
+    ClientSlot& s = slot(mem, i);
+    if (s.owner_pid.load(std::memory_order_acquire) == 0) continue;
+    Slot& view = slots_[i];
+    const auto g = s.generation.load(std::memory_order_acquire);
+    if (g != view.generation) {
+      view.commands->resync();
+      view.events->resync();
+      view.generation = g;
+    }
+    // At most one ring's worth per cycle, as local mailboxes.
+    for (std::size_t n = 0; n < view.commands->capacity(); ++n) {
+      const std::byte* rec = view.commands->front();
+      if (rec == nullptr) break;
+      std::uint32_t index = 0;
+      std::memcpy(&index, rec, sizeof index);
+      if (index < commands_.size() && commands_[index]->execute) {
+        commands_[index]->execute(rec + Mailbox::header_bytes());
+        ++commands_run_;
+      }
+      view.commands->pop();
+    }
+  }
+}
+
+}  // namespace saw::bridge

@@ -1,0 +1,171 @@
+// One connect(), two distances: a client task connects to a task in another process through
+// the shared-memory bridge exactly as to a local one; the server dying is seen, not hung on.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/mman.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "saw/bridge/proxy.hpp"
+#include "saw/bridge/shm_segment.hpp"
+#include "saw/manager.hpp"
+
+extern char** environ;
+
+namespace {
+
+using namespace std::chrono_literals;
+
+class Client : public saw::Task {
+ public:
+  Client() : Task("client", saw::TaskConfig::periodic(1ms, 0)) {
+    auto& r = require("arm");
+    r.add_function("count", count_);
+    r.add_function("add", add_);
+    r.add_function("reset", reset_, saw::Need::optional);
+    r.add_event_handler_write<std::int64_t>("ticked", [this](const std::int64_t& v) {
+      ticks.fetch_add(1);
+      last_tick.store(v);
+    });
+  }
+  void run() override {
+    std::int64_t v = 0;
+    const auto s = count_(v);
+    status.store(s);
+    if (s == saw::Status::ok) count.store(v);
+    if (send.exchange(false)) add_status.store(add_(1'000'000));
+    cycles.fetch_add(1);
+  }
+  std::atomic<std::int64_t> count{0}, last_tick{0};
+  std::atomic<int> ticks{0};
+  std::atomic<std::uint64_t> cycles{0};
+  std::atomic<bool> send{false};
+  std::atomic<saw::Status> status{saw::Status::no_data}, add_status{saw::Status::no_data};
+
+ private:
+  saw::FunctionRead<std::int64_t> count_;
+  saw::FunctionWrite<std::int64_t> add_;
+  saw::FunctionVoid reset_;
+};
+
+struct Peer {
+  explicit Peer(const std::string& name) {
+    char* argv[] = {const_cast<char*>(SAW_BRIDGE_PEER), const_cast<char*>(name.c_str()), nullptr};
+    if (posix_spawn(&pid, SAW_BRIDGE_PEER, nullptr, nullptr, argv, environ) != 0) pid = -1;
+  }
+  ~Peer() {
+    if (pid > 0) {
+      kill(pid, SIGKILL);
+      waitpid(pid, nullptr, 0);
+    }
+  }
+  pid_t pid = -1;
+};
+
+template <class F>
+bool wait_for(F done, std::chrono::milliseconds limit = 10s) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(1ms);
+  }
+  return true;
+}
+
+bool segment_ready(const std::string& name) {
+  try {
+    auto s = saw::bridge::ShmSegment::attach("/saw." + name);
+    return saw::bridge::validate(s.data(), s.size()).empty() &&
+           saw::bridge::header(s.data()).state.load() ==
+               static_cast<std::uint32_t>(saw::bridge::SegmentState::ready);
+  } catch (const saw::bridge::BridgeError&) {
+    return false;
+  }
+}
+
+TEST(BridgeConnect, SameConnectAcrossProcessesAndTheServerDyingIsSeen) {
+  const std::string name = "bdev" + std::to_string(getpid());
+  Peer peer(name);
+  ASSERT_GT(peer.pid, 0);
+  ASSERT_TRUE(wait_for([&] { return segment_ready(name); })) << "the server process did not export " << name;
+
+  Client client;
+  saw::Manager m;
+  m.add_resolver(std::make_unique<saw::bridge::ShmResolver>());
+  m.add(client);
+  m.connect("client", "arm", name, "arm");  // exactly as for a local server
+  m.start();
+  ASSERT_TRUE(wait_for([&] { return client.count.load() > 50; })) << "state did not cross";
+  ASSERT_TRUE(wait_for([&] { return client.ticks.load() > 3; })) << "events did not cross";
+  EXPECT_EQ(client.last_tick.load() % 10, 0);
+  const auto before = client.count.load();
+  client.send.store(true);
+  ASSERT_TRUE(wait_for([&] { return client.count.load() > before + 1'000'000; }))
+      << "the write command did not cross";
+  EXPECT_EQ(client.add_status.load(), saw::Status::ok);
+
+  // kill -9 the server: calls fail with `disconnected` instead of hanging, and the client's loop goes on.
+  kill(peer.pid, SIGKILL);
+  waitpid(peer.pid, nullptr, 0);
+  peer.pid = -1;
+  const auto killed = std::chrono::steady_clock::now();
+  ASSERT_TRUE(wait_for([&] { return client.status.load() == saw::Status::disconnected; }));
+  const auto seen_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - killed).count();
+  RecordProperty("disconnect_seen_ms", std::to_string(seen_ms));
+  std::printf("server death seen after %.1f ms\n", seen_ms);
+  const auto cycles = client.cycles.load();
+  ASSERT_TRUE(wait_for([&] { return client.cycles.load() > cycles + 20; })) << "the client's RT loop stopped";
+  client.send.store(true);
+  ASSERT_TRUE(wait_for([&] { return client.add_status.load() == saw::Status::disconnected; }));
+  m.stop();
+}
+
+TEST(BridgeConnect, TypeMismatchAcrossProcessesFailsAtConnectNamingBothTypes) {
+  const std::string name = "bdevt" + std::to_string(getpid());
+  Peer peer(name);
+  ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
+  class Wrong : public saw::Task {
+   public:
+    Wrong() : Task("wrong", saw::TaskConfig::periodic(1ms, 0)) { require("arm").add_function("add", add_); }
+    saw::FunctionWrite<double> add_;
+  } wrong;
+  saw::Manager m;
+  m.add_resolver(std::make_unique<saw::bridge::ShmResolver>());
+  m.add(wrong);
+  try {
+    m.connect("wrong", "arm", name, "arm");
+    ADD_FAILURE() << "connected despite the type mismatch";
+  } catch (const saw::ConnectError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("write command<double>"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("write command<long int>"), std::string::npos) << msg;
+  }
+}
+
+TEST(BridgeConnect, AStaleSegmentIsRefusedAtConnect) {
+  const std::string name = "bdevs" + std::to_string(getpid());
+  {
+    Peer peer(name);
+    ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
+  }                                    // SIGKILL: the segment stays, its heartbeat stops
+  std::this_thread::sleep_for(150ms);  // let the heartbeat age past the 100 ms limit (not a race: a bound)
+  Client client;
+  saw::Manager m;
+  m.add_resolver(std::make_unique<saw::bridge::ShmResolver>());
+  m.add(client);
+  try {
+    m.connect("client", "arm", name, "arm");
+    ADD_FAILURE();
+  } catch (const saw::ConnectError& e) {
+    EXPECT_NE(std::string(e.what()).find("is not running"), std::string::npos) << e.what();
+  }
+  shm_unlink(("/saw." + name).c_str());
+}
+
+}  // namespace
