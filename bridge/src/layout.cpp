@@ -170,11 +170,11 @@ int claim_slot(void* memory, std::int32_t pid) noexcept {
     auto& s = slot(memory, i);
     std::int32_t expected = 0;
     if (s.owner_pid.compare_exchange_strong(expected, pid, std::memory_order_acq_rel)) {
-      // Fresh rings for the new owner; nobody else reads a free slot's rings.
-      s.commands.head.store(0, std::memory_order_relaxed);
-      s.commands.tail.store(0, std::memory_order_relaxed);
-      s.events.head.store(0, std::memory_order_relaxed);
-      s.events.tail.store(0, std::memory_order_relaxed);
+      // The rings are not reset: the server may be draining this slot right now. The new owner
+      // continues from the indices as they are (commands a dead owner left are still run: they
+      // were accepted), and, as the event ring's consumer, skips the events queued for the
+      // previous owner.
+      s.events.tail.store(s.events.head.load(std::memory_order_acquire), std::memory_order_release);
       s.generation.fetch_add(1, std::memory_order_release);
       return static_cast<int>(i);
     }

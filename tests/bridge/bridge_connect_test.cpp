@@ -11,6 +11,7 @@
 #include <chrono>
 #include <thread>
 
+#include "saw/bridge/exporter.hpp"
 #include "saw/bridge/proxy.hpp"
 #include "saw/bridge/shm_segment.hpp"
 #include "saw/manager.hpp"
@@ -54,8 +55,11 @@ class Client : public saw::Task {
 };
 
 struct Peer {
-  explicit Peer(const std::string& name) {
-    char* argv[] = {const_cast<char*>(SAW_BRIDGE_PEER), const_cast<char*>(name.c_str()), nullptr};
+  explicit Peer(const std::string& name, const char* mode = nullptr) {
+    char* server[] = {const_cast<char*>(SAW_BRIDGE_PEER), const_cast<char*>(name.c_str()), nullptr};
+    char* client[] = {const_cast<char*>(SAW_BRIDGE_PEER), const_cast<char*>(mode),
+                      const_cast<char*>(name.c_str()), nullptr};
+    char** argv = mode == nullptr ? server : client;
     if (posix_spawn(&pid, SAW_BRIDGE_PEER, nullptr, nullptr, argv, environ) != 0) pid = -1;
   }
   ~Peer() {
@@ -166,6 +170,50 @@ TEST(BridgeConnect, AStaleSegmentIsRefusedAtConnect) {
     EXPECT_NE(std::string(e.what()).find("is not running"), std::string::npos) << e.what();
   }
   shm_unlink(("/saw." + name).c_str());
+}
+
+}  // namespace
+
+namespace {
+
+// A local task exported with ONE client slot: a second client can only connect if the slot of a
+// client killed with -9 is reclaimed. The server keeps running meanwhile.
+class Counter : public saw::Task {
+ public:
+  explicit Counter(std::string name) : Task(std::move(name), saw::TaskConfig::periodic(1ms, 0)) {
+    auto& p = provide("arm");
+    p.add_command_read("count", state_table().add_column("count", &count_));
+    p.add_command_write<std::int64_t>("add", [this](const std::int64_t& v) {
+      count_ += v;
+      adds.fetch_add(1);
+    });
+  }
+  std::atomic<std::int64_t> adds{0};
+
+ private:
+  std::int64_t count_ = 0;
+};
+
+TEST(BridgeConnect, AKilledClientsSlotIsReclaimedAndTheServerRunsOn) {
+  const std::string name = "bsrv" + std::to_string(getpid());
+  Counter counter(name);
+  saw::bridge::Exporter exporter(counter, "arm", /*slots=*/1);
+  saw::Manager m;
+  m.add(counter);
+  m.start();
+  {
+    Peer first(name, "client");
+    ASSERT_TRUE(wait_for([&] { return counter.adds.load() > 50; }))
+        << "the first client's commands did not arrive";
+  }  // kill -9
+  const auto adds = counter.adds.load();
+  const auto cycles = counter.statistics().cycles;
+  ASSERT_TRUE(wait_for([&] { return counter.statistics().cycles > cycles + 50; })) << "the server stopped";
+  EXPECT_LE(counter.adds.load(), adds + 1) << "nothing arrives from a dead client";
+  Peer second(name, "client");  // needs the dead client's slot
+  ASSERT_TRUE(wait_for([&] { return counter.adds.load() > adds + 50; }))
+      << "the second client could not connect";
+  m.stop();
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "saw/bridge/exporter.hpp"
+#include "saw/bridge/proxy.hpp"
 #include "saw/manager.hpp"
 
 namespace {
@@ -32,10 +33,45 @@ class Device : public saw::Task {
   saw::EventWrite<std::int64_t>* ticked_;
 };
 
+// Client mode: connects to NAME.arm through the bridge and sends add(1) every cycle.
+class Sender : public saw::Task {
+ public:
+  Sender() : Task("sender", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0)) {
+    require("arm").add_function("add", add_);
+  }
+  void run() override { (void)add_(1); }
+
+ private:
+  saw::FunctionWrite<std::int64_t> add_;
+};
+
+int run_client(const char* name) {
+  Sender sender;
+  saw::Manager m;
+  m.add_resolver(std::make_unique<saw::bridge::ShmResolver>());
+  m.add(sender);
+  try {
+    m.connect("sender", "arm", name, "arm");
+  } catch (const saw::ConnectError& e) {
+    std::printf("connect failed: %s\n", e.what());
+    return 3;
+  }
+  m.start();
+  std::printf("connected\n");
+  std::fflush(stdout);
+  while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  m.stop();
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) return 2;
+  if (std::string(argv[1]) == "client" && argc == 3) {
+    std::signal(SIGTERM, [](int) { stop.store(true); });
+    return run_client(argv[2]);
+  }
   std::signal(SIGTERM, [](int) { stop.store(true); });
   Device device(argv[1]);
   saw::bridge::Exporter exporter(device, "arm");

@@ -36,9 +36,9 @@ struct alignas(cache_line) SegmentHeader {
 };
 
 // One client's slot: claimed by compare-and-swap of owner_pid from 0, reclaimed when that
-// process is gone. Both rings' storage follows the slot header. A claim resets the rings and
-// bumps `generation`: a consumer holding a view of the slot's rings must compare generations
-// before each drain and rebuild its view when they differ.
+// process is gone. Both rings' storage follows the slot header. A claim keeps the ring indices
+// (the server may be mid-drain), drops the events queued for the previous owner and bumps
+// `generation`; the server resyncs its cached indices when it sees a new generation.
 struct alignas(cache_line) ClientSlot {
   std::atomic<std::int32_t> owner_pid;
   std::atomic<std::uint32_t> generation;  // bumped on every claim: a stale view can tell
