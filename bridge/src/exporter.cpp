@@ -35,7 +35,8 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
         LayoutParams lp;
         lp.component = component.name();
         lp.interface = provided;
-        std::size_t mirror = 0, command_payload = 8, event_payload = 8;
+        std::size_t mirror = 8, command_payload = 8,
+                    event_payload = 8;  // the mirror starts with the row time
         for (const auto& c : p->commands()) {
           if (c->signature.kind == CommandKind::qualified_read) continue;
           ++lp.manifest_count;
@@ -61,7 +62,7 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
   ProvidedInterface& p = *component.provided(provided);
   void* mem = segment_.data();
   ManifestEntry* m = manifest(mem);
-  std::uint32_t index = 0, offset = 0;
+  std::uint32_t index = 0, offset = 8;
   std::uint64_t hash = 14695981039346656037ULL;
   const auto describe = [&](const std::string& name, const Signature& sig) {
     ManifestEntry& e = m[index];
@@ -142,11 +143,12 @@ void Exporter::emit(std::uint32_t index, const void* arg, std::size_t size) noex
   }
 }
 
-void Exporter::after_cycle(Component&, TimeNs) noexcept {
+void Exporter::after_cycle(Component&, TimeNs time) noexcept {
   void* mem = segment_.data();
   header(mem).heartbeat.store(monotonic_now(), std::memory_order_release);
+  std::memcpy(staging_.data(), &time, sizeof time);  // the row's time: proxies stamp reads with it
   for (const Read& r : reads_) (void)r.command->read(nullptr, staging_.data() + r.offset);
-  if (!reads_.empty()) mirror_write(mem, staging_.data(), staging_.size() - 8);
+  mirror_write(mem, staging_.data(), staging_.size() - 8);
   for (std::uint32_t i = 0; i < slots_.size(); ++i) {
     ClientSlot& s = slot(mem, i);
     if (s.owner_pid.load(std::memory_order_acquire) == 0) continue;

@@ -45,13 +45,19 @@ Proxy::Proxy(ShmSegment segment, int slot_index, TimeNs stale_after)
     c.signature = sig;
     if (kind == CommandKind::read) {
       const std::uint32_t offset = e.mirror_offset, size = e.arg_size;
-      c.read = [this, offset, size](const void*, void* out) {
+      c.read_stamped = [this, offset, size](void* out, RowStamp& stamp) {
         if (!server_alive()) return Status::disconnected;
         alignas(16) std::byte block[4096];
         if (mirror_bytes_ > sizeof block) return Status::invalid;
         if (!mirror_read(segment_.data(), block, mirror_bytes_)) return Status::busy;
+        std::memcpy(&stamp.time, block, sizeof stamp.time);  // the server's row time
+        stamp.tick = 0;
         std::memcpy(out, block + offset, size);
         return Status::ok;
+      };
+      c.read = [f = c.read_stamped](const void*, void* out) {
+        RowStamp ignored;
+        return f(out, ignored);
       };
     } else {
       c.execute = [](const void*) {};  // never used: forward takes the call

@@ -2,6 +2,8 @@
 
 #include <filesystem>
 
+#include "saw/bridge/exporter.hpp"
+#include "saw/bridge/proxy.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/eigen.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
@@ -106,6 +108,11 @@ void register_builtin_types(deploy::ComponentRegistry& registry) {
                "simulated 3-DOF haptic device (Omni- or Falcon-like), KDL");
   registry.add("teleop", make_teleop, "collaborative force teleoperation between a master and a slave");
   registry.add("delay", make_delay, "re-publishes a device's measured_cp/cv `delay` late");
+  // Components of other processes on this host, through the shared-memory bridge.
+  registry.add_resolver([] { return std::make_unique<bridge::ShmResolver>(); });
+  registry.set_exporter([](Component& c, const std::string& provided) -> std::shared_ptr<void> {
+    return std::make_shared<bridge::Exporter>(c, provided);
+  });
 }
 
 }  // namespace saw::apps

@@ -2,16 +2,17 @@
 // starts; a good file runs, records, and the saw-rt process behaves as documented.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <regex>
+#include <sstream>
+#include <thread>
 
 #include "builtin_types.hpp"
 #include "saw/deploy/deployment.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
-
-#include <cmath>
 
 namespace {
 
@@ -70,36 +71,50 @@ struct Case {
 
 TEST(Deployment, EveryErrorNamesFileLineColumnAndKey) {
   const Case cases[] = {
-      {"type: teleop", "type: telop", R"(^cfg\.yaml:11:11: key 'components\[2\]\.type': unknown component type 'telop' \(known: .*teleop)"},
-      {"{model: omni,", "{model: omnni,", R"(^cfg\.yaml:6:21: key 'components\[0\]\.params\.model': 'omnni' is not one of: omni, falcon)"},
-      {"frequency: 0.5", "frequency: fast", R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.frequency': expected a number, got 'fast')"},
-      {"amplitude: [0.02, 0, 0]", "amplitude: [0.02, 0]", R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.amplitude': expected a list of exactly 3 numbers)"},
-      {"task: {period: 1ms}\n    params: {gains", "task: {period: 1 ms}\n    params: {gains", R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.period': '1 ms' is not a duration)"},
-      {"gains: {master: 100", "gainz: {master: 100", R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.gainz': unknown parameter)"},
-      {"name: slave", "name: master", R"(^cfg\.yaml:7:\d+: key 'components\[1\]\.name': a component named 'master' exists already)"},
-      {"server: slave,", "server: slav,", R"(^cfg\.yaml:16:\d+: key 'connections\[1\]': .*no component named 'slav')"},
-      {"provided: arm}\n  - {client: teleop, required: slave", "provided: sim}\n  - {client: teleop, required: slave",
+      {"type: teleop", "type: telop",
+       R"(^cfg\.yaml:11:11: key 'components\[2\]\.type': unknown component type 'telop' \(known: .*teleop)"},
+      {"{model: omni,", "{model: omnni,",
+       R"(^cfg\.yaml:6:21: key 'components\[0\]\.params\.model': 'omnni' is not one of: omni, falcon)"},
+      {"frequency: 0.5", "frequency: fast",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.frequency': expected a number, got 'fast')"},
+      {"amplitude: [0.02, 0, 0]", "amplitude: [0.02, 0]",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.amplitude': expected a list of exactly 3 numbers)"},
+      {"task: {period: 1ms}\n    params: {gains", "task: {period: 1 ms}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.period': '1 ms' is not a duration)"},
+      {"gains: {master: 100", "gainz: {master: 100",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.gainz': unknown parameter)"},
+      {"name: slave", "name: master",
+       R"(^cfg\.yaml:7:\d+: key 'components\[1\]\.name': a component named 'master' exists already)"},
+      {"server: slave,", "server: slav,",
+       R"(^cfg\.yaml:16:\d+: key 'connections\[1\]': .*no component named 'slav')"},
+      {"provided: arm}\n  - {client: teleop, required: slave",
+       "provided: sim}\n  - {client: teleop, required: slave",
        R"(^cfg\.yaml:15:\d+: key 'connections\[0\]': [\s\S]*'measured_cp'[\s\S]*no such command)"},
-      {"deployment: {name: t, clock: stepped}", "deployment: {name: t, clock: [stepped}", R"(^cfg\.yaml:1:\d+: key '': YAML syntax)"},
-      {"    params: {gains: {master: 100, slave: 100}}", "    params: {gains: {master: 100, slave: -5}}", R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.gains\.slave': .*out of range)"},
+      {"deployment: {name: t, clock: stepped}", "deployment: {name: t, clock: [stepped}",
+       R"(^cfg\.yaml:1:\d+: key '': YAML syntax)"},
+      {"    params: {gains: {master: 100, slave: 100}}", "    params: {gains: {master: 100, slave: -5}}",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.gains\.slave': .*out of range)"},
   };
   for (const auto& c : cases) {
     const auto message = error_of(c.from, c.to);
-    EXPECT_TRUE(std::regex_search(message, std::regex(c.expect))) << "message: " << message << "\nexpected: " << c.expect;
+    EXPECT_TRUE(std::regex_search(message, std::regex(c.expect)))
+        << "message: " << message << "\nexpected: " << c.expect;
   }
 }
 
 TEST(Deployment, ConnectionTypeMismatchKeepsTheManagersMessage) {
   // teleop's required "master" wants measured_cp as read<Pose>; the device's "sim" interface has
   // set_button (write<ButtonCommand>) etc. but no measured_cp.
-  const auto message = error_of("required: slave, server: slave, provided: arm", "required: slave, server: teleop, provided: teleop");
+  const auto message = error_of("required: slave, server: slave, provided: arm",
+                                "required: slave, server: teleop, provided: teleop");
   EXPECT_NE(message.find("'servo_cf'"), std::string::npos) << message;
   EXPECT_NE(message.find("'teleop'"), std::string::npos) << message;
 }
 
 TEST(Deployment, SteppedRunRecordsEveryRow) {
   const std::string csv = ::testing::TempDir() + "deploy_test.csv";
-  std::string text = std::string(good) + "record: {file: " + csv + ", columns: [master.measured_cp, teleop.tracking_error]}\n";
+  std::string text = std::string(good) + "record: {file: " + csv +
+                     ", columns: [master.measured_cp, teleop.tracking_error]}\n";
   auto d = saw::deploy::parse_deployment(text, "cfg.yaml", registry());
   d.start();
   d.run_for(1.0);
@@ -110,8 +125,9 @@ TEST(Deployment, SteppedRunRecordsEveryRow) {
   std::ifstream in(csv);
   std::string header, line;
   std::getline(in, header);
-  EXPECT_EQ(header, "time,master.measured_cp.x,master.measured_cp.y,master.measured_cp.z,master.measured_cp.qx,"
-                    "master.measured_cp.qy,master.measured_cp.qz,master.measured_cp.qw,teleop.tracking_error");
+  EXPECT_EQ(header,
+            "time,master.measured_cp.x,master.measured_cp.y,master.measured_cp.z,master.measured_cp.qx,"
+            "master.measured_cp.qy,master.measured_cp.qz,master.measured_cp.qw,teleop.tracking_error");
   int rows = 0;
   while (std::getline(in, line)) ++rows;
   EXPECT_EQ(rows, 1001);
@@ -168,12 +184,15 @@ TEST(Integration, ShippedTeleopSimTracksInSteppedMode) {
 // With 20 ms of delay on the master's positions, the local model removes most of the error.
 double delayed_rms(bool predict) {
   std::string text = good;
-  text.replace(text.find("connections:"), std::string("connections:").size(),
-               "  - {name: master_delay, type: delay, task: {period: 1ms}, params: {delay: 20ms}}\nconnections:\n"
-               "  - {client: master_delay, required: source, server: master, provided: arm}");
-  text.replace(text.find("required: master, server: master"), std::string("required: master, server: master").size(),
+  text.replace(
+      text.find("connections:"), std::string("connections:").size(),
+      "  - {name: master_delay, type: delay, task: {period: 1ms}, params: {delay: 20ms}}\nconnections:\n"
+      "  - {client: master_delay, required: source, server: master, provided: arm}");
+  text.replace(text.find("required: master, server: master"),
+               std::string("required: master, server: master").size(),
                "required: master, server: master_delay");
-  text.replace(text.find("gains: {master: 100, slave: 100}"), std::string("gains: {master: 100, slave: 100}").size(),
+  text.replace(text.find("gains: {master: 100, slave: 100}"),
+               std::string("gains: {master: 100, slave: 100}").size(),
                std::string("gains: {master: 0, slave: 300}, stale_timeout: 100ms, prediction: {enabled: ") +
                    (predict ? "true" : "false") + ", master: 20ms}");
   auto d = saw::deploy::parse_deployment(text, "cfg.yaml", registry());
@@ -200,6 +219,48 @@ TEST(Integration, PredictionReducesTheTrackingErrorOfADelayedMaster) {
   const double without = delayed_rms(false), with = delayed_rms(true);
   EXPECT_GT(without, 0.5e-3) << "20 ms of delay on a 2 cm, 0.5 Hz sinusoid shows";
   EXPECT_LT(with, 0.5 * without);
+}
+
+}  // namespace
+
+namespace {
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to) {
+  for (auto at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
+  return s;
+}
+
+// The same teleoperation split over two saw-rt processes: only the deployment files differ.
+TEST(Integration, TwoProcessesTeleoperateThroughTheBridge) {
+  const std::string master = "master" + std::to_string(getpid());  // a name no other run uses
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "m.yaml") << replace_all(read_file(SAW_SOURCE_DIR "/config/teleop-sim-master.yaml"),
+                                               "master", master);
+  std::ofstream(dir + "s.yaml") << replace_all(read_file(SAW_SOURCE_DIR "/config/teleop-sim-slave.yaml"),
+                                               "server: master", "server: " + master);
+  const std::string server_cmd =
+      std::string(SAW_RT_PATH) + " " + dir + "m.yaml --duration 8 > " + dir + "m.log 2>&1 &";
+  ASSERT_EQ(std::system(server_cmd.c_str()), 0);
+  std::string out;
+  int rc = 2;
+  for (int attempt = 0; attempt < 50 && rc != 0; ++attempt) {  // until the master has exported (bounded)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    rc = run(dir + "s.yaml --duration 1.5", out);
+  }
+  ASSERT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("teleop: ENABLED"), std::string::npos) << out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(RMS ([0-9.]+) mm)"))) << out;
+  EXPECT_LT(std::stod(m[1]), 1.0) << out;
+  EXPECT_TRUE(std::regex_search(out, std::regex(R"(slave +1\.00ms +1[45]\d\d )"))) << out;
 }
 
 }  // namespace

@@ -25,7 +25,8 @@ std::optional<TaskConfig> parse_task(Params& p) {
 
 }  // namespace
 
-Deployment parse_deployment(const std::string& yaml_text, const std::string& file, const ComponentRegistry& registry) {
+Deployment parse_deployment(const std::string& yaml_text, const std::string& file,
+                            const ComponentRegistry& registry) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
@@ -51,8 +52,10 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     const auto name = entry.get<std::string>("name");
     const auto type = entry.get<std::string>("type");
     const Factory* factory = registry.find(type);
-    if (factory == nullptr) entry.fail_at("type", "unknown component type '" + type + "' (known: " + registry.type_list() + ")");
-    if (d.manager_->find(name) != nullptr) entry.fail_at("name", "a component named '" + name + "' exists already");
+    if (factory == nullptr)
+      entry.fail_at("type", "unknown component type '" + type + "' (known: " + registry.type_list() + ")");
+    if (d.manager_->find(name) != nullptr)
+      entry.fail_at("name", "a component named '" + name + "' exists already");
     auto task = parse_task(entry);
     Params params = entry.child("params");
     FactoryContext ctx{name, task, params, directory};
@@ -67,6 +70,29 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     entry.check_all_used();
     d.manager_->add(std::move(component));
   }
+
+  // Exports: interfaces other processes may connect to (before any connection is made).
+  top.mark_used("exports");
+  const YAML::Node exports = root["exports"];
+  if (exports.IsDefined() && !exports.IsNull()) {
+    if (!exports.IsSequence()) top.fail_at("exports", "expected a list of {component, provided}");
+    for (std::size_t i = 0; i < exports.size(); ++i) {
+      Params e(exports[i], file, "exports[" + std::to_string(i) + "]");
+      const auto component = e.get<std::string>("component"), provided = e.get<std::string>("provided");
+      e.check_all_used();
+      Component* c = d.manager_->find(component);
+      if (c == nullptr) e.fail_at("component", "no component named '" + component + "'");
+      if (c->provided(provided) == nullptr)
+        e.fail_at("provided", "'" + component + "' has no provided interface '" + provided + "'");
+      if (!registry.exporter()) e.fail("this program cannot export interfaces");
+      try {
+        d.exports_.push_back(registry.exporter()(*c, provided));
+      } catch (const std::exception& ex) {
+        e.fail(ex.what());
+      }
+    }
+  }
+  for (const auto& make : registry.resolvers()) d.manager_->add_resolver(make());
 
   // Connections, checked by the manager (names and types); its message is kept whole.
   top.mark_used("connections");
@@ -96,18 +122,21 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     spec.decimation = static_cast<int>(r.get_in_range("decimation", 1, 1e6, 1));
     const YAML::Node cols = root["record"]["columns"];
     r.mark_used("columns");
-    if (!cols.IsDefined() || !cols.IsSequence() || cols.size() == 0) r.fail_at("columns", "expected a list of component.column");
+    if (!cols.IsDefined() || !cols.IsSequence() || cols.size() == 0)
+      r.fail_at("columns", "expected a list of component.column");
     for (const auto& n : cols) {
       const auto text = n.as<std::string>();
       const auto dot = text.find('.');
       const auto [line, column] = location(n);
       const Component* comp = dot == std::string::npos ? nullptr : d.manager_->find(text.substr(0, dot));
       const int index = comp == nullptr ? -1 : comp->state_table().find_column(text.substr(dot + 1));
-      if (index < 0) throw ConfigError(file, line, column, "record.columns", "no state-table column '" + text + "'");
+      if (index < 0)
+        throw ConfigError(file, line, column, "record.columns", "no state-table column '" + text + "'");
       if (format_for(comp->state_table().column_type(static_cast<std::uint32_t>(index))) == nullptr)
-        throw ConfigError(file, line, column, "record.columns",
-                          "'" + text + "' has a type the recorder cannot write: " +
-                              std::string(comp->state_table().column_type(static_cast<std::uint32_t>(index)).name));
+        throw ConfigError(
+            file, line, column, "record.columns",
+            "'" + text + "' has a type the recorder cannot write: " +
+                std::string(comp->state_table().column_type(static_cast<std::uint32_t>(index)).name));
       spec.columns.push_back(text);
     }
     const auto [line, column] = location(root["record"]);
@@ -128,7 +157,8 @@ Deployment load_deployment(const std::string& path, const ComponentRegistry& reg
 }
 
 void Deployment::set_record_file(std::string path) {
-  if (!record_) throw ConfigError(file_, 0, 0, "record", "--record needs a 'record:' section naming the columns");
+  if (!record_)
+    throw ConfigError(file_, 0, 0, "record", "--record needs a 'record:' section naming the columns");
   record_->file = std::move(path);
 }
 

@@ -75,9 +75,10 @@ class FunctionRead : public FunctionBase {
   FunctionRead() : FunctionBase({CommandKind::read, type_info_of<T>()}) {}
   // The server's newest committed value.
   [[nodiscard]] Status operator()(T& out) const noexcept { return call_read(nullptr, &out); }
-  // With the row's tick and time (state-backed commands only).
+  // With the row's tick and time (state-backed commands and proxies; a proxy gives tick 0).
   [[nodiscard]] Status operator()(T& out, RowStamp& stamp) const noexcept {
     if (!bound_) return Status::disconnected;
+    if (binding_.command->read_stamped) return binding_.command->read_stamped(&out, stamp);
     if (binding_.command->table == nullptr) return Status::no_data;
     return binding_.command->table->read_latest_erased(binding_.command->column, &out, &stamp);
   }

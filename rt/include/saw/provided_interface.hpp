@@ -26,6 +26,8 @@ struct Command {
   // A proxy's void/write command (the server is in another process): hands the argument on
   // at once, in the caller's thread, and says whether it was taken.
   std::function<Status(const void* arg)> forward;
+  // A proxy's read command: the value with the time of the row it came from.
+  std::function<Status(void* out, RowStamp& stamp)> read_stamped;
   const StateTable* table = nullptr;  // read commands backed by a column
   std::uint32_t column = 0;
 

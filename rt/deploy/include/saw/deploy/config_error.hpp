@@ -26,7 +26,8 @@ class ConfigError : public std::runtime_error {
 
   ConfigError(const std::string& file, int line, int column, const std::string& key, const std::string& what)
       : ConfigError(std::vector<Problem>{{{file, line, column, key}, what}}) {}
-  ConfigError(const Location& where, const std::string& what) : ConfigError(std::vector<Problem>{{where, what}}) {}
+  ConfigError(const Location& where, const std::string& what)
+      : ConfigError(std::vector<Problem>{{where, what}}) {}
   // `problems` must not be empty.
   explicit ConfigError(std::vector<Problem> problems)
       : std::runtime_error(format(problems)), problems_(std::move(problems)) {}
@@ -42,8 +43,8 @@ class ConfigError : public std::runtime_error {
     std::string out;
     for (const auto& p : problems) {
       if (!out.empty()) out += '\n';
-      out += p.where.file + ":" + std::to_string(p.where.line) + ":" + std::to_string(p.where.column) + ": key '" +
-             p.where.key + "': " + p.what;
+      out += p.where.file + ":" + std::to_string(p.where.line) + ":" + std::to_string(p.where.column) +
+             ": key '" + p.where.key + "': " + p.what;
     }
     return out;
   }

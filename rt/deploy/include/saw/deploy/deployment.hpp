@@ -51,11 +51,13 @@ class Deployment {
   std::unique_ptr<Manager> manager_;
   std::optional<RecordSpec> record_;
   std::unique_ptr<Recorder> recorder_;
+  std::vector<std::shared_ptr<void>> exports_;  // keeps exported interfaces exported
   int record_line_ = 0, record_column_ = 0;
 };
 
 // Throws ConfigError (file:line:column: key '…': what) for anything wrong, having started nothing.
-Deployment parse_deployment(const std::string& yaml_text, const std::string& file, const ComponentRegistry& registry);
+Deployment parse_deployment(const std::string& yaml_text, const std::string& file,
+                            const ComponentRegistry& registry);
 Deployment load_deployment(const std::string& path, const ComponentRegistry& registry);
 
 }  // namespace saw::deploy

@@ -9,6 +9,7 @@
 
 #include "saw/component.hpp"
 #include "saw/deploy/params.hpp"
+#include "saw/manager.hpp"
 #include "saw/task.hpp"
 
 namespace saw::deploy {
@@ -24,9 +25,22 @@ struct FactoryContext {
 
 using Factory = std::function<std::unique_ptr<Component>(FactoryContext&)>;
 
+// Exports a component's provided interface to other processes; the handle keeps it exported.
+using Exporter = std::function<std::shared_ptr<void>(Component& component, const std::string& provided)>;
+
+// What a deployment can build: component types, plus (from the composition root, so that this
+// library depends on neither) how to reach components elsewhere and how to export one.
 class ComponentRegistry {
  public:
   void add(std::string type, Factory factory, std::string description);
+  void add_resolver(std::function<std::unique_ptr<RemoteResolver>()> make) {
+    resolvers_.push_back(std::move(make));
+  }
+  void set_exporter(Exporter e) { exporter_ = std::move(e); }
+  const std::vector<std::function<std::unique_ptr<RemoteResolver>()>>& resolvers() const noexcept {
+    return resolvers_;
+  }
+  const Exporter& exporter() const noexcept { return exporter_; }
   const Factory* find(const std::string& type) const;
   // "a, b, c": for error messages.
   std::string type_list() const;
@@ -34,6 +48,8 @@ class ComponentRegistry {
 
  private:
   std::map<std::string, std::pair<Factory, std::string>> types_;
+  std::vector<std::function<std::unique_ptr<RemoteResolver>()>> resolvers_;
+  Exporter exporter_;
 };
 
 }  // namespace saw::deploy
