@@ -4,6 +4,8 @@
 
 #include <cstring>
 
+#include "saw/bridge/futex.hpp"
+
 namespace saw::bridge {
 namespace {
 
@@ -38,7 +40,11 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
         std::size_t mirror = 8, command_payload = 8,
                     event_payload = 8;  // the mirror starts with the row time
         for (const auto& c : p->commands()) {
-          if (c->signature.kind == CommandKind::qualified_read) continue;
+          if (c->signature.kind == CommandKind::qualified_read &&
+              (c->signature.arg.size > QueryArea::max_bytes ||
+               c->signature.result.size > QueryArea::max_bytes))
+            throw BridgeError("export: qualified read '" + c->name + "' has values over " +
+                              std::to_string(QueryArea::max_bytes) + " bytes");
           ++lp.manifest_count;
           if (c->signature.kind == CommandKind::read)
             mirror += (c->signature.arg.size + 7) / 8 * 8;
@@ -76,7 +82,6 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
                  std::to_string(e.kind) + ":" + std::to_string(e.arg_size));
   };
   for (const auto& c : p.commands()) {
-    if (c->signature.kind == CommandKind::qualified_read) continue;
     describe(c->name, c->signature);
     if (c->signature.kind == CommandKind::read) {
       m[index].mirror_offset = offset;
@@ -110,14 +115,41 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
     slots_.push_back(std::move(s));
   }
   component.add_cycle_hook(this);
+  service_ = std::thread([this] { serve(); });
   header(mem).heartbeat.store(monotonic_now(), std::memory_order_relaxed);
   header(mem).state.store(static_cast<std::uint32_t>(SegmentState::ready), std::memory_order_release);
 }
 
 Exporter::~Exporter() {
-  if (segment_.data() != nullptr)
-    header(segment_.data())
-        .state.store(static_cast<std::uint32_t>(SegmentState::closed), std::memory_order_release);
+  stop_.store(true, std::memory_order_release);
+  if (segment_.data() != nullptr) {
+    auto& h = header(segment_.data());
+    h.state.store(static_cast<std::uint32_t>(SegmentState::closed), std::memory_order_release);
+    h.service_bell.fetch_add(1, std::memory_order_release);
+    futex_wake_all(h.service_bell);
+  }
+  if (service_.joinable()) service_.join();
+}
+
+void Exporter::serve() {
+  void* mem = segment_.data();
+  auto& h = header(mem);
+  while (!stop_.load(std::memory_order_acquire)) {
+    const auto bell = h.service_bell.load(std::memory_order_acquire);
+    for (std::uint32_t i = 0; i < h.slot_count; ++i) {
+      QueryArea& q = slot(mem, i).query;
+      const auto request = q.request.load(std::memory_order_acquire);
+      if (request == q.reply.load(std::memory_order_relaxed)) continue;
+      Status st = Status::invalid;
+      if (q.command < commands_.size() && commands_[q.command]->signature.kind == CommandKind::qualified_read)
+        st = commands_[q.command]->read(q.arg, q.result);
+      q.status = static_cast<std::uint32_t>(st);
+      q.reply.store(request, std::memory_order_release);
+      futex_wake_all(q.reply);
+    }
+    (void)reclaim_dead_slots(mem);
+    futex_wait(h.service_bell, bell, 50'000'000);  // woken by a query, or every 50 ms
+  }
 }
 
 void Exporter::emit(std::uint32_t index, const void* arg, std::size_t size) noexcept {

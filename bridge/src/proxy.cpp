@@ -5,6 +5,8 @@
 #include <cstring>
 #include <optional>
 
+#include "saw/bridge/futex.hpp"
+
 namespace saw::bridge {
 
 Proxy::Proxy(ShmSegment segment, int slot_index, TimeNs stale_after)
@@ -58,6 +60,30 @@ Proxy::Proxy(ShmSegment segment, int slot_index, TimeNs stale_after)
       c.read = [f = c.read_stamped](const void*, void* out) {
         RowStamp ignored;
         return f(out, ignored);
+      };
+    } else if (kind == CommandKind::qualified_read) {
+      // Waits for the server's service thread: for non-RT callers only (connect refuses RT ones).
+      c.read = [this, i, arg = e.arg_size, res = e.result_size](const void* q, void* r) {
+        if (!server_alive()) return Status::disconnected;
+        QueryArea& area = slot(segment_.data(), static_cast<std::uint32_t>(slot_)).query;
+        SegmentHeader& hdr = header(segment_.data());
+        std::memcpy(area.arg, q, arg);
+        area.command = i;
+        const auto request = area.request.load(std::memory_order_relaxed) + 1;
+        area.request.store(request, std::memory_order_release);
+        hdr.service_bell.fetch_add(1, std::memory_order_release);
+        futex_wake_all(hdr.service_bell);
+        const TimeNs deadline = monotonic_now() + stale_after_;
+        for (;;) {
+          const auto reply = area.reply.load(std::memory_order_acquire);
+          if (reply == request) break;
+          const TimeNs left = deadline - monotonic_now();
+          if (left <= 0) return Status::timeout;
+          futex_wait(area.reply, reply, left);
+        }
+        const auto st = static_cast<Status>(area.status);
+        if (st == Status::ok) std::memcpy(r, area.result, res);
+        return st;
       };
     } else {
       c.execute = [](const void*) {};  // never used: forward takes the call

@@ -95,6 +95,17 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
     check(h->name, h->signature, h->need, e ? &e->signature() : nullptr);
   }
   if (!errors.empty()) throw ConnectError(what + "interfaces do not match:" + errors);
+  // A qualified read of a component in another process waits for that process: never from an RT task.
+  if (const auto* task = dynamic_cast<const Task*>(&client);
+      server.is_remote() && task != nullptr && task->config().priority > 0)
+    for (const auto& f : req->functions())
+      if (f.function->signature().kind == CommandKind::qualified_read &&
+          prov->find_command(f.name) != nullptr)
+        throw ConnectError(
+            what + "'" + f.name + "' is a qualified read of a component in another process: it would make " +
+            "the real-time task '" + client.name() + "' (SCHED_FIFO " +
+            std::to_string(task->config().priority) +
+            ") wait for that process. Read state instead, or call it from a non-RT component.");
 
   // Commands: queued into a mailbox the server drains, unless the server has no thread.
   std::size_t max_arg = 0;

@@ -217,3 +217,49 @@ TEST(BridgeConnect, AKilledClientsSlotIsReclaimedAndTheServerRunsOn) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(BridgeConnect, QualifiedReadsCrossForNonRtCallersAndAreRefusedToRtTasks) {
+  const std::string name = "bdevq" + std::to_string(getpid());
+  Peer peer(name);
+  ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
+  class Caller : public saw::Component {
+   public:
+    Caller() : Component("caller") { require("arm").add_function("tripled", tripled); }
+    saw::FunctionQualifiedRead<std::int64_t, std::int64_t> tripled;
+  } caller;
+  class RtCaller : public saw::Task {
+   public:
+    RtCaller() : Task("rt_caller", saw::TaskConfig::periodic(1ms, 80)) {
+      require("arm").add_function("tripled", tripled);
+    }
+    saw::FunctionQualifiedRead<std::int64_t, std::int64_t> tripled;
+  } rt_caller;
+  saw::Manager m;
+  m.add_resolver(std::make_unique<saw::bridge::ShmResolver>());
+  m.add(caller);
+  m.add(rt_caller);
+  try {
+    m.connect("rt_caller", "arm", name, "arm");
+    ADD_FAILURE() << "an RT task was allowed to wait for another process";
+  } catch (const saw::ConnectError& e) {
+    EXPECT_NE(std::string(e.what()).find("real-time task 'rt_caller'"), std::string::npos) << e.what();
+  }
+  m.connect("caller", "arm", name, "arm");
+  std::int64_t r = 0;
+  for (std::int64_t q : {1, 7, -5, 1'000'000}) {
+    ASSERT_EQ(caller.tripled(q, r), saw::Status::ok);
+    EXPECT_EQ(r, 3 * q);
+  }
+  kill(peer.pid, SIGKILL);
+  waitpid(peer.pid, nullptr, 0);
+  peer.pid = -1;
+  // Never hangs: a dead server answers `disconnected` (stale heartbeat) or `timeout`.
+  ASSERT_TRUE(wait_for([&] {
+    const auto s = caller.tripled(2, r);
+    return s == saw::Status::disconnected || s == saw::Status::timeout;
+  }));
+}
+
+}  // namespace

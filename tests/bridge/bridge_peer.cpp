@@ -22,6 +22,8 @@ class Device : public saw::Task {
     p.add_command_write<std::int64_t>("add", [this](const std::int64_t& v) { count_ += v; });
     p.add_command_void("reset", [this] { count_ = 0; });
     ticked_ = &p.add_event_write<std::int64_t>("ticked");
+    p.add_command_qualified_read<std::int64_t, std::int64_t>(
+        "tripled", [](const std::int64_t& q, std::int64_t& r) { r = 3 * q; });
   }
   void run() override {
     ++count_;

@@ -53,6 +53,8 @@ class Component {
 
   // A proxy of a component in another process returns the mailbox its events arrive in.
   virtual Mailbox* remote_events() noexcept { return nullptr; }
+  // True for a proxy of a component in another process: a call may have to wait for it.
+  virtual bool is_remote() const noexcept { return false; }
 
   // Called at the end of every cycle, after the state-table row (the bridge's exporter uses
   // it to publish state and take remote commands). Setup only; each must be RT-safe.

@@ -107,22 +107,29 @@ void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
 
 bool CollaborativeControlForce::read_inputs(Input& master, Input& slave) noexcept {
   const auto stale_ns = static_cast<TimeNs>(config_.stale_timeout * 1e9);
-  for (auto [in, cp, cv, missing, stale] :
-       {std::tuple{&master, &master_cp_, &master_cv_, FaultReason::master_missing, FaultReason::master_stale},
-        std::tuple{&slave, &slave_cp_, &slave_cv_, FaultReason::slave_missing, FaultReason::slave_stale}}) {
+  for (auto [in, last, cp, cv, missing, stale] :
+       {std::tuple{&master, &last_master_, &master_cp_, &master_cv_, FaultReason::master_missing,
+                   FaultReason::master_stale},
+        std::tuple{&slave, &last_slave_, &slave_cp_, &slave_cv_, FaultReason::slave_missing,
+                   FaultReason::slave_stale}}) {
     Pose pose;
     Twist twist;
     RowStamp stamp;
-    if ((*cp)(pose, stamp) != Status::ok || (*cv)(twist) != Status::ok) {
+    if ((*cp)(pose, stamp) == Status::ok && (*cv)(twist) == Status::ok) {
+      last->input = {to_eigen(pose.position), to_eigen(twist.linear)};
+      last->time = stamp.time;
+      last->valid = true;
+    } else if (!last->valid) {
       fault_ = missing;
       return false;
     }
-    if (now() - stamp.time > stale_ns) {
+    // A read that fails once (a writer pre-empted mid-row, a full retry budget) keeps the last
+    // value; only an input older than stale_timeout is a fault.
+    if (now() - last->time > stale_ns) {
       fault_ = stale;
       return false;
     }
-    in->position = to_eigen(pose.position);
-    in->velocity = to_eigen(twist.linear);
+    *in = last->input;
   }
   return true;
 }

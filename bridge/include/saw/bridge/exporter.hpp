@@ -1,8 +1,10 @@
 // Exporter: publishes one provided interface of a local task in a shared-memory segment.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "saw/bridge/layout.hpp"
@@ -15,8 +17,8 @@ namespace saw::bridge {
 // the exporter (in that task's thread, RT-safe: no allocation, lock or blocking call) refreshes
 // the heartbeat, copies the read commands' newest values into the state mirror, and runs the
 // void/write commands that client processes left in their slots' rings. Events emitted by the
-// task are copied into every claimed slot's event ring as they happen.
-// Qualified reads are not exported yet.
+// task are copied into every claimed slot's event ring as they happen. A non-RT service thread
+// answers qualified reads (const and thread-safe by contract) and reclaims dead clients' slots.
 class Exporter : public Component::CycleHook {
  public:
   // Before the manager starts. Throws BridgeError if the name is held by a live process.
@@ -39,6 +41,7 @@ class Exporter : public Component::CycleHook {
     std::unique_ptr<SpscRing> commands, events;
   };
   void emit(std::uint32_t index, const void* arg, std::size_t size) noexcept;
+  void serve();
 
   ShmSegment segment_;
   std::vector<Command*> commands_;  // by wire index; events take the indices after commands
@@ -52,6 +55,8 @@ class Exporter : public Component::CycleHook {
   };
   std::vector<std::unique_ptr<EventTap>> taps_;
   std::uint64_t commands_run_ = 0, events_refused_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread service_;
 };
 
 }  // namespace saw::bridge

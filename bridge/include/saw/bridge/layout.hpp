@@ -32,7 +32,21 @@ struct alignas(cache_line) SegmentHeader {
   char interface[64];
   alignas(cache_line) std::atomic<std::int32_t> owner_pid;
   std::atomic<std::uint32_t> state;
-  std::atomic<std::int64_t> heartbeat;  // owner's CLOCK_MONOTONIC ns, refreshed every cycle
+  std::atomic<std::int64_t> heartbeat;      // owner's CLOCK_MONOTONIC ns, refreshed every cycle
+  std::atomic<std::uint32_t> service_bell;  // bumped (and futex-woken) by clients with a query
+};
+
+// A qualified read in flight: the client fills `command` and `arg`, then bumps `request`
+// (release); the server's service thread runs the query and stores `reply` = `request`
+// (release) after `result`. The bytes change hands by those two atomics only.
+struct alignas(cache_line) QueryArea {
+  static constexpr std::size_t max_bytes = 256;
+  std::atomic<std::uint32_t> request;
+  std::atomic<std::uint32_t> reply;
+  std::uint32_t command;
+  std::uint32_t status;  // saw::Status of the query
+  alignas(16) std::byte arg[max_bytes];
+  alignas(16) std::byte result[max_bytes];
 };
 
 // One client's slot: claimed by compare-and-swap of owner_pid from 0, reclaimed when that
@@ -44,6 +58,7 @@ struct alignas(cache_line) ClientSlot {
   std::atomic<std::uint32_t> generation;  // bumped on every claim: a stale view can tell
   SpscRingControl commands;               // client → server
   SpscRingControl events;                 // server → client
+  QueryArea query;                        // qualified reads, answered by the service thread
 };
 
 // One exported command or event, in the order the manifest gives them (their wire index).

@@ -24,6 +24,7 @@ class Proxy : public Component {
   ~Proxy() override;
 
   Mailbox* remote_events() noexcept override { return events_.get(); }
+  bool is_remote() const noexcept override { return true; }
   bool server_alive() const noexcept;
 
  private:

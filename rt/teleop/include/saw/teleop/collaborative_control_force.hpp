@@ -36,6 +36,22 @@ struct TeleopConfig {
 
 enum class FaultReason : std::uint8_t { none, master_stale, slave_stale, master_missing, slave_missing };
 
+constexpr std::string_view to_string(FaultReason r) {
+  switch (r) {
+    case FaultReason::none:
+      return "none";
+    case FaultReason::master_stale:
+      return "master input stale";
+    case FaultReason::slave_stale:
+      return "slave input stale";
+    case FaultReason::master_missing:
+      return "master input missing";
+    case FaultReason::slave_missing:
+      return "slave input missing";
+  }
+  return "?";
+}
+
 // Required interfaces "master" and "slave" (CRTK: measured_cp, measured_cv, servo_cf; optional
 // clutch event on the master). Provided interface "teleop": state_command, set_scale,
 // set_gains, set_force_limits, set_prediction, set_slave_offset, and its state as read commands.
@@ -70,6 +86,11 @@ class CollaborativeControlForce : public Task {
   struct Input {
     Eigen::Vector3d position, velocity;
   };
+  struct LastInput {
+    Input input{};
+    TimeNs time = 0;
+    bool valid = false;
+  };
   bool read_inputs(Input& master, Input& slave) noexcept;
   void handle_state_command(StateCommand c) noexcept;
   void set_operating_state(OperatingStateValue s) noexcept;
@@ -86,6 +107,7 @@ class CollaborativeControlForce : public Task {
   TimeNs start_time_ = -1;
   Scale previous_scale_;
   FaultReason fault_ = FaultReason::none;
+  LastInput last_master_, last_slave_;
   std::uint64_t rejected_ = 0, refused_sends_ = 0;
   double tracking_sum_sq_ = 0, tracking_max_ = 0;
   std::uint64_t enabled_cycles_ = 0;
