@@ -157,18 +157,24 @@ void Exporter::serve() {
   }
 }
 
+Exporter::Slot* Exporter::claimed(std::uint32_t i) noexcept {
+  ClientSlot& s = slot(segment_.data(), i);
+  if (s.owner_pid.load(std::memory_order_acquire) == 0) return nullptr;
+  Slot& view = slots_[i];
+  // A new owner since we last looked: reload the cached ring indices.
+  if (const auto g = s.generation.load(std::memory_order_acquire); g != view.generation) {
+    view.commands->resync();
+    view.events->resync();
+    view.generation = g;
+  }
+  return &view;
+}
+
 void Exporter::emit(std::uint32_t index, const void* arg, std::size_t size) noexcept {
-  void* mem = segment_.data();
   for (std::uint32_t i = 0; i < slots_.size(); ++i) {
-    ClientSlot& s = slot(mem, i);
-    if (s.owner_pid.load(std::memory_order_acquire) == 0) continue;
-    Slot& view = slots_[i];
-    const auto g = s.generation.load(std::memory_order_acquire);
-    if (g != view.generation) {
-      view.commands->resync();
-      view.events->resync();
-      view.generation = g;
-    }
+    Slot* live = claimed(i);
+    if (live == nullptr) continue;
+    Slot& view = *live;
     std::byte* rec = view.events->try_reserve();
     if (rec == nullptr) {
       ++events_refused_;
@@ -187,15 +193,9 @@ void Exporter::after_cycle(Component&, TimeNs time) noexcept {
   for (const Read& r : reads_) (void)r.command->read(nullptr, staging_.data() + r.offset);
   mirror_write(mem, staging_.data(), staging_.size() - 8);
   for (std::uint32_t i = 0; i < slots_.size(); ++i) {
-    ClientSlot& s = slot(mem, i);
-    if (s.owner_pid.load(std::memory_order_acquire) == 0) continue;
-    Slot& view = slots_[i];
-    const auto g = s.generation.load(std::memory_order_acquire);
-    if (g != view.generation) {
-      view.commands->resync();
-      view.events->resync();
-      view.generation = g;
-    }
+    Slot* live = claimed(i);
+    if (live == nullptr) continue;
+    Slot& view = *live;
     // At most one ring's worth per cycle, as local mailboxes.
     for (std::size_t n = 0; n < view.commands->capacity(); ++n) {
       const std::byte* rec = view.commands->front();

@@ -9,6 +9,7 @@
 #include <csignal>
 #include <thread>
 
+#include "ping_pong.hpp"
 #include "saw/bridge/exporter.hpp"
 #include "saw/bridge/futex.hpp"
 #include "saw/bridge/proxy.hpp"
@@ -43,36 +44,6 @@ class Caller : public saw::Component {
   m.start();
   pause();  // until the parent kills us
   std::_Exit(0);
-}
-
-std::vector<std::int64_t> futex_ping_pong(int n) {
-  struct Words {
-    alignas(64) std::atomic<std::uint32_t> ping{0};
-    alignas(64) std::atomic<std::uint32_t> pong{0};
-  };
-  auto* w =
-      new (mmap(nullptr, sizeof(Words), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0)) Words;
-  const pid_t pid = fork();
-  if (pid == 0) {
-    (void)saw::rt::set_affinity(1);
-    for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(n); ++i) {
-      while (w->ping.load(std::memory_order_acquire) != i) saw::bridge::futex_wait(w->ping, i - 1, 0);
-      w->pong.store(i, std::memory_order_release);
-      saw::bridge::futex_wake_all(w->pong);
-    }
-    std::_Exit(0);
-  }
-  std::vector<std::int64_t> out(static_cast<std::size_t>(n));
-  for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(n); ++i) {
-    const auto t0 = saw::monotonic_now();
-    w->ping.store(i, std::memory_order_release);
-    saw::bridge::futex_wake_all(w->ping);
-    while (w->pong.load(std::memory_order_acquire) != i) saw::bridge::futex_wait(w->pong, i - 1, 0);
-    out[i - 1] = saw::monotonic_now() - t0;
-  }
-  waitpid(pid, nullptr, 0);
-  munmap(w, sizeof(Words));
-  return out;
 }
 
 }  // namespace
@@ -116,7 +87,7 @@ int main(int argc, char** argv) {
       qread.push_back(saw::monotonic_now() - t0);
       x = out * 0.5;
     }
-    auto f = futex_ping_pong(n);
+    auto f = saw::bench::futex_ping_pong(n, 1);
     futex.insert(futex.end(), f.begin(), f.end());
   }
   kill(server, SIGKILL);

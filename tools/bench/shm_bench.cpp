@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cstring>
 
+#include "ping_pong.hpp"
 #include "saw/bridge/layout.hpp"
 #include "saw/bridge/shm_segment.hpp"
 #include "saw/clock.hpp"
@@ -20,13 +21,6 @@
 namespace {
 
 using saw::TimeNs;
-
-void futex_wait(std::atomic<std::uint32_t>& a, std::uint32_t expected) {
-  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&a), FUTEX_WAIT, expected, nullptr, nullptr, 0);
-}
-void futex_wake(std::atomic<std::uint32_t>& a) {
-  syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&a), FUTEX_WAKE, 1, nullptr, nullptr, 0);
-}
 
 // Two words in a shared anonymous mapping: ping (parent → child) and pong (child → parent).
 struct PingPong {
@@ -85,25 +79,7 @@ int main(int argc, char** argv) {
   (void)saw::bridge::claim_slot(seg.data(), getpid());
 
   for (int r = 0; r < reps; ++r) {
-    new (pp) PingPong{};
-    auto futex = two_processes(
-        n, cpu_a, cpu_b,
-        [&](int count) {
-          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
-            while (pp->ping.load(std::memory_order_acquire) != i) futex_wait(pp->ping, i - 1);
-            pp->pong.store(i, std::memory_order_release);
-            futex_wake(pp->pong);
-          }
-        },
-        [&](int count, std::vector<std::int64_t>& out) {
-          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
-            const TimeNs t0 = saw::monotonic_now();
-            pp->ping.store(i, std::memory_order_release);
-            futex_wake(pp->ping);
-            while (pp->pong.load(std::memory_order_acquire) != i) futex_wait(pp->pong, i - 1);
-            out[i - 1] = saw::monotonic_now() - t0;
-          }
-        });
+    auto futex = saw::bench::futex_ping_pong(n, cpu_b);
     new (pp) PingPong{};
     auto spin = two_processes(
         n, cpu_a, cpu_b,
@@ -140,7 +116,7 @@ int main(int argc, char** argv) {
               for (;;) {
                 const auto seen = pp->ping.load(std::memory_order_acquire);
                 if ((s = in.front()) != nullptr) break;
-                if (sleep) futex_wait(pp->ping, seen);
+                if (sleep) saw::bridge::futex_wait(pp->ping, seen, 0);
               }
               std::uint64_t v;
               std::memcpy(&v, s, sizeof v);
@@ -152,7 +128,7 @@ int main(int argc, char** argv) {
               out.commit();
               if (sleep) {
                 pp->pong.fetch_add(1, std::memory_order_release);
-                futex_wake(pp->pong);
+                saw::bridge::futex_wake_all(pp->pong);
               }
             }
           },
@@ -169,13 +145,13 @@ int main(int argc, char** argv) {
               out.commit();
               if (sleep) {
                 pp->ping.fetch_add(1, std::memory_order_release);
-                futex_wake(pp->ping);
+                saw::bridge::futex_wake_all(pp->ping);
               }
               const std::byte* e;
               for (;;) {
                 const auto seen = pp->pong.load(std::memory_order_acquire);
                 if ((e = in.front()) != nullptr) break;
-                if (sleep) futex_wait(pp->pong, seen);
+                if (sleep) saw::bridge::futex_wait(pp->pong, seen, 0);
               }
               in.pop();
               samples[static_cast<std::size_t>(i)] = saw::monotonic_now() - t0;

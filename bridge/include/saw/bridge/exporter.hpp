@@ -41,6 +41,8 @@ class Exporter : public Component::CycleHook {
     std::unique_ptr<SpscRing> commands, events;
   };
   void emit(std::uint32_t index, const void* arg, std::size_t size) noexcept;
+  // The view of slot i if a client holds it (resynced to a new owner), else nullptr.
+  Slot* claimed(std::uint32_t i) noexcept;
   void serve();
 
   ShmSegment segment_;
