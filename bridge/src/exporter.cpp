@@ -25,11 +25,19 @@ std::uint64_t fnv1a(std::uint64_t h, std::string_view s) {
   return h;
 }
 
+// A value that crosses the process boundary must declare its layout (see TypeInfo).
+void check_registered(const std::string& component, const std::string& name, const Signature& sig) {
+  for (const TypeInfo* t : {&sig.arg, &sig.result})
+    if (t->size != 0 && t->version == 0)
+      throw BridgeError("export: " + component + " '" + name + "' carries " + std::string(t->name) +
+                        ", which has no layout version: declare `static constexpr std::uint32_t "
+                        "layout_version = 1;` in it to let it cross a process boundary");
+}
+
 }  // namespace
 
-Exporter::Exporter(Component& component, const std::string& provided, std::uint32_t slots,
-                   std::uint32_t ring_capacity)
-    : segment_([&] {
+Exporter::Exporter(Component& component, const std::string& provided, ExportOptions options)
+    : service_spin_(options.service_spin), segment_([&] {
         ProvidedInterface* p = component.provided(provided);
         if (p == nullptr)
           throw BridgeError("export: component '" + component.name() + "' has no provided interface '" +
@@ -45,6 +53,7 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
                c->signature.result.size > QueryArea::max_bytes))
             throw BridgeError("export: qualified read '" + c->name + "' has values over " +
                               std::to_string(QueryArea::max_bytes) + " bytes");
+          check_registered(component.name(), c->name, c->signature);
           ++lp.manifest_count;
           if (c->signature.kind == CommandKind::read)
             mirror += (c->signature.arg.size + 7) / 8 * 8;
@@ -52,12 +61,13 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
             command_payload = std::max(command_payload, c->signature.arg.size);
         }
         for (const auto& e : p->events()) {
+          check_registered(component.name(), e->name(), e->signature());
           ++lp.manifest_count;
           event_payload = std::max(event_payload, e->signature().arg.size);
         }
         lp.mirror_bytes = mirror;
-        lp.slot_count = slots;
-        lp.ring_capacity = ring_capacity;
+        lp.slot_count = options.slots;
+        lp.ring_capacity = options.ring_capacity;
         lp.command_payload = command_payload;
         lp.event_payload = event_payload;
         const Layout l = Layout::of(lp);
@@ -76,10 +86,14 @@ Exporter::Exporter(Component& component, const std::string& provided, std::uint3
     e.kind = static_cast<std::uint8_t>(sig.kind);
     e.arg_size = static_cast<std::uint32_t>(sig.arg.size);
     e.result_size = static_cast<std::uint32_t>(sig.result.size);
+    e.arg_version = sig.arg.version;
+    e.result_version = sig.result.version;
     copy_name(e.arg_type, sizeof e.arg_type, sig.arg.name);
     copy_name(e.result_type, sizeof e.result_type, sig.result.name);
-    hash = fnv1a(fnv1a(fnv1a(hash, name), sig.arg.name),
-                 std::to_string(e.kind) + ":" + std::to_string(e.arg_size));
+    hash = fnv1a(fnv1a(fnv1a(fnv1a(hash, name), sig.arg.name), sig.result.name),
+                 std::to_string(e.kind) + ":" + std::to_string(e.arg_size) + ":" +
+                     std::to_string(e.arg_version) + ":" + std::to_string(e.result_size) + ":" +
+                     std::to_string(e.result_version));
   };
   for (const auto& c : p.commands()) {
     describe(c->name, c->signature);
@@ -134,7 +148,7 @@ Exporter::~Exporter() {
 void Exporter::serve() {
   void* mem = segment_.data();
   auto& h = header(mem);
-  TimeNs last_reclaim = 0;
+  TimeNs last_reclaim = 0, last_query = 0;
   while (!stop_.load(std::memory_order_acquire)) {
     const auto bell = h.service_bell.load(std::memory_order_acquire);
     for (std::uint32_t i = 0; i < h.slot_count; ++i) {
@@ -145,15 +159,23 @@ void Exporter::serve() {
       if (q.command < commands_.size() && commands_[q.command]->signature.kind == CommandKind::qualified_read)
         st = commands_[q.command]->read(q.arg, q.result);
       q.status = static_cast<std::uint32_t>(st);
-      q.reply.store(request, std::memory_order_release);
-      futex_wake_all(q.reply);
+      // Dekker with a sleeping client (see the proxy): publish, then look whether it sleeps.
+      q.reply.store(request, std::memory_order_seq_cst);
+      if (q.waiting.load(std::memory_order_seq_cst) != 0) futex_wake_all(q.reply);
+      last_query = monotonic_now();
     }
     // Dead clients' slots are reclaimed every 50 ms, not on every query (it costs a syscall per slot).
-    if (const TimeNs t = monotonic_now(); t - last_reclaim >= 50'000'000) {
+    const TimeNs t = monotonic_now();
+    if (t - last_reclaim >= 50'000'000) {
       (void)reclaim_dead_slots(mem);
       last_reclaim = t;
     }
-    futex_wait(h.service_bell, bell, 50'000'000);  // woken by a query, or every 50 ms
+    // Busy for a while after a query (callers that want sub-microsecond answers), then asleep.
+    if (t - last_query < service_spin_) continue;
+    h.service_sleeping.store(1, std::memory_order_seq_cst);
+    if (h.service_bell.load(std::memory_order_seq_cst) == bell)
+      futex_wait(h.service_bell, bell, 50'000'000);  // woken by a query, or every 50 ms
+    h.service_sleeping.store(0, std::memory_order_relaxed);
   }
 }
 
@@ -192,6 +214,10 @@ void Exporter::after_cycle(Component&, TimeNs time) noexcept {
   std::memcpy(staging_.data(), &time, sizeof time);  // the row's time: proxies stamp reads with it
   for (const Read& r : reads_) (void)r.command->read(nullptr, staging_.data() + r.offset);
   mirror_write(mem, staging_.data(), staging_.size() - 8);
+  // Non-RT clients may sleep on the bell: one wake-up call per cycle at most, none if nobody sleeps.
+  SegmentHeader& h = header(mem);
+  h.update_bell.fetch_add(1, std::memory_order_seq_cst);
+  if (h.update_sleepers.load(std::memory_order_seq_cst) != 0) futex_wake_all(h.update_bell);
   for (std::uint32_t i = 0; i < slots_.size(); ++i) {
     Slot* live = claimed(i);
     if (live == nullptr) continue;

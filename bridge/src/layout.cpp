@@ -1,6 +1,7 @@
 #include "saw/bridge/layout.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <new>
@@ -33,6 +34,8 @@ void initialize(void* memory, const LayoutParams& p, const Layout& l, std::int32
   h->layout_version = layout_version;
   h->header_size = sizeof(SegmentHeader);
   h->interface_hash = p.interface_hash;
+  h->incarnation = (static_cast<std::uint64_t>(owner_pid) << 40) ^
+                   static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
   h->total_size = l.total_size;
   h->manifest_offset = l.manifest_offset;
   h->manifest_count = p.manifest_count;

@@ -82,8 +82,9 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
         errors += "\n  " + quoted(name) + ": the client requires " + to_string(want) +
                   ", the server provides no such " + (is_event(want.kind) ? "event" : "command");
     } else if (!(*have == want)) {
-      errors += "\n  " + quoted(name) + ": the client expects " + to_string(want) + ", the server provides " +
-                to_string(*have);
+      const bool layout = to_string(want) == to_string(*have);  // same names: the layouts differ
+      errors += "\n  " + quoted(name) + ": the client expects " + to_string(want, layout) +
+                ", the server provides " + to_string(*have, layout);
     }
   };
   for (const auto& f : req->functions()) {

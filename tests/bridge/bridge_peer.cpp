@@ -1,4 +1,5 @@
-// A server process for the bridge tests: task NAME exports interface "arm" until killed.
+// A process for the bridge tests: `NAME` exports task NAME's "arm" until killed; `client NAME`
+// sends to it; `v2 NAME` exports a type with another layout version.
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -68,21 +69,46 @@ int run_client(const char* name) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  if (argc < 2) return 2;
-  if (std::string(argv[1]) == "client" && argc == 3) {
-    std::signal(SIGTERM, [](int) { stop.store(true); });
-    return run_client(argv[2]);
+// The same type name as the test's, with another layout version (a process built from newer code).
+namespace probe {
+struct Sample {
+  static constexpr std::uint32_t layout_version = 2;
+  double a = 0, b = 0;
+};
+}  // namespace probe
+
+namespace {
+
+class Versioned : public saw::Task {
+ public:
+  explicit Versioned(std::string name)
+      : Task(std::move(name), saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0)) {
+    provide("arm").add_command_write<probe::Sample>("set", [](const probe::Sample&) {});
   }
-  std::signal(SIGTERM, [](int) { stop.store(true); });
-  Device device(argv[1]);
-  saw::bridge::Exporter exporter(device, "arm");
+};
+
+int serve(saw::Task& task) {
+  saw::bridge::Exporter exporter(task, "arm");
   saw::Manager m;
-  m.add(device);
+  m.add(task);
   m.start();
   std::printf("ready %s\n", exporter.segment_name().c_str());
   std::fflush(stdout);
   while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   m.stop();
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) return 2;
+  std::signal(SIGTERM, [](int) { stop.store(true); });
+  if (std::string(argv[1]) == "v2" && argc == 3) {
+    Versioned task(argv[2]);
+    return serve(task);
+  }
+  if (std::string(argv[1]) == "client" && argc == 3) return run_client(argv[2]);
+  Device device(argv[1]);
+  return serve(device);
 }

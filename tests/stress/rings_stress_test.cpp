@@ -123,3 +123,84 @@ TEST(RingStress, LogRingKeepsEachProducersOrderAndCountsDrops) {
 }
 
 }  // namespace
+
+namespace {
+
+// A ring in "shared memory" (here: this process's heap), with a producer's view of it.
+struct ExternalRing {
+  static constexpr std::size_t capacity = 16, slot = 32;
+  saw::SpscRingControl control;
+  alignas(64) std::byte storage[capacity * slot];
+  saw::SpscRing producer{&control, storage, capacity, slot};
+};
+
+// A reconnect: the mailbox's consumer switches from the dead server's ring to the new one's
+// while both producers write. Everything the new producer sends arrives, in order, and nothing
+// from the old ring is run after the switch.
+TEST(RingStress, AMailboxSwitchesToAnOfferedRingWhileBothProducersRun) {
+  constexpr std::uint64_t from_new = 100'000;
+  auto old_ring = std::make_unique<ExternalRing>();
+  auto new_ring = std::make_unique<ExternalRing>();
+  saw::SpscRing new_consumer(&new_ring->control, new_ring->storage, ExternalRing::capacity,
+                             ExternalRing::slot);
+  saw::Mailbox mailbox("remote events", &old_ring->control, old_ring->storage, ExternalRing::capacity,
+                       ExternalRing::slot);
+  std::vector<std::uint64_t> old_seen, new_seen;
+  old_seen.reserve(1 << 20);
+  new_seen.reserve(from_new);
+  std::uint64_t old_after_switch = 0;
+  mailbox.add_target({[](void* self, const void* arg) {
+                        auto* v = static_cast<std::vector<std::uint64_t>*>(self);
+                        std::uint64_t x;
+                        std::memcpy(&x, arg, sizeof x);
+                        v->push_back(x);
+                      },
+                      &old_seen});
+  mailbox.add_target({[](void* self, const void* arg) {
+                        auto* v = static_cast<std::vector<std::uint64_t>*>(self);
+                        std::uint64_t x;
+                        std::memcpy(&x, arg, sizeof x);
+                        v->push_back(x);
+                      },
+                      &new_seen});
+  const auto produce = [](saw::SpscRing& ring, std::uint32_t target, std::uint64_t value) {
+    std::byte* s = ring.try_reserve();
+    if (s == nullptr) return false;
+    std::memcpy(s, &target, sizeof target);
+    std::memcpy(s + saw::Mailbox::header_bytes(), &value, sizeof value);
+    ring.commit();
+    return true;
+  };
+  std::atomic<bool> old_stop{false};
+  std::thread old_producer([&] {
+    for (std::uint64_t k = 0; !old_stop.load(std::memory_order_relaxed);)
+      if (produce(old_ring->producer, 0, k)) ++k;
+  });
+  std::thread new_producer([&] {
+    for (std::uint64_t k = 0; k < from_new;)
+      if (produce(new_ring->producer, 1, k)) ++k;
+  });
+  std::thread consumer([&] {
+    while (new_seen.size() < from_new) {
+      const auto before = new_seen.size();
+      const auto olds = old_seen.size();
+      mailbox.drain();
+      if (before != 0 && old_seen.size() != olds) old_after_switch += old_seen.size() - olds;
+    }
+  });
+  while (!mailbox.offer_ring(&new_consumer)) {
+  }
+  while (mailbox.offer_pending()) {
+  }
+  old_stop.store(true);
+  old_producer.join();
+  new_producer.join();
+  consumer.join();
+  ASSERT_EQ(new_seen.size(), from_new);
+  for (std::uint64_t k = 0; k < from_new; ++k) ASSERT_EQ(new_seen[k], k) << "lost or reordered";
+  for (std::size_t k = 1; k < old_seen.size(); ++k) ASSERT_GT(old_seen[k], old_seen[k - 1]);
+  EXPECT_EQ(old_after_switch, 0u);
+  EXPECT_FALSE(mailbox.offer_pending());
+}
+
+}  // namespace

@@ -23,8 +23,13 @@ struct Signature {
   friend bool operator==(const Signature&, const Signature&) = default;
 };
 
-inline std::string to_string(const Signature& s) {
-  const auto n = [](TypeInfo t) { return std::string(t.name); };
+// With `layout`, each type also shows its layout version and size (for mismatches of those).
+inline std::string to_string(const Signature& s, bool layout = false) {
+  const auto n = [layout](TypeInfo t) {
+    if (!layout) return std::string(t.name);
+    return std::string(t.name) + " (layout v" + std::to_string(t.version) + ", " + std::to_string(t.size) +
+           " B)";
+  };
   switch (s.kind) {
     case CommandKind::void_command:
       return "void command";

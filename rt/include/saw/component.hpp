@@ -65,7 +65,10 @@ class Component {
   void add_cycle_hook(CycleHook* h) { hooks_.push_back(h); }
 
   // For tasks and the manager.
-  void add_inbound(Mailbox* m) { inbound_.push_back(m); }
+  void add_inbound(Mailbox* m) {
+    m->set_consumer_attached();
+    inbound_.push_back(m);
+  }
   std::size_t process_mailboxes() noexcept;
   void set_lifecycle(Lifecycle l) noexcept { lifecycle_.store(l, std::memory_order_release); }
   // One full cycle: mailboxes, run(), then the state-table row stamped `time`.

@@ -12,24 +12,28 @@ using Quat = std::array<double, 4>;  // x, y, z, w (ROS order)
 
 // geometry_msgs/Pose; the stamp is the state-table row's.
 struct Pose {
+  static constexpr std::uint32_t layout_version = 1;
   Vec3 position{};
   Quat orientation{0, 0, 0, 1};
 };
 
 // geometry_msgs/Twist.
 struct Twist {
+  static constexpr std::uint32_t layout_version = 1;
   Vec3 linear{};
   Vec3 angular{};
 };
 
 // geometry_msgs/Wrench.
 struct Wrench {
+  static constexpr std::uint32_t layout_version = 1;
   Vec3 force{};
   Vec3 torque{};
 };
 
 // sensor_msgs/JointState with a fixed maximum size (a da Vinci MTM has 7 joints + gripper).
 struct JointState {
+  static constexpr std::uint32_t layout_version = 1;
   static constexpr std::size_t max_joints = 8;
   std::uint32_t size = 0;
   std::array<double, max_joints> position{};
@@ -41,6 +45,7 @@ struct JointState {
 enum class OperatingStateValue : std::uint8_t { disabled, enabled, paused, fault };
 
 struct OperatingState {
+  static constexpr std::uint32_t layout_version = 1;
   OperatingStateValue state = OperatingStateValue::disabled;
   bool is_homed = false;
   bool is_busy = false;
@@ -81,6 +86,7 @@ constexpr std::string_view to_string(StateCommand c) {
 
 // Button events (sensor_msgs/Joy-like): pressed or released.
 struct ButtonEvent {
+  static constexpr std::uint32_t layout_version = 1;
   bool pressed = false;
 };
 

@@ -31,16 +31,31 @@ class Mailbox {
   void set_target(std::uint32_t index, Invoker target);
   std::size_t target_count() const noexcept { return targets_.size(); }
 
+  // Setup: a component drains this mailbox (set when it becomes one's inbound mailbox).
+  void set_consumer_attached() noexcept { consumer_attached_.store(true, std::memory_order_release); }
+  bool consumer_attached() const noexcept { return consumer_attached_.load(std::memory_order_acquire); }
+
+  // Non-RT, for a mailbox whose producer is another process (a reconnected server): hands the
+  // consumer a ring to switch to at the start of its next drain(). Returns false while an
+  // earlier offer is still pending. The caller keeps `ring` (and its memory) alive as long as
+  // the consumer may use it: until a later offer has been taken, or the mailbox is destroyed.
+  bool offer_ring(SpscRing* ring) noexcept {
+    SpscRing* expected = nullptr;
+    return offered_.compare_exchange_strong(expected, ring, std::memory_order_acq_rel);
+  }
+  // False once the consumer has switched: from then on it never touches the previous ring.
+  bool offer_pending() const noexcept { return offered_.load(std::memory_order_acquire) != nullptr; }
+
   // Producer side. Never blocks: a full mailbox is an error, counted.
   Status push(std::uint32_t target, const void* payload, std::size_t size) noexcept {
-    std::byte* slot = ring_.try_reserve();
+    std::byte* slot = ring_->try_reserve();
     if (slot == nullptr) {
       full_count_.store(full_count_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
       return Status::queue_full;
     }
     std::memcpy(slot, &target, sizeof target);
     if (size != 0) std::memcpy(slot + header_size, payload, size);
-    ring_.commit();
+    ring_->commit();
     return Status::ok;
   }
 
@@ -49,14 +64,18 @@ class Mailbox {
 
   std::uint64_t full_count() const noexcept { return full_count_.load(std::memory_order_relaxed); }
   std::uint64_t executed_count() const noexcept { return executed_.load(std::memory_order_relaxed); }
-  std::size_t capacity() const noexcept { return ring_.capacity(); }
-  std::size_t pending() const noexcept { return ring_.size_approx(); }
+  // From the consumer's thread, or any thread for a mailbox that is never offered a ring.
+  std::size_t capacity() const noexcept { return ring_->capacity(); }
+  std::size_t pending() const noexcept { return ring_->size_approx(); }
 
  private:
   static constexpr std::size_t header_size = SpscRing::slot_alignment;
 
   std::string name_;
-  SpscRing ring_;
+  SpscRing own_;
+  SpscRing* ring_ = &own_;  // the consumer's; switched by drain() when a ring is offered
+  std::atomic<SpscRing*> offered_{nullptr};
+  std::atomic<bool> consumer_attached_{false};
   std::vector<Invoker> targets_;
   std::atomic<std::uint64_t> full_count_{0};  // written by the producer only
   std::atomic<std::uint64_t> executed_{0};    // written by the consumer only

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <thread>
 
 #include "saw/component.hpp"
@@ -26,6 +27,7 @@ struct TaskConfig {
 
 // Period and compute-time statistics; a column ("period_statistics") of the task's state table.
 struct TaskStatistics {
+  static constexpr std::uint32_t layout_version = 1;
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;        // cycles that ended after their next wake-up
   std::uint64_t missed_periods = 0;  // wake-ups skipped to keep phase

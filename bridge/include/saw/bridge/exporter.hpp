@@ -19,11 +19,19 @@ namespace saw::bridge {
 // void/write commands that client processes left in their slots' rings. Events emitted by the
 // task are copied into every claimed slot's event ring as they happen. A non-RT service thread
 // answers qualified reads (const and thread-safe by contract) and reclaims dead clients' slots.
+struct ExportOptions {
+  std::uint32_t slots = 8;           // client processes at once
+  std::uint32_t ring_capacity = 64;  // per slot and direction
+  TimeNs service_spin = 0;           // the query thread stays awake this long after a query
+};
+
 class Exporter : public Component::CycleHook {
  public:
-  // Before the manager starts. Throws BridgeError if the name is held by a live process.
-  Exporter(Component& component, const std::string& provided, std::uint32_t slots = 8,
-           std::uint32_t ring_capacity = 64);
+  // Before the manager starts. Throws BridgeError if the name is held by a live process, or a
+  // type has no layout version.
+  Exporter(Component& component, const std::string& provided, ExportOptions options = {});
+  Exporter(Component& component, const std::string& provided, std::uint32_t slots)
+      : Exporter(component, provided, ExportOptions{slots}) {}
   ~Exporter() override;
 
   void after_cycle(Component& c, TimeNs time) noexcept override;
@@ -45,6 +53,7 @@ class Exporter : public Component::CycleHook {
   Slot* claimed(std::uint32_t i) noexcept;
   void serve();
 
+  TimeNs service_spin_;
   ShmSegment segment_;
   std::vector<Command*> commands_;  // by wire index; events take the indices after commands
   std::vector<Read> reads_;

@@ -13,7 +13,7 @@
 namespace saw::bridge {
 
 inline constexpr std::uint64_t segment_magic = 0x3147445242574153ULL;  // "SAWBRDG1", little endian
-inline constexpr std::uint32_t layout_version = 1;                     // any change below bumps this
+inline constexpr std::uint32_t layout_version = 2;                     // any change below bumps this
 
 enum class SegmentState : std::uint32_t { initializing = 0, ready = 1, closed = 2 };
 
@@ -23,6 +23,7 @@ struct alignas(cache_line) SegmentHeader {
   std::uint32_t layout_version;
   std::uint32_t header_size;
   std::uint64_t interface_hash;  // of the exported interface: names, kinds, type names and sizes
+  std::uint64_t incarnation;     // differs between two servers that used the same name
   std::uint64_t total_size;
   std::uint64_t manifest_offset, manifest_count;
   std::uint64_t mirror_offset, mirror_words;
@@ -32,8 +33,13 @@ struct alignas(cache_line) SegmentHeader {
   char interface[64];
   alignas(cache_line) std::atomic<std::int32_t> owner_pid;
   std::atomic<std::uint32_t> state;
-  std::atomic<std::int64_t> heartbeat;      // owner's CLOCK_MONOTONIC ns, refreshed every cycle
-  std::atomic<std::uint32_t> service_bell;  // bumped (and futex-woken) by clients with a query
+  std::atomic<std::int64_t> heartbeat;          // owner's CLOCK_MONOTONIC ns, refreshed every cycle
+  std::atomic<std::uint32_t> service_bell;      // bumped by clients with a query
+  std::atomic<std::uint32_t> service_sleeping;  // the service thread is (about to be) in futex_wait
+  // Bumped by the owner after every state row; woken (one call per cycle at most) only when
+  // update_sleepers says a non-RT client waits on it.
+  alignas(cache_line) std::atomic<std::uint32_t> update_bell;
+  std::atomic<std::uint32_t> update_sleepers;
 };
 
 // A qualified read in flight: the client fills `command` and `arg`, then bumps `request`
@@ -43,6 +49,7 @@ struct alignas(cache_line) QueryArea {
   static constexpr std::size_t max_bytes = 256;
   std::atomic<std::uint32_t> request;
   std::atomic<std::uint32_t> reply;
+  std::atomic<std::uint32_t> waiting;  // the client sleeps on `reply`: the server must wake it
   std::uint32_t command;
   std::uint32_t status;  // saw::Status of the query
   alignas(16) std::byte arg[max_bytes];
@@ -67,7 +74,8 @@ struct ManifestEntry {
   std::uint8_t kind;  // saw::CommandKind
   std::uint8_t reserved[3];
   std::uint32_t arg_size, result_size;
-  std::uint32_t mirror_offset;  // read commands: where the value sits in the state mirror
+  std::uint32_t mirror_offset;                // read commands: where the value sits in the state mirror
+  std::uint32_t arg_version, result_version;  // the types' layout versions (TypeInfo::version)
   char arg_type[96];
   char result_type[96];
 };

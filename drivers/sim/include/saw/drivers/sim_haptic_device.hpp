@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "saw/crtk.hpp"
 #include "saw/drivers/arm_kinematics.hpp"
@@ -26,6 +27,7 @@ struct SimDeviceConfig {
 
 // Buttons on the "sim" interface's set_button.
 struct ButtonCommand {
+  static constexpr std::uint32_t layout_version = 1;
   std::uint8_t button = 0;  // 0 clutch, 1 operator_present
   bool pressed = false;
 };

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdint>
 
 #include "saw/crtk.hpp"
 #include "saw/task.hpp"
@@ -14,6 +15,7 @@ namespace saw::teleop {
 // The local model predicts only the inputs that arrive late: a side's horizon is the delay of
 // the link its positions come over (0 for a device beside this task).
 struct Prediction {
+  static constexpr std::uint32_t layout_version = 1;
   bool enabled = false;
   double master_horizon = 0.0;  // s
   double slave_horizon = 0.0;   // s

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "saw/crtk.hpp"
 
@@ -19,11 +20,13 @@ struct Scale {
 };
 
 struct Gains {
+  static constexpr std::uint32_t layout_version = 1;
   double master = 100.0;  // k_m, N/m
   double slave = 100.0;   // k_s, N/m
 };
 
 struct ForceLimits {
+  static constexpr std::uint32_t layout_version = 1;
   double master = 3.0;  // lim_m, N (magnitude)
   double slave = 3.0;   // lim_s, N
 };
