@@ -128,7 +128,11 @@ Proxy::Proxy(ShmSegment segment, int slot_index, ProxyOptions options)
         Link& l = link();
         if (!alive(l)) return Status::disconnected;
         std::byte* rec = l.commands->try_reserve();
-        if (rec == nullptr) return Status::queue_full;
+        if (rec == nullptr) {
+          commands_refused_.store(commands_refused_.load(std::memory_order_relaxed) + 1,
+                                  std::memory_order_relaxed);  // one writer: the calling thread
+          return Status::queue_full;
+        }
         std::memcpy(rec, &i, sizeof i);
         if (size != 0) std::memcpy(rec + Mailbox::header_bytes(), arg, size);
         l.commands->commit();

@@ -384,3 +384,33 @@ TEST(BridgeConnect, ANonRtConsumerSleepsUntilTheServerPublishesARow) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(BridgeConnect, AFullCommandRingIsAnErrorReturnedAndCounted) {
+  const std::string name = "bfull" + std::to_string(getpid());
+  Counter counter(name);  // never started: nothing drains its slots
+  saw::bridge::Exporter exporter(counter, "arm", {.slots = 1, .ring_capacity = 4});
+  class Caller : public saw::Component {
+   public:
+    Caller() : Component("caller") { require("arm").add_function("add", add); }
+    saw::FunctionWrite<std::int64_t> add;
+  } caller;
+  saw::Manager m;
+  // A generous staleness limit: the unstarted server's heartbeat is the exporter's first one.
+  m.add_resolver(
+      std::make_unique<saw::bridge::ShmResolver>(saw::bridge::ProxyOptions{.stale_after = 60'000'000'000}));
+  m.add(caller);
+  m.connect("caller", "arm", name, "arm");
+  int ok = 0, full = 0;
+  for (int i = 0; i < 10; ++i) {
+    const auto s = caller.add(1);
+    ok += s == saw::Status::ok;
+    full += s == saw::Status::queue_full;
+  }
+  EXPECT_EQ(ok, 4);
+  EXPECT_EQ(full, 6);
+  EXPECT_EQ(dynamic_cast<saw::bridge::Proxy*>(m.find(name))->commands_refused(), 6u);
+}
+
+}  // namespace

@@ -41,6 +41,10 @@ class Proxy : public Component {
   bool is_remote() const noexcept override { return true; }
   // From the calling thread.
   bool server_alive() noexcept { return alive(link()); }
+  // Commands refused because the slot's ring was full (the server is behind).
+  std::uint64_t commands_refused() const noexcept {
+    return commands_refused_.load(std::memory_order_relaxed);
+  }
   // Times a new server was adopted (monitor's count).
   std::uint64_t reconnects() const noexcept { return reconnects_.load(std::memory_order_relaxed); }
 
@@ -74,7 +78,7 @@ class Proxy : public Component {
   const Link* mailbox_on_ = nullptr;          // the monitor's: whose event ring the mailbox has
   std::atomic<Link*> offered_{nullptr};       // monitor → calling thread
   std::unique_ptr<Mailbox> events_;
-  std::atomic<std::uint64_t> reconnects_{0};
+  std::atomic<std::uint64_t> reconnects_{0}, commands_refused_{0};
   std::atomic<std::uint32_t> stop_{0};
   std::thread monitor_;
 };
