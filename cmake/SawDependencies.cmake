@@ -15,3 +15,7 @@ if(EXISTS "${SAW_RUCKIG_DIR}/CMakeLists.txt")
 else()
   message(FATAL_ERROR "Ruckig not found in ${SAW_RUCKIG_DIR}: run tools/bootstrap.sh")
 endif()
+
+# Fast DDS 2.9 (Debian): nonrt/ only.
+find_package(fastcdr REQUIRED)
+find_package(fastrtps REQUIRED)

@@ -1,0 +1,67 @@
+// Gateway: maps components exported through the shared-memory bridge to DDS topics.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "saw/clock.hpp"
+#include "saw/gateway/participant.hpp"
+
+namespace saw::gateway {
+
+struct GatewayConfig {
+  std::vector<std::string> attach;  // exported component names ("/saw.<name>" segments)
+  ParticipantConfig dds;
+  unsigned decimation = 1;    // publish state every Nth row of the server's task
+  TimeNs attach_timeout = 0;  // wait this long for a component to be exported (0: fail at once)
+  std::string name;           // unique per host; default "gateway.<pid>"
+};
+
+// One row of the manifest: how a command or event of an attached component is mapped.
+struct EndpointInfo {
+  std::string component, interface_name, name, kind, saw_type, dds_type, topic;
+};
+
+struct GatewayStats {
+  std::uint64_t published = 0;  // state samples written
+  std::uint64_t events = 0;     // events written
+  std::uint64_t commands = 0;   // commands from DDS passed to the bridge
+  std::uint64_t rejected = 0;   // commands from DDS refused (invalid value, full ring, server gone)
+  std::uint64_t reconnects = 0;
+};
+
+class Attachment;
+
+// An ordinary (non-RT) process's object. Per attached component, one thread: it sleeps on the
+// bridge's update bell, publishes the read commands' values (best effort, keep last 1) every
+// `decimation` rows, publishes events (reliable), and passes commands arriving from DDS —
+// validated first — into the bridge. Each gateway publishes its manifest on `rt/saw/manifest`
+// (reliable, transient local), and republishes it with state FAULT when a server stops.
+class Gateway {
+ public:
+  explicit Gateway(GatewayConfig config);  // throws std::runtime_error naming what failed
+  ~Gateway();
+  Gateway(const Gateway&) = delete;
+  Gateway& operator=(const Gateway&) = delete;
+
+  const std::vector<EndpointInfo>& endpoints() const noexcept { return endpoints_; }
+  GatewayStats stats() const;
+  const std::string& name() const noexcept { return config_.name; }
+
+  // Called by attachments when a server's liveness changes.
+  void publish_manifest();
+
+ private:
+  GatewayConfig config_;
+  struct Dds;
+  std::unique_ptr<Dds> dds_;
+  std::vector<EndpointInfo> endpoints_;
+  std::vector<std::unique_ptr<Attachment>> attachments_;
+  std::mutex manifest_mutex_;
+};
+
+}  // namespace saw::gateway

@@ -1,0 +1,28 @@
+// Participant: a Fast DDS domain participant restricted to the network interfaces it is given.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace eprosima::fastdds::dds {
+class DomainParticipant;
+}
+
+namespace saw::gateway {
+
+struct ParticipantConfig {
+  std::string name = "saw";
+  int domain = 0;
+  // IPv4 addresses of the interfaces DDS may use. Loopback only unless a deployment names
+  // others: Fast DDS would otherwise announce itself on every interface.
+  std::vector<std::string> interfaces{"127.0.0.1"};
+};
+
+// Builtin transports off; UDPv4 on the listed interfaces only (discovery by unicast to the
+// loopback peers when loopback is the only interface, so nothing is multicast at all), plus
+// shared memory between processes on this host. Throws std::runtime_error on failure.
+eprosima::fastdds::dds::DomainParticipant* make_participant(const ParticipantConfig& config);
+// Deletes the participant and every entity it holds.
+void delete_participant(eprosima::fastdds::dds::DomainParticipant* p) noexcept;
+
+}  // namespace saw::gateway

@@ -1,0 +1,50 @@
+// TypeMap: how each rt value type travels over DDS (its ROS 2 / CRTK message and conversions).
+#pragma once
+
+#include <fastdds/dds/topic/TypeSupport.hpp>
+#include <string>
+#include <string_view>
+
+#include "saw/clock.hpp"
+
+namespace eprosima::fastdds::dds {
+class DataWriter;
+class DataReader;
+}  // namespace eprosima::fastdds::dds
+
+namespace saw::gateway {
+
+// One rt type ↔ one DDS message type. Values are passed as the rt type's bytes (the bridge
+// moves bytes; TypeInfo's name says which mapping applies).
+class Mapping {
+ public:
+  enum class Take { none, ok, rejected };
+
+  virtual ~Mapping() = default;
+  virtual std::string_view saw_type() const = 0;
+  virtual std::string_view dds_type()
+      const = 0;  // the registered name, e.g. geometry_msgs::msg::dds_::PoseStamped_
+  virtual eprosima::fastdds::dds::TypeSupport type_support() const = 0;
+  // Converts `value` and writes it; `stamp_ns` (wall clock) goes into the header when the message has one.
+  virtual bool write(eprosima::fastdds::dds::DataWriter& w, const void* value, std::int64_t stamp_ns,
+                     std::string_view frame_id) const = 0;
+  // Takes the next sample into `value`. A sample that is not a valid rt value (NaN, infinite,
+  // too many joints, unknown state string) is `rejected`, with the reason in `why`; `value` is
+  // then left unspecified and must not be used.
+  virtual Take take(eprosima::fastdds::dds::DataReader& r, void* value, std::string& why) const = 0;
+  // The rt value as one line of text (sawctl echo).
+  virtual std::string to_text(const void* value) const = 0;
+  virtual std::size_t size() const = 0;  // of the rt type
+};
+
+// The mapping for an rt type name (TypeInfo::name), or nullptr if it has none.
+const Mapping* find_mapping(std::string_view saw_type);
+// The mapping whose DDS type is `dds_type`, or nullptr.
+const Mapping* find_mapping_by_dds(std::string_view dds_type);
+// Void commands travel as std_msgs/Empty.
+const Mapping& empty_mapping();
+
+// Wall-clock ns for a CLOCK_MONOTONIC time (row times are monotonic; ROS headers are wall time).
+std::int64_t wall_from_monotonic(TimeNs monotonic);
+
+}  // namespace saw::gateway

@@ -1,0 +1,208 @@
+#include "attachment.hpp"
+
+#include <chrono>
+#include <thread>
+
+#include "crtk_msgs/msg/OperatingState.h"
+#include "crtk_msgs/msg/StringStamped.h"
+#include "saw/crtk.hpp"
+
+namespace saw::gateway {
+
+namespace {
+
+// The gateway sees a dead RT process sooner than RT clients do (100 ms): it must publish FAULT
+// within 100 ms of the death, and it sleeps at most `poll` between checks.
+constexpr bridge::ProxyOptions proxy_options{.stale_after = 50'000'000};
+constexpr TimeNs poll = 10'000'000;
+
+std::string kind_name(CommandKind k) {
+  switch (k) {
+    case CommandKind::void_command:
+      return "void";
+    case CommandKind::write:
+      return "write";
+    case CommandKind::read:
+      return "read";
+    case CommandKind::qualified_read:
+      return "qualified_read";
+    case CommandKind::void_event:
+      return "void_event";
+    case CommandKind::write_event:
+      return "write_event";
+  }
+  return "?";
+}
+
+std::string type_label(const TypeInfo& t) {
+  return t.size == 0 ? "" : std::string(t.name) + " v" + std::to_string(t.version);
+}
+
+std::unique_ptr<Component> resolve(const std::string& name, TimeNs timeout) {
+  const TimeNs deadline = monotonic_now() + timeout;
+  std::string why =
+      "no shared-memory segment /saw." + name + " (is the RT process running and exporting it?)";
+  for (;;) {
+    try {
+      if (auto c = bridge::ShmResolver(proxy_options).resolve(name)) return c;
+    } catch (const ConnectError& e) {
+      why = e.what();
+    }
+    if (monotonic_now() >= deadline) throw std::runtime_error("attach " + name + ": " + why);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
+}  // namespace
+
+Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned decimation, TimeNs timeout,
+                       std::function<void()> liveness_changed)
+    : dds_(dds),
+      name_(component),
+      decimation_(decimation == 0 ? 1 : decimation),
+      liveness_changed_(std::move(liveness_changed)),
+      component_(resolve(component, timeout)),
+      proxy_(dynamic_cast<bridge::Proxy*>(component_.get())) {
+  if (proxy_ == nullptr) throw std::runtime_error("attach " + component + ": not a bridge proxy");
+  const ProvidedInterface& p = *component_->provided_interfaces().front();
+  const std::string prefix = "rt/" + name_ + "/";
+  const Mapping* string_stamped = find_mapping(type_info_of<StateCommand>().name);
+  error_writer_ = dds_.publisher->create_datawriter(dds_.topic(prefix + "error", *string_stamped),
+                                                    DdsContext::writer_qos(Flow::event));
+  for (const auto& e : p.events()) {
+    const Signature& sig = e->signature();
+    const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : find_mapping(sig.arg.name);
+    EndpointInfo info{name_, p.name(), e->name(), kind_name(sig.kind), type_label(sig.arg), "", ""};
+    auto out = std::make_unique<EventOut>(EventOut{this, m, nullptr});
+    if (m != nullptr) {
+      info.dds_type = m->dds_type();
+      info.topic = prefix + e->name();
+      out->writer =
+          dds_.publisher->create_datawriter(dds_.topic(info.topic, *m), DdsContext::writer_qos(Flow::event));
+      if (m == find_mapping(type_info_of<OperatingState>().name)) fault_writer_ = out->writer;
+    }
+    // Numbered by ordinal among the interface's events, as the proxy's mailbox numbers them.
+    proxy_->remote_events()->set_target(
+        static_cast<std::uint32_t>(events_.size()),
+        Invoker{[](void* self, const void* arg) {
+                  auto* o = static_cast<EventOut*>(self);
+                  if (o->writer == nullptr) return;
+                  o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()), o->self->name_);
+                  o->self->event_count_.fetch_add(1, std::memory_order_relaxed);
+                },
+                out.get()});
+    events_.push_back(std::move(out));
+    endpoints_.push_back(std::move(info));
+  }
+  proxy_->remote_events()->set_consumer_attached();
+  for (const auto& c : p.commands()) {
+    const Signature& sig = c->signature;
+    EndpointInfo info{name_, p.name(), c->name, kind_name(sig.kind), type_label(sig.arg), "", ""};
+    if (sig.kind == CommandKind::qualified_read) {
+      info.saw_type += " -> " + type_label(sig.result);  // request/reply topics: not mapped yet
+      endpoints_.push_back(std::move(info));
+      continue;
+    }
+    const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : find_mapping(sig.arg.name);
+    if (m != nullptr) {
+      info.dds_type = m->dds_type();
+      info.topic = prefix + c->name;
+      if (sig.kind == CommandKind::read) {
+        // A read and an event of the same name share the topic: the event (on change, reliable) serves it.
+        const bool event_too = std::any_of(p.events().begin(), p.events().end(),
+                                           [&](const auto& e) { return e->name() == c->name; });
+        if (!event_too) {
+          auto* w = dds_.publisher->create_datawriter(dds_.topic(info.topic, *m),
+                                                      DdsContext::writer_qos(Flow::state));
+          states_.push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
+          if (m == find_mapping(type_info_of<OperatingState>().name) && fault_writer_ == nullptr)
+            fault_writer_ = w;
+        }
+      } else {
+        auto* r = dds_.subscriber->create_datareader(dds_.topic(info.topic, *m),
+                                                     DdsContext::reader_qos(Flow::command));
+        commands_.push_back({c.get(), m, r, std::vector<std::byte>(std::max<std::size_t>(m->size(), 1))});
+      }
+    }
+    endpoints_.push_back(std::move(info));
+  }
+}
+
+Attachment::~Attachment() {
+  stop_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();
+}
+
+void Attachment::start() {
+  thread_ = std::thread([this] { run(); });
+}
+
+void Attachment::add_stats(GatewayStats& s) const {
+  s.published += published_.load(std::memory_order_relaxed);
+  s.events += event_count_.load(std::memory_order_relaxed);
+  s.commands += commands_in_.load(std::memory_order_relaxed);
+  s.rejected += rejected_.load(std::memory_order_relaxed);
+  s.reconnects += proxy_->reconnects();
+}
+
+void Attachment::reject(const std::string& command, const std::string& why) {
+  rejected_.fetch_add(1, std::memory_order_relaxed);
+  crtk_msgs::msg::StringStamped m;
+  const auto wall = wall_from_monotonic(monotonic_now());
+  m.header().stamp().sec(static_cast<std::int32_t>(wall / 1'000'000'000));
+  m.header().stamp().nanosec(static_cast<std::uint32_t>(wall % 1'000'000'000));
+  m.header().frame_id(name_);
+  m.string(command + " rejected: " + why);
+  if (error_writer_ != nullptr) error_writer_->write(&m);
+}
+
+void Attachment::publish_fault() {
+  if (fault_writer_ == nullptr) return;
+  const OperatingState fault{OperatingStateValue::fault, false, false};
+  find_mapping(type_info_of<OperatingState>().name)
+      ->write(*fault_writer_, &fault, wall_from_monotonic(monotonic_now()), name_);
+}
+
+void Attachment::run() {
+  std::uint32_t seen = 0;
+  unsigned rows = 0;
+  bool was_alive = true;
+  std::string why;
+  while (!stop_.load(std::memory_order_acquire)) {
+    const bool row = proxy_->wait_for_update(seen, poll);
+    const bool alive = proxy_->server_alive();
+    if (alive != was_alive) {
+      was_alive = alive;
+      alive_.store(alive, std::memory_order_release);
+      if (!alive) publish_fault();
+      liveness_changed_();
+    }
+    if (row && alive && ++rows >= decimation_) {
+      rows = 0;
+      for (auto& s : states_) {
+        RowStamp stamp;
+        if (s.command->read_stamped(s.value.data(), stamp) != Status::ok) continue;
+        if (s.mapping->write(*s.writer, s.value.data(), wall_from_monotonic(stamp.time), name_))
+          published_.fetch_add(1, std::memory_order_relaxed);
+      }
+    }
+    proxy_->remote_events()->drain();
+    for (auto& c : commands_) {
+      for (;;) {
+        const auto t = c.mapping->take(*c.reader, c.value.data(), why);
+        if (t == Mapping::Take::none) break;
+        if (t == Mapping::Take::rejected) {
+          reject(c.command->name, why);
+          continue;
+        }
+        const Status st = c.command->forward(c.value.data());
+        if (st == Status::ok)
+          commands_in_.fetch_add(1, std::memory_order_relaxed);
+        else
+          reject(c.command->name, std::string(to_string(st)));
+      }
+    }
+  }
+}
+
+}  // namespace saw::gateway

@@ -1,0 +1,72 @@
+// Attachment: one exported component, mapped to DDS by its own thread (internal).
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "dds_context.hpp"
+#include "saw/bridge/proxy.hpp"
+#include "saw/gateway/gateway.hpp"
+
+namespace saw::gateway {
+
+class Attachment {
+ public:
+  // Resolves the component through the bridge (waiting up to `timeout`), creates its topics.
+  Attachment(DdsContext& dds, const std::string& component, unsigned decimation, TimeNs timeout,
+             std::function<void()> liveness_changed);
+  ~Attachment();
+
+  const std::vector<EndpointInfo>& endpoints() const noexcept { return endpoints_; }
+  const std::string& component() const noexcept { return name_; }
+  bool alive() const noexcept { return alive_.load(std::memory_order_acquire); }
+  void add_stats(GatewayStats& s) const;
+  // Starts the thread (after the gateway has published its first manifest).
+  void start();
+
+ private:
+  struct StateOut {
+    const Command* command;
+    const Mapping* mapping;
+    fdds::DataWriter* writer;
+    std::vector<std::byte> value;
+  };
+  struct EventOut {
+    Attachment* self;
+    const Mapping* mapping;
+    fdds::DataWriter* writer;
+  };
+  struct CommandIn {
+    const Command* command;
+    const Mapping* mapping;
+    fdds::DataReader* reader;
+    std::vector<std::byte> value;
+  };
+
+  void run();
+  void reject(const std::string& command, const std::string& why);
+  void publish_fault();
+
+  DdsContext& dds_;
+  std::string name_;
+  unsigned decimation_;
+  std::function<void()> liveness_changed_;
+  std::unique_ptr<Component> component_;
+  bridge::Proxy* proxy_ = nullptr;
+  std::vector<EndpointInfo> endpoints_;
+  std::vector<StateOut> states_;
+  std::vector<std::unique_ptr<EventOut>> events_;
+  std::vector<CommandIn> commands_;
+  fdds::DataWriter* error_writer_ = nullptr;
+  fdds::DataWriter* fault_writer_ = nullptr;  // the OperatingState topic, if the component has one
+  std::atomic<bool> alive_{true};
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> published_{0}, event_count_{0}, commands_in_{0}, rejected_{0};
+  std::thread thread_;
+};
+
+}  // namespace saw::gateway

@@ -1,0 +1,83 @@
+// DdsContext: the gateway's participant, publisher, subscriber and topics (internal).
+#pragma once
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "saw/gateway/type_map.hpp"
+
+namespace saw::gateway {
+
+namespace fdds = eprosima::fastdds::dds;
+
+enum class Flow { state, event, command, registry };
+
+struct DdsContext {
+  fdds::DomainParticipant* participant = nullptr;
+  fdds::Publisher* publisher = nullptr;
+  fdds::Subscriber* subscriber = nullptr;
+
+  // One Topic per name; a name already used with another type is an error naming both.
+  fdds::Topic* topic(const std::string& name, const Mapping& m) {
+    std::lock_guard lock(mutex_);
+    if (auto it = topics_.find(name); it != topics_.end()) {
+      if (it->second->get_type_name() != m.dds_type())
+        throw std::runtime_error("DDS topic " + name + " is already used with type " +
+                                 it->second->get_type_name() + ", not " + std::string(m.dds_type()));
+      return it->second;
+    }
+    fdds::TypeSupport type = m.type_support();
+    type.register_type(participant);
+    fdds::Topic* t = participant->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    if (t == nullptr) throw std::runtime_error("DDS: could not create topic " + name);
+    topics_[name] = t;
+    return t;
+  }
+
+  static fdds::DataWriterQos writer_qos(Flow f) {
+    fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
+    q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+    switch (f) {
+      case Flow::state:  // the newest value is all that matters
+        q.reliability().kind = fdds::BEST_EFFORT_RELIABILITY_QOS;
+        q.history().depth = 1;
+        break;
+      case Flow::event:
+      case Flow::command:
+        q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+        q.history().depth = 16;
+        break;
+      case Flow::registry:  // late joiners (sawctl) get every gateway's last manifest
+        q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+        q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+        q.history().depth = 1;
+        break;
+    }
+    return q;
+  }
+
+  static fdds::DataReaderQos reader_qos(Flow f) {
+    fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
+    q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+    // The registry is unkeyed: one instance for all gateways, so keep enough for each's newest.
+    q.history().depth = f == Flow::state ? 1 : f == Flow::registry ? 256 : 16;
+    q.reliability().kind =
+        f == Flow::state ? fdds::BEST_EFFORT_RELIABILITY_QOS : fdds::RELIABLE_RELIABILITY_QOS;
+    if (f == Flow::registry) q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+    return q;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<std::string, fdds::Topic*> topics_;
+};
+
+}  // namespace saw::gateway

@@ -1,0 +1,94 @@
+#include "saw/gateway/gateway.hpp"
+
+#include <unistd.h>
+
+#include "attachment.hpp"
+#include "saw_msgs/msg/ManifestPubSubTypes.h"
+
+namespace saw::gateway {
+
+namespace {
+
+std::string host_name() {
+  char b[256] = {};
+  gethostname(b, sizeof b - 1);
+  return b;
+}
+
+}  // namespace
+
+struct Gateway::Dds {
+  DdsContext context;
+  fdds::DataWriter* manifest = nullptr;
+};
+
+Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::make_unique<Dds>()) {
+  if (config_.name.empty()) config_.name = "gateway." + std::to_string(getpid());
+  if (config_.dds.name == ParticipantConfig{}.name) config_.dds.name = config_.name;
+  auto& ctx = dds_->context;
+  ctx.participant = make_participant(config_.dds);
+  try {
+    ctx.publisher = ctx.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    ctx.subscriber = ctx.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    fdds::TypeSupport manifest_type(new saw_msgs::msg::ManifestPubSubType());
+    manifest_type.register_type(ctx.participant);
+    fdds::Topic* topic = ctx.participant->create_topic("rt/saw/manifest", manifest_type.get_type_name(),
+                                                       fdds::TOPIC_QOS_DEFAULT);
+    dds_->manifest = ctx.publisher->create_datawriter(topic, DdsContext::writer_qos(Flow::registry));
+    if (ctx.publisher == nullptr || ctx.subscriber == nullptr || dds_->manifest == nullptr)
+      throw std::runtime_error(
+          "DDS: could not create the gateway's publisher, subscriber or manifest writer");
+    for (const auto& name : config_.attach) {
+      attachments_.push_back(std::make_unique<Attachment>(
+          ctx, name, config_.decimation, config_.attach_timeout, [this] { publish_manifest(); }));
+      const auto& e = attachments_.back()->endpoints();
+      endpoints_.insert(endpoints_.end(), e.begin(), e.end());
+    }
+  } catch (...) {
+    attachments_.clear();
+    delete_participant(ctx.participant);
+    throw;
+  }
+  publish_manifest();
+  for (auto& a : attachments_) a->start();
+}
+
+Gateway::~Gateway() {
+  attachments_.clear();  // threads joined before the DDS entities go
+  delete_participant(dds_->context.participant);
+}
+
+GatewayStats Gateway::stats() const {
+  GatewayStats s;
+  for (const auto& a : attachments_) a->add_stats(s);
+  return s;
+}
+
+void Gateway::publish_manifest() {
+  std::lock_guard lock(manifest_mutex_);
+  saw_msgs::msg::Manifest m;
+  const auto wall = wall_from_monotonic(monotonic_now());
+  m.header().stamp().sec(static_cast<std::int32_t>(wall / 1'000'000'000));
+  m.header().stamp().nanosec(static_cast<std::uint32_t>(wall % 1'000'000'000));
+  m.header().frame_id(config_.name);
+  m.host(host_name());
+  m.pid(static_cast<std::int32_t>(getpid()));
+  m.gateway(config_.name);
+  bool all_alive = true;
+  for (const auto& a : attachments_) all_alive = all_alive && a->alive();
+  m.state(all_alive ? "ENABLED" : "FAULT");
+  for (const auto& e : endpoints_) {
+    saw_msgs::msg::Endpoint out;
+    out.component_name(e.component);
+    out.interface_name(e.interface_name);
+    out.name(e.name);
+    out.kind(e.kind);
+    out.saw_type(e.saw_type);
+    out.dds_type(e.dds_type);
+    out.topic(e.topic);
+    m.endpoints().push_back(std::move(out));
+  }
+  dds_->manifest->write(&m);
+}
+
+}  // namespace saw::gateway

@@ -1,0 +1,70 @@
+#include "saw/gateway/participant.hpp"
+
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <stdexcept>
+
+namespace saw::gateway {
+
+namespace fdds = eprosima::fastdds::dds;
+using eprosima::fastrtps::rtps::IPLocator;
+using eprosima::fastrtps::rtps::Locator_t;
+
+namespace {
+
+// The RTPS well-known port of participant `index`'s unicast discovery in `domain` (PB 7400,
+// DG 250, PG 2, d1 10): what every DDS implementation listens on, Cyclone DDS included.
+std::uint32_t discovery_port(int domain, int index) {
+  return static_cast<std::uint32_t>(7400 + 250 * domain + 10 + 2 * index);
+}
+
+constexpr int max_local_participants = 32;
+
+}  // namespace
+
+fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
+  if (config.interfaces.empty()) throw std::runtime_error("DDS: no network interface given");
+  fdds::DomainParticipantQos qos;
+  qos.name(config.name);
+  qos.transport().use_builtin_transports = false;
+  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+  udp->interfaceWhiteList = config.interfaces;
+  qos.transport().user_transports.push_back(udp);
+  qos.transport().user_transports.push_back(
+      std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+  const bool loopback_only = config.interfaces.size() == 1 && config.interfaces.front() == "127.0.0.1";
+  if (loopback_only) {
+    // Unicast discovery on loopback: our own metatraffic locator (its port is assigned from the
+    // participant index), which also keeps Fast DDS from adding its default multicast locator,
+    // and every local participant index as an initial peer.
+    auto& builtin = qos.wire_protocol().builtin;
+    Locator_t self;
+    IPLocator::setIPv4(self, "127.0.0.1");
+    self.port = 0;
+    builtin.metatrafficUnicastLocatorList.push_back(self);
+    for (int i = 0; i < max_local_participants; ++i) {
+      Locator_t peer;
+      IPLocator::setIPv4(peer, "127.0.0.1");
+      peer.port = discovery_port(config.domain, i);
+      builtin.initialPeersList.push_back(peer);
+    }
+  }
+  auto* p = fdds::DomainParticipantFactory::get_instance()->create_participant(config.domain, qos);
+  if (p == nullptr)
+    throw std::runtime_error("DDS: could not create a participant in domain " +
+                             std::to_string(config.domain));
+  return p;
+}
+
+void delete_participant(fdds::DomainParticipant* p) noexcept {
+  if (p == nullptr) return;
+  p->delete_contained_entities();
+  fdds::DomainParticipantFactory::get_instance()->delete_participant(p);
+}
+
+}  // namespace saw::gateway

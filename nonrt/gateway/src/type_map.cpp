@@ -1,0 +1,351 @@
+#include "saw/gateway/type_map.hpp"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <memory>
+#include <vector>
+
+#include "crtk_msgs/msg/OperatingStatePubSubTypes.h"
+#include "crtk_msgs/msg/StringStampedPubSubTypes.h"
+#include "geometry_msgs/msg/PoseStampedPubSubTypes.h"
+#include "geometry_msgs/msg/TwistStampedPubSubTypes.h"
+#include "geometry_msgs/msg/Vector3StampedPubSubTypes.h"
+#include "geometry_msgs/msg/WrenchStampedPubSubTypes.h"
+#include "saw/crtk.hpp"
+#include "saw/type_info.hpp"
+#include "sensor_msgs/msg/JointStatePubSubTypes.h"
+#include "sensor_msgs/msg/JoyPubSubTypes.h"
+#include "std_msgs/msg/BoolPubSubTypes.h"
+#include "std_msgs/msg/EmptyPubSubTypes.h"
+#include "std_msgs/msg/Float64PubSubTypes.h"
+#include "std_msgs/msg/Int64PubSubTypes.h"
+
+namespace saw::gateway {
+
+namespace fdds = eprosima::fastdds::dds;
+
+namespace {
+
+bool finite(std::initializer_list<double> xs) {
+  for (double x : xs)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+template <class V>
+void put(const Vec3& a, V& v) {
+  v.x(a[0]);
+  v.y(a[1]);
+  v.z(a[2]);
+}
+template <class V>
+bool get(const V& v, Vec3& a, std::string& why, const char* what) {
+  a = {v.x(), v.y(), v.z()};
+  if (finite({a[0], a[1], a[2]})) return true;
+  why = std::string(what) + " is not finite";
+  return false;
+}
+std::string text(const Vec3& v) {
+  char b[96];
+  std::snprintf(b, sizeof b, "[%.6g, %.6g, %.6g]", v[0], v[1], v[2]);
+  return b;
+}
+
+// One rt type Rt carried as message Msg; Conv supplies to_msg / from_msg / to_text.
+template <class Rt, class Msg, class PubSub, class Conv>
+class Typed final : public Mapping {
+ public:
+  std::string_view saw_type() const override { return type_info_of<Rt>().name; }
+  std::string_view dds_type() const override { return name_; }
+  fdds::TypeSupport type_support() const override { return fdds::TypeSupport(new PubSub()); }
+  std::size_t size() const override { return sizeof(Rt); }
+
+  bool write(fdds::DataWriter& w, const void* value, std::int64_t stamp_ns,
+             std::string_view frame) const override {
+    Msg m;
+    if constexpr (requires { m.header(); }) {
+      m.header().stamp().sec(static_cast<std::int32_t>(stamp_ns / 1'000'000'000));
+      m.header().stamp().nanosec(static_cast<std::uint32_t>(stamp_ns % 1'000'000'000));
+      m.header().frame_id(std::string(frame));
+    }
+    Conv::to_msg(*static_cast<const Rt*>(value), m);
+    return w.write(&m);
+  }
+
+  Take take(fdds::DataReader& r, void* value, std::string& why) const override {
+    Msg m;
+    fdds::SampleInfo info;
+    for (;;) {
+      if (r.take_next_sample(&m, &info) != ReturnCode_t::RETCODE_OK) return Take::none;
+      if (info.valid_data) break;  // skip disposal/unregistration notices
+    }
+    Rt v{};
+    if (!Conv::from_msg(m, v, why)) return Take::rejected;
+    *static_cast<Rt*>(value) = v;
+    return Take::ok;
+  }
+
+  std::string to_text(const void* value) const override { return Conv::text(*static_cast<const Rt*>(value)); }
+
+ private:
+  std::string name_ = PubSub().getName();
+};
+
+struct PoseConv {
+  static void to_msg(const Pose& p, geometry_msgs::msg::PoseStamped& m) {
+    put(p.position, m.pose().position());
+    auto& q = m.pose().orientation();
+    q.x(p.orientation[0]);
+    q.y(p.orientation[1]);
+    q.z(p.orientation[2]);
+    q.w(p.orientation[3]);
+  }
+  static bool from_msg(const geometry_msgs::msg::PoseStamped& m, Pose& p, std::string& why) {
+    if (!get(m.pose().position(), p.position, why, "position")) return false;
+    const auto& q = m.pose().orientation();
+    p.orientation = {q.x(), q.y(), q.z(), q.w()};
+    const double n = std::sqrt(q.x() * q.x() + q.y() * q.y() + q.z() * q.z() + q.w() * q.w());
+    if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3) {
+      why = "orientation is not a unit quaternion (norm " + std::to_string(n) + ")";
+      return false;
+    }
+    return true;
+  }
+  static std::string text(const Pose& p) {
+    char b[96];
+    std::snprintf(b, sizeof b, " q [%.4f, %.4f, %.4f, %.4f]", p.orientation[0], p.orientation[1],
+                  p.orientation[2], p.orientation[3]);
+    return "p " + saw::gateway::text(p.position) + b;
+  }
+};
+
+struct TwistConv {
+  static void to_msg(const Twist& t, geometry_msgs::msg::TwistStamped& m) {
+    put(t.linear, m.twist().linear());
+    put(t.angular, m.twist().angular());
+  }
+  static bool from_msg(const geometry_msgs::msg::TwistStamped& m, Twist& t, std::string& why) {
+    return get(m.twist().linear(), t.linear, why, "linear") &&
+           get(m.twist().angular(), t.angular, why, "angular");
+  }
+  static std::string text(const Twist& t) {
+    return "v " + saw::gateway::text(t.linear) + " w " + saw::gateway::text(t.angular);
+  }
+};
+
+struct WrenchConv {
+  static void to_msg(const Wrench& w, geometry_msgs::msg::WrenchStamped& m) {
+    put(w.force, m.wrench().force());
+    put(w.torque, m.wrench().torque());
+  }
+  static bool from_msg(const geometry_msgs::msg::WrenchStamped& m, Wrench& w, std::string& why) {
+    return get(m.wrench().force(), w.force, why, "force") &&
+           get(m.wrench().torque(), w.torque, why, "torque");
+  }
+  static std::string text(const Wrench& w) {
+    return "f " + saw::gateway::text(w.force) + " t " + saw::gateway::text(w.torque);
+  }
+};
+
+struct Vec3Conv {
+  static void to_msg(const Vec3& v, geometry_msgs::msg::Vector3Stamped& m) { put(v, m.vector()); }
+  static bool from_msg(const geometry_msgs::msg::Vector3Stamped& m, Vec3& v, std::string& why) {
+    return get(m.vector(), v, why, "vector");
+  }
+  static std::string text(const Vec3& v) { return saw::gateway::text(v); }
+};
+
+struct JointStateConv {
+  static void to_msg(const JointState& j, sensor_msgs::msg::JointState& m) {
+    const auto n = std::min<std::size_t>(j.size, JointState::max_joints);
+    m.position().assign(j.position.begin(), j.position.begin() + static_cast<std::ptrdiff_t>(n));
+    m.velocity().assign(j.velocity.begin(), j.velocity.begin() + static_cast<std::ptrdiff_t>(n));
+    m.effort().assign(j.effort.begin(), j.effort.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+  static bool from_msg(const sensor_msgs::msg::JointState& m, JointState& j, std::string& why) {
+    const std::size_t n = m.position().size();
+    if (n > JointState::max_joints) {
+      why = std::to_string(n) + " joints, at most " + std::to_string(JointState::max_joints);
+      return false;
+    }
+    for (const auto* s : {&m.velocity(), &m.effort()})
+      if (!s->empty() && s->size() != n) {
+        why = "velocity/effort sizes differ from position's (" + std::to_string(n) + ")";
+        return false;
+      }
+    j.size = static_cast<std::uint32_t>(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      j.position[i] = m.position()[i];
+      j.velocity[i] = m.velocity().empty() ? 0.0 : m.velocity()[i];
+      j.effort[i] = m.effort().empty() ? 0.0 : m.effort()[i];
+      if (!finite({j.position[i], j.velocity[i], j.effort[i]})) {
+        why = "joint " + std::to_string(i) + " is not finite";
+        return false;
+      }
+    }
+    return true;
+  }
+  static std::string text(const JointState& j) {
+    std::string s = "position [";
+    for (std::uint32_t i = 0; i < std::min<std::uint32_t>(j.size, JointState::max_joints); ++i)
+      s += (i ? ", " : "") + std::to_string(j.position[i]);
+    return s + "]";
+  }
+};
+
+struct OperatingStateConv {
+  static void to_msg(const OperatingState& s, crtk_msgs::msg::OperatingState& m) {
+    m.state(std::string(to_string(s.state)));
+    m.is_homed(s.is_homed);
+    m.is_busy(s.is_busy);
+  }
+  static bool from_msg(const crtk_msgs::msg::OperatingState& m, OperatingState& s, std::string& why) {
+    for (auto v : {OperatingStateValue::disabled, OperatingStateValue::enabled, OperatingStateValue::paused,
+                   OperatingStateValue::fault})
+      if (m.state() == to_string(v)) {
+        s.state = v;
+        s.is_homed = m.is_homed();
+        s.is_busy = m.is_busy();
+        return true;
+      }
+    why = "unknown operating state \"" + m.state() + "\"";
+    return false;
+  }
+  static std::string text(const OperatingState& s) {
+    return std::string(to_string(s.state)) + (s.is_homed ? " homed" : " not homed") +
+           (s.is_busy ? " busy" : "");
+  }
+};
+
+struct StateCommandConv {
+  static void to_msg(const StateCommand& c, crtk_msgs::msg::StringStamped& m) {
+    m.string(std::string(to_string(c)));
+  }
+  static bool from_msg(const crtk_msgs::msg::StringStamped& m, StateCommand& c, std::string& why) {
+    for (auto v : {StateCommand::enable, StateCommand::disable, StateCommand::pause, StateCommand::resume,
+                   StateCommand::home})
+      if (m.string() == to_string(v)) {
+        c = v;
+        return true;
+      }
+    why = "unknown state command \"" + m.string() + "\" (enable, disable, pause, resume, home)";
+    return false;
+  }
+  static std::string text(const StateCommand& c) { return std::string(to_string(c)); }
+};
+
+// Buttons as the dVRK publishes them: sensor_msgs/Joy with buttons[0] = 1 pressed, 0 released.
+struct ButtonConv {
+  static void to_msg(const ButtonEvent& b, sensor_msgs::msg::Joy& m) { m.buttons({b.pressed ? 1 : 0}); }
+  static bool from_msg(const sensor_msgs::msg::Joy& m, ButtonEvent& b, std::string& why) {
+    if (m.buttons().empty()) {
+      why = "no button in the message";
+      return false;
+    }
+    b.pressed = m.buttons()[0] != 0;
+    return true;
+  }
+  static std::string text(const ButtonEvent& b) { return b.pressed ? "pressed" : "released"; }
+};
+
+template <class T, class Msg>
+struct DataConv {
+  static void to_msg(const T& v, Msg& m) { m.data(v); }
+  static bool from_msg(const Msg& m, T& v, std::string& why) {
+    v = m.data();
+    if constexpr (std::is_floating_point_v<T>)
+      if (!std::isfinite(v)) {
+        why = "value is not finite";
+        return false;
+      }
+    return true;
+  }
+  static std::string text(const T& v) { return std::to_string(v); }
+};
+
+class EmptyMapping final : public Mapping {
+ public:
+  std::string_view saw_type() const override { return ""; }
+  std::string_view dds_type() const override { return name_; }
+  fdds::TypeSupport type_support() const override {
+    return fdds::TypeSupport(new std_msgs::msg::EmptyPubSubType());
+  }
+  std::size_t size() const override { return 0; }
+  bool write(fdds::DataWriter& w, const void*, std::int64_t, std::string_view) const override {
+    std_msgs::msg::Empty m;
+    return w.write(&m);
+  }
+  Take take(fdds::DataReader& r, void*, std::string&) const override {
+    std_msgs::msg::Empty m;
+    fdds::SampleInfo info;
+    for (;;) {
+      if (r.take_next_sample(&m, &info) != ReturnCode_t::RETCODE_OK) return Take::none;
+      if (info.valid_data) return Take::ok;
+    }
+  }
+  std::string to_text(const void*) const override { return "(void)"; }
+
+ private:
+  std::string name_ = std_msgs::msg::EmptyPubSubType().getName();
+};
+
+const std::vector<std::unique_ptr<Mapping>>& mappings() {
+  static const auto all = [] {
+    std::vector<std::unique_ptr<Mapping>> v;
+    using namespace geometry_msgs::msg;
+    v.push_back(std::make_unique<Typed<Pose, PoseStamped, PoseStampedPubSubType, PoseConv>>());
+    v.push_back(std::make_unique<Typed<Twist, TwistStamped, TwistStampedPubSubType, TwistConv>>());
+    v.push_back(std::make_unique<Typed<Wrench, WrenchStamped, WrenchStampedPubSubType, WrenchConv>>());
+    v.push_back(std::make_unique<Typed<Vec3, Vector3Stamped, Vector3StampedPubSubType, Vec3Conv>>());
+    v.push_back(std::make_unique<Typed<JointState, sensor_msgs::msg::JointState,
+                                       sensor_msgs::msg::JointStatePubSubType, JointStateConv>>());
+    v.push_back(std::make_unique<Typed<OperatingState, crtk_msgs::msg::OperatingState,
+                                       crtk_msgs::msg::OperatingStatePubSubType, OperatingStateConv>>());
+    v.push_back(std::make_unique<Typed<StateCommand, crtk_msgs::msg::StringStamped,
+                                       crtk_msgs::msg::StringStampedPubSubType, StateCommandConv>>());
+    v.push_back(std::make_unique<
+                Typed<ButtonEvent, sensor_msgs::msg::Joy, sensor_msgs::msg::JoyPubSubType, ButtonConv>>());
+    v.push_back(std::make_unique<Typed<double, std_msgs::msg::Float64, std_msgs::msg::Float64PubSubType,
+                                       DataConv<double, std_msgs::msg::Float64>>>());
+    v.push_back(std::make_unique<Typed<std::int64_t, std_msgs::msg::Int64, std_msgs::msg::Int64PubSubType,
+                                       DataConv<std::int64_t, std_msgs::msg::Int64>>>());
+    v.push_back(std::make_unique<Typed<bool, std_msgs::msg::Bool, std_msgs::msg::BoolPubSubType,
+                                       DataConv<bool, std_msgs::msg::Bool>>>());
+    return v;
+  }();
+  return all;
+}
+
+}  // namespace
+
+const Mapping* find_mapping(std::string_view saw_type) {
+  for (const auto& m : mappings())
+    if (m->saw_type() == saw_type) return m.get();
+  return nullptr;
+}
+
+const Mapping* find_mapping_by_dds(std::string_view dds_type) {
+  for (const auto& m : mappings())
+    if (m->dds_type() == dds_type) return m.get();
+  if (dds_type == empty_mapping().dds_type()) return &empty_mapping();
+  return nullptr;
+}
+
+const Mapping& empty_mapping() {
+  static const EmptyMapping m;
+  return m;
+}
+
+std::int64_t wall_from_monotonic(TimeNs monotonic) {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  const std::int64_t wall = static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  return wall - (monotonic_now() - monotonic);
+}
+
+}  // namespace saw::gateway

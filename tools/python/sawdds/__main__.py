@@ -1,0 +1,26 @@
+"""python -m sawdds list | echo TOPIC [N] | state-command TOPIC CMD"""
+import sys
+
+from . import msgs
+from .client import Client
+
+
+def main(argv):
+    if not argv or argv[0] not in ("list", "echo", "state-command"):
+        print(__doc__)
+        return 2
+    c = Client()
+    if argv[0] == "list":
+        for name, m in sorted(c.manifests().items()):
+            print(f"{name} on {m.host} (pid {m.pid}): {m.state}")
+            for e in m.endpoints:
+                print(f"  {e.kind:15} {e.component_name}.{e.name:20} {e.saw_type:28} {e.topic or '(not mapped)'}")
+    elif argv[0] == "echo":
+        for _ in range(int(argv[2]) if len(argv) > 2 else 1):
+            print(c.read(argv[1]))
+    else:
+        c.send(argv[1], msgs.StringStamped(string=argv[2]))
+    return 0
+
+
+sys.exit(main(sys.argv[1:]))
