@@ -63,10 +63,11 @@ std::size_t Component::process_mailboxes() noexcept {
 
 void Component::cycle(TimeNs time) noexcept {
   cycle_time_ = time;
+  row_time_ = time;
   process_mailboxes();
   run();
-  state_table_.advance(time);
-  for (CycleHook* h : hooks_) h->after_cycle(*this, time);
+  state_table_.advance(row_time_);
+  for (CycleHook* h : hooks_) h->after_cycle(*this, row_time_);
 }
 
 }  // namespace saw

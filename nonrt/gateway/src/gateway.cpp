@@ -3,6 +3,9 @@
 #include <unistd.h>
 
 #include "attachment.hpp"
+#include "imported_arm.hpp"
+#include "saw/bridge/exporter.hpp"
+#include "saw/manager.hpp"
 #include "saw_msgs/msg/ManifestPubSubTypes.h"
 
 namespace saw::gateway {
@@ -16,6 +19,12 @@ std::string host_name() {
 }
 
 }  // namespace
+
+struct Gateway::Imports {
+  std::vector<std::unique_ptr<ImportedArm>> arms;
+  std::vector<std::unique_ptr<bridge::Exporter>> exporters;
+  Manager manager{ManagerOptions{.lock_memory = false, .hold_dma_latency = false}};
+};
 
 struct Gateway::Dds {
   DdsContext context;
@@ -44,8 +53,18 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
       const auto& e = attachments_.back()->endpoints();
       endpoints_.insert(endpoints_.end(), e.begin(), e.end());
     }
+    imports_ = std::make_unique<Imports>();
+    for (const auto& i : config_.imports) {
+      imports_->arms.push_back(std::make_unique<ImportedArm>(ctx, i));
+      imports_->exporters.push_back(std::make_unique<bridge::Exporter>(*imports_->arms.back(), "arm"));
+      imports_->manager.add(*imports_->arms.back());
+      const auto& e = imports_->arms.back()->endpoints();
+      endpoints_.insert(endpoints_.end(), e.begin(), e.end());
+    }
+    if (!config_.imports.empty()) imports_->manager.start();
   } catch (...) {
     attachments_.clear();
+    imports_.reset();
     delete_participant(ctx.participant);
     throw;
   }
@@ -55,12 +74,19 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
 
 Gateway::~Gateway() {
   attachments_.clear();  // threads joined before the DDS entities go
+  if (imports_ != nullptr) imports_->manager.stop();
+  imports_.reset();
   delete_participant(dds_->context.participant);
 }
 
 GatewayStats Gateway::stats() const {
   GatewayStats s;
   for (const auto& a : attachments_) a->add_stats(s);
+  if (imports_ != nullptr)
+    for (const auto& a : imports_->arms) {
+      s.imported += a->samples();
+      s.imported_rejected += a->rejected();
+    }
   return s;
 }
 

@@ -17,7 +17,17 @@ int main(int argc, char** argv) {
   CLI::App app{"saw-gateway: maps components exported through the shared-memory bridge to DDS"};
   saw::gateway::GatewayConfig config;
   double duration = 0, wait = 5;
-  app.add_option("--attach", config.attach, "exported component to map (repeatable)")->required();
+  std::vector<std::string> imports;
+  std::string ros_namespace;
+  saw::gateway::ImportConfig defaults;
+  app.add_option("--attach", config.attach, "exported component to map to DDS (repeatable)");
+  app.add_option("--import", imports,
+                 "foreign CRTK arm to present through the bridge: NAME or NAME=ARM (topics rt/[NS/]ARM/...; "
+                 "repeatable)");
+  app.add_option("--ros-namespace", ros_namespace, "namespace of the imported arms' topics");
+  app.add_option("--clutch-topic", defaults.clutch_topic, "sensor_msgs/Joy topic of the clutch (\"\": none)");
+  app.add_option("--operator-present-topic", defaults.operator_present_topic,
+                 "sensor_msgs/Joy topic of the operator-present sensor (\"\": none)");
   app.add_option("--domain", config.dds.domain, "DDS domain id")->check(CLI::Range(0, 232));
   app.add_option("--interface", config.dds.interfaces,
                  "IPv4 address of a network interface DDS may use (repeatable; default loopback only)");
@@ -29,6 +39,18 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
+  if (config.attach.empty() && imports.empty()) {
+    std::fprintf(stderr, "saw-gateway: nothing to do: give --attach and/or --import\n");
+    return 2;
+  }
+  for (const auto& i : imports) {
+    saw::gateway::ImportConfig c = defaults;
+    const auto eq = i.find('=');
+    c.component = i.substr(0, eq);
+    c.arm = eq == std::string::npos ? c.component : i.substr(eq + 1);
+    c.ros_namespace = ros_namespace;
+    config.imports.push_back(c);
+  }
   config.attach_timeout = static_cast<saw::TimeNs>(wait * 1e9);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -36,20 +58,20 @@ int main(int argc, char** argv) {
     saw::gateway::Gateway gateway(config);
     std::printf("saw-gateway %s: %zu endpoints\n", gateway.name().c_str(), gateway.endpoints().size());
     for (const auto& e : gateway.endpoints())
-      std::printf("  %-14s %-18s %-15s %-40s %s\n", e.kind.c_str(), (e.component + "." + e.name).c_str(),
-                  e.topic.empty() ? "(not mapped)" : "", e.saw_type.c_str(), e.topic.c_str());
+      std::printf("  %-14s %-26s %-24s %s\n", e.kind.c_str(), (e.component + "." + e.name).c_str(),
+                  e.saw_type.c_str(), e.topic.empty() ? "(not mapped)" : e.topic.c_str());
     std::fflush(stdout);
     const auto started = std::chrono::steady_clock::now();
     while (!stop_requested.load() && (duration <= 0 || std::chrono::steady_clock::now() - started <
                                                            std::chrono::duration<double>(duration)))
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     const auto s = gateway.stats();
+    const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf(
-        "saw-gateway: published %llu state samples, %llu events; %llu commands in, %llu rejected; %llu "
-        "reconnects\n",
-        static_cast<unsigned long long>(s.published), static_cast<unsigned long long>(s.events),
-        static_cast<unsigned long long>(s.commands), static_cast<unsigned long long>(s.rejected),
-        static_cast<unsigned long long>(s.reconnects));
+        "saw-gateway: published %llu state samples, %llu events; %llu commands in, %llu rejected; "
+        "%llu reconnects; imported %llu samples, %llu rejected\n",
+        u(s.published), u(s.events), u(s.commands), u(s.rejected), u(s.reconnects), u(s.imported),
+        u(s.imported_rejected));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "saw-gateway: %s\n", e.what());
     return 1;

@@ -61,6 +61,7 @@ template <class Rt, class Msg, class PubSub, class Conv>
 class Typed final : public Mapping {
  public:
   std::string_view saw_type() const override { return type_info_of<Rt>().name; }
+  std::uint32_t saw_version() const override { return type_info_of<Rt>().version; }
   std::string_view dds_type() const override { return name_; }
   fdds::TypeSupport type_support() const override { return fdds::TypeSupport(new PubSub()); }
   std::size_t size() const override { return sizeof(Rt); }
@@ -271,6 +272,7 @@ struct DataConv {
 class EmptyMapping final : public Mapping {
  public:
   std::string_view saw_type() const override { return ""; }
+  std::uint32_t saw_version() const override { return 0; }
   std::string_view dds_type() const override { return name_; }
   fdds::TypeSupport type_support() const override {
     return fdds::TypeSupport(new std_msgs::msg::EmptyPubSubType());

@@ -44,6 +44,10 @@ class Component {
 
   // Time of the current cycle: real monotonic time, or the simulated clock in stepped mode.
   TimeNs now() const noexcept { return cycle_time_; }
+  // From run(): the time this cycle's state row stands for, when it is not the cycle's — a
+  // component that republishes measurements taken elsewhere stamps them with their arrival, so
+  // that readers see them age when they stop coming. At most now().
+  void stamp_row(TimeNs t) noexcept { row_time_ = t < cycle_time_ ? t : cycle_time_; }
 
   // Called by the manager outside any RT path.
   virtual void startup() {}
@@ -83,6 +87,7 @@ class Component {
   std::vector<Mailbox*> inbound_;
   std::vector<CycleHook*> hooks_;
   TimeNs cycle_time_ = 0;
+  TimeNs row_time_ = 0;
 };
 
 }  // namespace saw

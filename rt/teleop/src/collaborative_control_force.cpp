@@ -68,7 +68,9 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
     auto& r = require(iface);
     r.add_function("measured_cp", *cp);
     r.add_function("measured_cv", *cv);
-    r.add_function("servo_cf", *cf);
+    // A master may be read-only (a da Vinci master through the dVRK's research API): then the
+    // operator feels no force, and the law still drives the slave.
+    r.add_function("servo_cf", *cf, std::string_view(iface) == "master" ? Need::optional : Need::required);
   }
   required("master")->add_event_handler_write<ButtonEvent>(
       "clutch", [this](const ButtonEvent& b) { clutched_ = b.pressed; }, Need::optional);
@@ -148,7 +150,7 @@ void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master,
                                             const Eigen::Vector3d& f_slave) noexcept {
   Wrench w;
   w.force = to_vec3(f_master);
-  if (master_cf_(w) != Status::ok) ++refused_sends_;
+  if (master_cf_.is_bound() && master_cf_(w) != Status::ok) ++refused_sends_;
   w.force = to_vec3(f_slave);
   if (slave_cf_(w) != Status::ok) ++refused_sends_;
   master_force_ = to_vec3(f_master);

@@ -13,8 +13,19 @@
 
 namespace saw::gateway {
 
+// A foreign CRTK arm (a dVRK master published by the dVRK's ROS 2 stack) to present through
+// the bridge as component `component`, provided interface "arm", read-only.
+struct ImportConfig {
+  std::string component;      // its name on this host, e.g. "MTML"
+  std::string ros_namespace;  // "" or e.g. "dvrk": topics rt/<ns>/<arm>/measured_cp, ...
+  std::string arm;            // e.g. "MTML"
+  std::string clutch_topic = "rt/footpedals/clutch";                     // sensor_msgs/Joy; "" for none
+  std::string operator_present_topic = "rt/footpedals/operatorpresent";  // sensor_msgs/Joy; "" for none
+};
+
 struct GatewayConfig {
   std::vector<std::string> attach;  // exported component names ("/saw.<name>" segments)
+  std::vector<ImportConfig> imports;
   ParticipantConfig dds;
   unsigned decimation = 1;    // publish state every Nth row of the server's task
   TimeNs attach_timeout = 0;  // wait this long for a component to be exported (0: fail at once)
@@ -32,9 +43,12 @@ struct GatewayStats {
   std::uint64_t commands = 0;   // commands from DDS passed to the bridge
   std::uint64_t rejected = 0;   // commands from DDS refused (invalid value, full ring, server gone)
   std::uint64_t reconnects = 0;
+  std::uint64_t imported = 0;           // samples taken from imported arms' topics
+  std::uint64_t imported_rejected = 0;  // of which not valid values (dropped, counted)
 };
 
 class Attachment;
+class ImportedArm;
 
 // An ordinary (non-RT) process's object. Per attached component, one thread: it sleeps on the
 // bridge's update bell, publishes the read commands' values (best effort, keep last 1) every
@@ -61,6 +75,8 @@ class Gateway {
   std::unique_ptr<Dds> dds_;
   std::vector<EndpointInfo> endpoints_;
   std::vector<std::unique_ptr<Attachment>> attachments_;
+  struct Imports;
+  std::unique_ptr<Imports> imports_;
   std::mutex manifest_mutex_;
 };
 

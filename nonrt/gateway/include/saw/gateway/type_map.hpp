@@ -22,6 +22,7 @@ class Mapping {
 
   virtual ~Mapping() = default;
   virtual std::string_view saw_type() const = 0;
+  virtual std::uint32_t saw_version() const = 0;  // the rt type's layout version
   virtual std::string_view dds_type()
       const = 0;  // the registered name, e.g. geometry_msgs::msg::dds_::PoseStamped_
   virtual eprosima::fastdds::dds::TypeSupport type_support() const = 0;
