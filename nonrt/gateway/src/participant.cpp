@@ -37,6 +37,10 @@ fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
   qos.transport().user_transports.push_back(udp);
   qos.transport().user_transports.push_back(
       std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>());
+  // Announce every 250 ms (default 3 s): a peer that missed our reply to its first announcement
+  // (a process restarting under the same participant index) finds us within that, not seconds later.
+  qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod =
+      eprosima::fastrtps::Duration_t(0, 250'000'000);
   const bool loopback_only = config.interfaces.size() == 1 && config.interfaces.front() == "127.0.0.1";
   if (loopback_only) {
     // Unicast discovery on loopback: our own metatraffic locator (its port is assigned from the

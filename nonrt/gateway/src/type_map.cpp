@@ -3,11 +3,14 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <iterator>
 #include <memory>
+#include <sstream>
 #include <vector>
 
 #include "crtk_msgs/msg/OperatingStatePubSubTypes.h"
@@ -50,6 +53,43 @@ bool get(const V& v, Vec3& a, std::string& why, const char* what) {
   why = std::string(what) + " is not finite";
   return false;
 }
+// Whitespace- or comma-separated numbers.
+std::vector<double> numbers(std::string_view t, std::string& why) {
+  std::vector<double> v;
+  std::string s(t);
+  for (char& c : s)
+    if (c == ',' || c == '[' || c == ']') c = ' ';
+  std::istringstream in(s);
+  std::string word;
+  while (in >> word) {
+    char* end = nullptr;
+    const double x = std::strtod(word.c_str(), &end);
+    if (end == word.c_str() || *end != '\0') {
+      why = "\"" + word + "\" is not a number";
+      return {};
+    }
+    v.push_back(x);
+  }
+  return v;
+}
+
+bool count_is(const std::vector<double>& v, std::initializer_list<std::size_t> ok, std::string& why) {
+  for (auto n : ok)
+    if (v.size() == n) return true;
+  if (why.empty()) {
+    why = "expected ";
+    for (auto n : ok) why += std::to_string(n) + (n == *std::prev(ok.end()) ? "" : " or ");
+    why += " numbers, got " + std::to_string(v.size());
+  }
+  return false;
+}
+
+std::string trimmed(std::string_view t) {
+  const auto b = t.find_first_not_of(" \t\n");
+  if (b == std::string_view::npos) return "";
+  return std::string(t.substr(b, t.find_last_not_of(" \t\n") - b + 1));
+}
+
 std::string text(const Vec3& v) {
   char b[96];
   std::snprintf(b, sizeof b, "[%.6g, %.6g, %.6g]", v[0], v[1], v[2]);
@@ -93,11 +133,31 @@ class Typed final : public Mapping {
 
   std::string to_text(const void* value) const override { return Conv::text(*static_cast<const Rt*>(value)); }
 
+  bool from_text(std::string_view text, void* value, std::string& why) const override {
+    Rt v{};
+    if (!Conv::parse(text, v, why)) return false;
+    // Through the message and back: the same validation as a sample arriving from DDS.
+    Msg m;
+    Conv::to_msg(v, m);
+    Rt checked{};
+    if (!Conv::from_msg(m, checked, why)) return false;
+    *static_cast<Rt*>(value) = checked;
+    return true;
+  }
+
  private:
   std::string name_ = PubSub().getName();
 };
 
 struct PoseConv {
+  static bool parse(std::string_view t, Pose& p, std::string& why) {
+    const auto v = numbers(t, why);
+    if (!count_is(v, {3, 7}, why)) return false;
+    p.position = {v[0], v[1], v[2]};
+    if (v.size() == 7) p.orientation = {v[3], v[4], v[5], v[6]};
+    return true;
+  }
+
   static void to_msg(const Pose& p, geometry_msgs::msg::PoseStamped& m) {
     put(p.position, m.pose().position());
     auto& q = m.pose().orientation();
@@ -126,6 +186,14 @@ struct PoseConv {
 };
 
 struct TwistConv {
+  static bool parse(std::string_view t, Twist& w, std::string& why) {
+    const auto v = numbers(t, why);
+    if (!count_is(v, {3, 6}, why)) return false;
+    w.linear = {v[0], v[1], v[2]};
+    if (v.size() == 6) w.angular = {v[3], v[4], v[5]};
+    return true;
+  }
+
   static void to_msg(const Twist& t, geometry_msgs::msg::TwistStamped& m) {
     put(t.linear, m.twist().linear());
     put(t.angular, m.twist().angular());
@@ -140,6 +208,14 @@ struct TwistConv {
 };
 
 struct WrenchConv {
+  static bool parse(std::string_view t, Wrench& w, std::string& why) {
+    const auto v = numbers(t, why);
+    if (!count_is(v, {3, 6}, why)) return false;
+    w.force = {v[0], v[1], v[2]};
+    if (v.size() == 6) w.torque = {v[3], v[4], v[5]};
+    return true;
+  }
+
   static void to_msg(const Wrench& w, geometry_msgs::msg::WrenchStamped& m) {
     put(w.force, m.wrench().force());
     put(w.torque, m.wrench().torque());
@@ -154,6 +230,13 @@ struct WrenchConv {
 };
 
 struct Vec3Conv {
+  static bool parse(std::string_view t, Vec3& a, std::string& why) {
+    const auto v = numbers(t, why);
+    if (!count_is(v, {3}, why)) return false;
+    a = {v[0], v[1], v[2]};
+    return true;
+  }
+
   static void to_msg(const Vec3& v, geometry_msgs::msg::Vector3Stamped& m) { put(v, m.vector()); }
   static bool from_msg(const geometry_msgs::msg::Vector3Stamped& m, Vec3& v, std::string& why) {
     return get(m.vector(), v, why, "vector");
@@ -162,6 +245,19 @@ struct Vec3Conv {
 };
 
 struct JointStateConv {
+  static bool parse(std::string_view t, JointState& j, std::string& why) {
+    const auto v = numbers(t, why);
+    if (!why.empty()) return false;
+    if (v.empty() || v.size() > JointState::max_joints) {
+      why = "1 to " + std::to_string(JointState::max_joints) + " joint positions, got " +
+            std::to_string(v.size());
+      return false;
+    }
+    j.size = static_cast<std::uint32_t>(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) j.position[i] = v[i];
+    return true;
+  }
+
   static void to_msg(const JointState& j, sensor_msgs::msg::JointState& m) {
     const auto n = std::min<std::size_t>(j.size, JointState::max_joints);
     m.position().assign(j.position.begin(), j.position.begin() + static_cast<std::ptrdiff_t>(n));
@@ -200,6 +296,12 @@ struct JointStateConv {
 };
 
 struct OperatingStateConv {
+  static bool parse(std::string_view t, OperatingState& s, std::string& why) {
+    crtk_msgs::msg::OperatingState m;
+    m.state(trimmed(t));
+    return from_msg(m, s, why);
+  }
+
   static void to_msg(const OperatingState& s, crtk_msgs::msg::OperatingState& m) {
     m.state(std::string(to_string(s.state)));
     m.is_homed(s.is_homed);
@@ -224,6 +326,12 @@ struct OperatingStateConv {
 };
 
 struct StateCommandConv {
+  static bool parse(std::string_view t, StateCommand& c, std::string& why) {
+    crtk_msgs::msg::StringStamped m;
+    m.string(trimmed(t));
+    return from_msg(m, c, why);
+  }
+
   static void to_msg(const StateCommand& c, crtk_msgs::msg::StringStamped& m) {
     m.string(std::string(to_string(c)));
   }
@@ -242,6 +350,19 @@ struct StateCommandConv {
 
 // Buttons as the dVRK publishes them: sensor_msgs/Joy with buttons[0] = 1 pressed, 0 released.
 struct ButtonConv {
+  static bool parse(std::string_view t, ButtonEvent& b, std::string& why) {
+    const auto w = trimmed(t);
+    if (w == "pressed" || w == "1" || w == "true")
+      b.pressed = true;
+    else if (w == "released" || w == "0" || w == "false")
+      b.pressed = false;
+    else {
+      why = "\"" + w + "\": pressed or released";
+      return false;
+    }
+    return true;
+  }
+
   static void to_msg(const ButtonEvent& b, sensor_msgs::msg::Joy& m) { m.buttons({b.pressed ? 1 : 0}); }
   static bool from_msg(const sensor_msgs::msg::Joy& m, ButtonEvent& b, std::string& why) {
     if (m.buttons().empty()) {
@@ -267,6 +388,28 @@ struct DataConv {
     return true;
   }
   static std::string text(const T& v) { return std::to_string(v); }
+  static bool parse(std::string_view t, T& v, std::string& why) {
+    const auto w = trimmed(t);
+    if constexpr (std::is_same_v<T, bool>) {
+      if (w != "true" && w != "false") {
+        why = "\"" + w + "\": true or false";
+        return false;
+      }
+      v = w == "true";
+      return true;
+    } else {
+      const auto n = numbers(w, why);
+      if (!count_is(n, {1}, why)) return false;
+      if constexpr (std::is_integral_v<T>) {
+        if (n[0] != std::floor(n[0]) || std::abs(n[0]) > 9.0e15) {
+          why = "\"" + w + "\" is not an integer";
+          return false;
+        }
+      }
+      v = static_cast<T>(n[0]);
+      return true;
+    }
+  }
 };
 
 class EmptyMapping final : public Mapping {
@@ -291,6 +434,11 @@ class EmptyMapping final : public Mapping {
     }
   }
   std::string to_text(const void*) const override { return "(void)"; }
+  bool from_text(std::string_view text, void*, std::string& why) const override {
+    if (trimmed(text).empty()) return true;
+    why = "a void command takes no value";
+    return false;
+  }
 
  private:
   std::string name_ = std_msgs::msg::EmptyPubSubType().getName();

@@ -35,6 +35,9 @@ class Mapping {
   virtual Take take(eprosima::fastdds::dds::DataReader& r, void* value, std::string& why) const = 0;
   // The rt value as one line of text (sawctl echo).
   virtual std::string to_text(const void* value) const = 0;
+  // Parses text (numbers separated by spaces or commas, or a word for states and commands) into
+  // a valid rt value, validated as a sample from DDS would be (sawctl call).
+  virtual bool from_text(std::string_view text, void* value, std::string& why) const = 0;
   virtual std::size_t size() const = 0;  // of the rt type
 };
 
