@@ -88,6 +88,8 @@ std::unique_ptr<Component> make_teleop(FactoryContext& ctx) {
       static_cast<double>(pr.get_or<std::chrono::nanoseconds>("slave", 0ns).count()) * 1e-9;
   c.stale_timeout =
       static_cast<double>(p.get_or<std::chrono::nanoseconds>("stale_timeout", 10ms).count()) * 1e-9;
+  c.startup_timeout =
+      static_cast<double>(p.get_or<std::chrono::nanoseconds>("startup_timeout", 0ns).count()) * 1e-9;
   c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.align = p.get_or<bool>("align", false);
   c.slave_offset = p.get_or<Vec3>("slave_offset", {0, 0, 0});

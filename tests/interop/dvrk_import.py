@@ -88,6 +88,7 @@ components:
       gains: {{master: 300, slave: 300}}
       force_limits: {{master: 3.0, slave: 3.0}}
       stale_timeout: 50ms
+      startup_timeout: 10s  # the imported stream may take a moment to flow (DDS discovery)
 connections:
   - {{client: teleop{tag}, required: master, server: {component}, provided: arm}}
   - {{client: teleop{tag}, required: slave, server: slave{tag}, provided: arm}}

@@ -287,4 +287,30 @@ TEST(CollaborativeControlForce, WaitsForInputsAtStartUpThenFaultsIfTheyNeverCome
   EXPECT_EQ(rig.teleop.fault_reason(), saw::teleop::FaultReason::master_missing);
 }
 
+TEST(CollaborativeControlForce, AStartupTimeoutWaitsLongerForARemoteMasterThenFollowsIt) {
+  TeleopConfig c = basic();
+  c.stale_timeout = 0.005;
+  c.startup_timeout = 0.050;  // a master across DDS may take a while to start streaming
+  Rig rig(c);
+  rig.step(40, false);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled)
+      << "still within startup_timeout";
+  rig.step(5);  // the master starts publishing: teleoperation runs, no fault
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  rig.step(10, false);  // and once seen, its silence is a fault after stale_timeout, not startup_timeout
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
+  EXPECT_EQ(rig.teleop.fault_reason(), saw::teleop::FaultReason::master_stale);
+}
+
+TEST(CollaborativeControlForce, AStartupTimeoutEndsInAFaultIfTheMasterNeverComes) {
+  TeleopConfig c = basic();
+  c.stale_timeout = 0.005;
+  c.startup_timeout = 0.020;
+  Rig rig(c);
+  rig.step(15, false);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  rig.step(10, false);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
+}
+
 }  // namespace

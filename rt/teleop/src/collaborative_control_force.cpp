@@ -170,9 +170,9 @@ void CollaborativeControlForce::run() {
   if (start_time_ < 0) start_time_ = now();
   if (!inputs_ok) {
     // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
-    // At start-up, inputs may simply not be published yet: wait up to stale_timeout for them.
-    const bool starting =
-        !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(config_.stale_timeout * 1e9);
+    // At start-up, inputs may simply not be published yet: wait up to startup_timeout for them.
+    const double grace = config_.startup_timeout > 0 ? config_.startup_timeout : config_.stale_timeout;
+    const bool starting = !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(grace * 1e9);
     if (state_.state == OperatingStateValue::enabled && !starting)
       set_operating_state(OperatingStateValue::fault);
     send_forces(zero, zero);

@@ -29,6 +29,9 @@ struct TeleopConfig {
   OffsetLimits offset_limits;
   Prediction prediction;
   double stale_timeout = 0.01;  // s: an input older than this is a fault
+  // s: how long a device that has not published yet (a remote master still coming up) is
+  // waited for after start before it is a fault; 0: stale_timeout.
+  double startup_timeout = 0.0;
   // Aligned mode: after enabling, the slave offset travels (jerk-limited) from the value that
   // cancels the error to `slave_offset`, pulling the slave smoothly into the configured pose.
   bool align = false;
