@@ -34,8 +34,17 @@ std::string kind_name(CommandKind k) {
   return "?";
 }
 
-std::string type_label(const TypeInfo& t) {
-  return t.size == 0 ? "" : std::string(t.name) + " v" + std::to_string(t.version);
+EndpointInfo describe(const std::string& component, const std::string& interface, const std::string& name,
+                      const Signature& sig) {
+  EndpointInfo e;
+  e.component = component;
+  e.interface_name = interface;
+  e.name = name;
+  e.kind = kind_name(sig.kind);
+  e.saw_type = sig.arg.name;
+  e.saw_size = static_cast<std::uint32_t>(sig.arg.size);
+  e.saw_version = sig.arg.version;
+  return e;
 }
 
 std::unique_ptr<Component> resolve(const std::string& name, TimeNs timeout) {
@@ -72,7 +81,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
   for (const auto& e : p.events()) {
     const Signature& sig = e->signature();
     const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : find_mapping(sig.arg.name);
-    EndpointInfo info{name_, p.name(), e->name(), kind_name(sig.kind), type_label(sig.arg), "", ""};
+    EndpointInfo info = describe(name_, p.name(), e->name(), sig);
     auto out = std::make_unique<EventOut>(EventOut{this, m, nullptr});
     if (m != nullptr) {
       info.dds_type = m->dds_type();
@@ -97,9 +106,8 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
   proxy_->remote_events()->set_consumer_attached();
   for (const auto& c : p.commands()) {
     const Signature& sig = c->signature;
-    EndpointInfo info{name_, p.name(), c->name, kind_name(sig.kind), type_label(sig.arg), "", ""};
-    if (sig.kind == CommandKind::qualified_read) {
-      info.saw_type += " -> " + type_label(sig.result);  // request/reply topics: not mapped yet
+    EndpointInfo info = describe(name_, p.name(), c->name, sig);
+    if (sig.kind == CommandKind::qualified_read) {  // request/reply topics: not mapped yet
       endpoints_.push_back(std::move(info));
       continue;
     }

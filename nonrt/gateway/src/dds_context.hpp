@@ -24,6 +24,7 @@ struct DdsContext {
   fdds::DomainParticipant* participant = nullptr;
   fdds::Publisher* publisher = nullptr;
   fdds::Subscriber* subscriber = nullptr;
+  fdds::Topic* manifest_topic = nullptr;  // rt/saw/manifest, the registry
 
   // One Topic per name; a name already used with another type is an error naming both.
   fdds::Topic* topic(const std::string& name, const Mapping& m) {

@@ -4,6 +4,7 @@
 
 #include "attachment.hpp"
 #include "imported_arm.hpp"
+#include "mirror.hpp"
 #include "saw/bridge/exporter.hpp"
 #include "saw/manager.hpp"
 #include "saw_msgs/msg/ManifestPubSubTypes.h"
@@ -22,6 +23,7 @@ std::string host_name() {
 
 struct Gateway::Imports {
   std::vector<std::unique_ptr<ImportedArm>> arms;
+  std::vector<std::unique_ptr<Mirror>> mirrors;
   std::vector<std::unique_ptr<bridge::Exporter>> exporters;
   Manager manager{ManagerOptions{.lock_memory = false, .hold_dma_latency = false}};
 };
@@ -43,6 +45,7 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
     manifest_type.register_type(ctx.participant);
     fdds::Topic* topic = ctx.participant->create_topic("rt/saw/manifest", manifest_type.get_type_name(),
                                                        fdds::TOPIC_QOS_DEFAULT);
+    ctx.manifest_topic = topic;
     dds_->manifest = ctx.publisher->create_datawriter(topic, DdsContext::writer_qos(Flow::registry));
     if (ctx.publisher == nullptr || ctx.subscriber == nullptr || dds_->manifest == nullptr)
       throw std::runtime_error(
@@ -61,7 +64,18 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
       const auto& e = imports_->arms.back()->endpoints();
       endpoints_.insert(endpoints_.end(), e.begin(), e.end());
     }
-    if (!config_.imports.empty()) imports_->manager.start();
+    for (const auto& name : config_.mirrors) {
+      auto remote = find_remote(ctx, name, config_.name, config_.attach_timeout);
+      imports_->mirrors.push_back(std::make_unique<Mirror>(ctx, name, remote));
+      Mirror& m = *imports_->mirrors.back();
+      imports_->exporters.push_back(std::make_unique<bridge::Exporter>(m, m.interface_name()));
+      imports_->manager.add(m);
+      for (auto& e : remote) {
+        e.kind = "mirror";  // served here through the bridge; the topics are the remote gateway's
+        endpoints_.push_back(std::move(e));
+      }
+    }
+    if (!config_.imports.empty() || !config_.mirrors.empty()) imports_->manager.start();
   } catch (...) {
     attachments_.clear();
     imports_.reset();
@@ -87,6 +101,8 @@ GatewayStats Gateway::stats() const {
       s.imported += a->samples();
       s.imported_rejected += a->rejected();
     }
+  if (imports_ != nullptr)
+    for (const auto& m : imports_->mirrors) s.mirrored += m->samples();
   return s;
 }
 
@@ -110,6 +126,8 @@ void Gateway::publish_manifest() {
     out.name(e.name);
     out.kind(e.kind);
     out.saw_type(e.saw_type);
+    out.saw_size(e.saw_size);
+    out.saw_version(e.saw_version);
     out.dds_type(e.dds_type);
     out.topic(e.topic);
     m.endpoints().push_back(std::move(out));

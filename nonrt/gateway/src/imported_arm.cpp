@@ -30,9 +30,17 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
 
 fdds::DataReader* ImportedArm::reader(const std::string& name, const std::string& topic, const Mapping& m,
                                       Flow f) {
-  endpoints_.push_back({this->name(), "arm", name, "import",
-                        std::string(m.saw_type()) + " v" + std::to_string(m.saw_version()),
-                        std::string(m.dds_type()), topic});
+  EndpointInfo e;
+  e.component = this->name();
+  e.interface_name = "arm";
+  e.name = name;
+  e.kind = "import";
+  e.saw_type = m.saw_type();
+  e.saw_size = static_cast<std::uint32_t>(m.size());
+  e.saw_version = m.saw_version();
+  e.dds_type = m.dds_type();
+  e.topic = topic;
+  endpoints_.push_back(std::move(e));
   // State streams: best effort matches both best-effort and reliable publishers (ROS 2's default).
   auto* r = dds_.subscriber->create_datareader(dds_.topic(topic, m), DdsContext::reader_qos(f));
   if (r == nullptr) throw std::runtime_error("import: could not subscribe to " + topic);

@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   app.add_option("--import", imports,
                  "foreign CRTK arm to present through the bridge: NAME or NAME=ARM (topics rt/[NS/]ARM/...; "
                  "repeatable)");
+  app.add_option("--mirror", config.mirrors,
+                 "component served by a gateway on another host, to present on this host (repeatable)");
   app.add_option("--ros-namespace", ros_namespace, "namespace of the imported arms' topics");
   app.add_option("--clutch-topic", defaults.clutch_topic, "sensor_msgs/Joy topic of the clutch (\"\": none)");
   app.add_option("--operator-present-topic", defaults.operator_present_topic,
@@ -39,8 +41,8 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
-  if (config.attach.empty() && imports.empty()) {
-    std::fprintf(stderr, "saw-gateway: nothing to do: give --attach and/or --import\n");
+  if (config.attach.empty() && imports.empty() && config.mirrors.empty()) {
+    std::fprintf(stderr, "saw-gateway: nothing to do: give --attach, --import or --mirror\n");
     return 2;
   }
   for (const auto& i : imports) {
@@ -59,7 +61,7 @@ int main(int argc, char** argv) {
     std::printf("saw-gateway %s: %zu endpoints\n", gateway.name().c_str(), gateway.endpoints().size());
     for (const auto& e : gateway.endpoints())
       std::printf("  %-14s %-26s %-24s %s\n", e.kind.c_str(), (e.component + "." + e.name).c_str(),
-                  e.saw_type.c_str(), e.topic.empty() ? "(not mapped)" : e.topic.c_str());
+                  e.label().c_str(), e.topic.empty() ? "(not mapped)" : e.topic.c_str());
     std::fflush(stdout);
     const auto started = std::chrono::steady_clock::now();
     while (!stop_requested.load() && (duration <= 0 || std::chrono::steady_clock::now() - started <
@@ -69,9 +71,9 @@ int main(int argc, char** argv) {
     const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf(
         "saw-gateway: published %llu state samples, %llu events; %llu commands in, %llu rejected; "
-        "%llu reconnects; imported %llu samples, %llu rejected\n",
+        "%llu reconnects; imported %llu samples, %llu rejected; mirrored %llu samples\n",
         u(s.published), u(s.events), u(s.commands), u(s.rejected), u(s.reconnects), u(s.imported),
-        u(s.imported_rejected));
+        u(s.imported_rejected), u(s.mirrored));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "saw-gateway: %s\n", e.what());
     return 1;

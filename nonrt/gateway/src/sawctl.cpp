@@ -15,6 +15,10 @@ namespace {
 using namespace saw::gateway;
 using Clock = std::chrono::steady_clock;
 
+std::string label(const saw_msgs::msg::Endpoint& e) {
+  return e.saw_type().empty() ? "" : e.saw_type() + " v" + std::to_string(e.saw_version());
+}
+
 struct Session {
   explicit Session(const ParticipantConfig& c) {
     ctx.participant = make_participant(c);
@@ -78,7 +82,7 @@ int list(Session& s, double timeout) {
     std::printf("%s on %s (pid %d): %s\n", name.c_str(), m.host().c_str(), m.pid(), m.state().c_str());
     for (const auto& e : m.endpoints())
       std::printf("  %-14s %-28s %-26s %s\n", e.kind().c_str(), (e.component_name() + "." + e.name()).c_str(),
-                  e.saw_type().c_str(), e.topic().empty() ? "(not mapped)" : e.topic().c_str());
+                  label(e).c_str(), e.topic().empty() ? "(not mapped)" : e.topic().c_str());
   }
   return 0;
 }
@@ -132,7 +136,7 @@ int call(Session& s, const std::string& topic, const std::vector<std::string>& w
   for (const auto& w : words) text += (text.empty() ? "" : " ") + w;
   std::vector<std::byte> value(std::max<std::size_t>(m->size(), 1));
   if (!m->from_text(text, value.data(), why)) {
-    std::fprintf(stderr, "sawctl: %s takes %s: %s\n", topic.c_str(), e->saw_type().c_str(), why.c_str());
+    std::fprintf(stderr, "sawctl: %s takes %s: %s\n", topic.c_str(), label(*e).c_str(), why.c_str());
     return 2;
   }
   auto* w = s.ctx.publisher->create_datawriter(s.ctx.topic(topic, *m), DdsContext::writer_qos(Flow::command));

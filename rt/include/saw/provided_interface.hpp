@@ -52,6 +52,8 @@ class EventBase {
   const Signature& signature() const noexcept { return signature_; }
   void add_observer(Observer o) { observers_.push_back(o); }
   std::size_t observer_count() const noexcept { return observers_.size(); }
+  // For events built from a description (add_event_remote): emits `arg`, signature().arg.size bytes.
+  Status emit_described(const void* arg) noexcept { return emit_erased(arg, signature_.arg.size); }
   // Deliveries refused because an observer's mailbox was full.
   std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
 

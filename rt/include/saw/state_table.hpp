@@ -46,6 +46,9 @@ class StateTable {
   StateColumn<T> add_column(std::string name, const T* source) {
     return {this, add_column_erased(std::move(name), type_info_of<T>(), source)};
   }
+  // For components built from a description (a gateway's mirror of a remote component): a
+  // column of a type known at run time; `source` holds type.size bytes.
+  std::uint32_t add_column_erased(std::string name, TypeInfo type, const void* source);
   // Allocates the rows; no column may be added after this.
   void finalize();
   bool finalized() const noexcept { return rows_ != nullptr; }
@@ -104,7 +107,6 @@ class StateTable {
   // Row word layout: [seq, tick, time, column words...].
   static constexpr std::size_t seq_word = 0, tick_word = 1, time_word = 2, header_words = 3;
 
-  std::uint32_t add_column_erased(std::string name, TypeInfo type, const void* source);
   Status read_row(std::uint32_t column, std::uint64_t tick, void* out, RowStamp* stamp) const noexcept;
   // Time of row `tick`, or -1 if that row is gone or being written.
   bool row_time(std::uint64_t tick, TimeNs& time) const noexcept;

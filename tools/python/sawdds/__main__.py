@@ -14,7 +14,7 @@ def main(argv):
         for name, m in sorted(c.manifests().items()):
             print(f"{name} on {m.host} (pid {m.pid}): {m.state}")
             for e in m.endpoints:
-                print(f"  {e.kind:15} {e.component_name}.{e.name:20} {e.saw_type:28} {e.topic or '(not mapped)'}")
+                print(f"  {e.kind:15} {e.component_name}.{e.name:20} {(e.saw_type + ' v' + str(e.saw_version)) if e.saw_type else '':28} {e.topic or '(not mapped)'}")
     elif argv[0] == "echo":
         for _ in range(int(argv[2]) if len(argv) > 2 else 1):
             print(c.read(argv[1]))

@@ -164,6 +164,8 @@ class Endpoint(IdlStruct, typename="saw_msgs::msg::dds_::Endpoint_"):
     name: str = ""
     kind: str = ""
     saw_type: str = ""
+    saw_size: t.uint32 = 0
+    saw_version: t.uint32 = 0
     dds_type: str = ""
     topic: str = ""
 

@@ -26,6 +26,9 @@ struct ImportConfig {
 struct GatewayConfig {
   std::vector<std::string> attach;  // exported component names ("/saw.<name>" segments)
   std::vector<ImportConfig> imports;
+  // Components served by gateways on other hosts, to present on this host (one connect(),
+  // three distances): each becomes a local component exported through this host's bridge.
+  std::vector<std::string> mirrors;
   ParticipantConfig dds;
   unsigned decimation = 1;    // publish state every Nth row of the server's task
   TimeNs attach_timeout = 0;  // wait this long for a component to be exported (0: fail at once)
@@ -34,7 +37,13 @@ struct GatewayConfig {
 
 // One row of the manifest: how a command or event of an attached component is mapped.
 struct EndpointInfo {
-  std::string component, interface_name, name, kind, saw_type, dds_type, topic;
+  std::string component, interface_name, name, kind;
+  std::string saw_type;  // the value's rt type name ("" for none)
+  std::uint32_t saw_size = 0, saw_version = 0;
+  std::string dds_type, topic;  // "" when not mapped
+  std::string label() const {   // "Pose v1"
+    return saw_type.empty() ? "" : saw_type + " v" + std::to_string(saw_version);
+  }
 };
 
 struct GatewayStats {
@@ -45,6 +54,7 @@ struct GatewayStats {
   std::uint64_t reconnects = 0;
   std::uint64_t imported = 0;           // samples taken from imported arms' topics
   std::uint64_t imported_rejected = 0;  // of which not valid values (dropped, counted)
+  std::uint64_t mirrored = 0;           // state samples taken for mirrored components
 };
 
 class Attachment;

@@ -1,0 +1,112 @@
+#include "mirror.hpp"
+
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <thread>
+
+#include "saw_msgs/msg/ManifestPubSubTypes.h"
+
+namespace saw::gateway {
+
+TypeInfo Mirror::type(const EndpointInfo& e) {
+  if (e.saw_size == 0) return {};
+  type_names_.push_back(e.saw_type);
+  return {type_names_.back(), e.saw_size, e.saw_version};
+}
+
+Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote)
+    : Task(component, TaskConfig::periodic(std::chrono::milliseconds(1), 0)), dds_(dds) {
+  if (remote.empty()) throw std::runtime_error("mirror " + component + ": the remote manifest lists nothing");
+  interface_ = remote.front().interface_name;
+  auto& p = provide(interface_);
+  for (const auto& e : remote) {
+    if (e.interface_name != interface_ || e.topic.empty())
+      continue;  // one interface per segment; mapped only
+    const Mapping* m = find_mapping_by_dds(e.dds_type);
+    if (m == nullptr || (e.saw_size != 0 && m->size() != e.saw_size)) continue;
+    const TypeInfo t = type(e);
+    if (e.kind == "read") {
+      auto* r =
+          dds_.subscriber->create_datareader(dds_.topic(e.topic, *m), DdsContext::reader_qos(Flow::state));
+      states_.push_back({m, r, std::make_unique<std::byte[]>(m->size())});
+      const auto column = state_table().add_column_erased(e.name, t, states_.back().value.get());
+      Command c;
+      c.name = e.name;
+      c.signature = {CommandKind::read, t};
+      c.table = &state_table();
+      c.column = column;
+      c.read = [table = &state_table(), column](const void*, void* out) {
+        return table->read_latest_erased(column, out, nullptr);
+      };
+      p.add_command(std::move(c));
+    } else if (e.kind == "write_event" || e.kind == "void_event") {
+      auto* r =
+          dds_.subscriber->create_datareader(dds_.topic(e.topic, *m), DdsContext::reader_qos(Flow::event));
+      EventBase& ev = p.add_event_remote(
+          e.name, {e.kind == "write_event" ? CommandKind::write_event : CommandKind::void_event, t});
+      events_.push_back({m, r, std::make_unique<std::byte[]>(std::max<std::size_t>(m->size(), 1)), &ev});
+    } else if (e.kind == "write" || e.kind == "void") {
+      auto* w =
+          dds_.publisher->create_datawriter(dds_.topic(e.topic, *m), DdsContext::writer_qos(Flow::command));
+      outs_.push_back(std::make_unique<Out>(Out{m, w, component}));
+      Command c;
+      c.name = e.name;
+      c.signature = {e.kind == "write" ? CommandKind::write : CommandKind::void_command, t};
+      c.execute = [o = outs_.back().get()](const void* arg) {
+        o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()), o->frame);
+      };
+      p.add_command(std::move(c));
+    }
+  }
+}
+
+void Mirror::run() {
+  std::string why;
+  for (auto& s : states_) {
+    bool got = false;
+    for (auto t = s.mapping->take(*s.reader, s.value.get(), why); t != Mapping::Take::none;
+         t = s.mapping->take(*s.reader, s.value.get(), why))
+      got = got || t == Mapping::Take::ok;
+    if (got) {
+      arrival_ = now();
+      samples_.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+  for (auto& e : events_)
+    for (auto t = e.mapping->take(*e.reader, e.value.get(), why); t != Mapping::Take::none;
+         t = e.mapping->take(*e.reader, e.value.get(), why))
+      if (t == Mapping::Take::ok) (void)e.event->emit_described(e.value.get());
+  stamp_row(arrival_);
+}
+
+std::vector<EndpointInfo> find_remote(DdsContext& dds, const std::string& component, const std::string& self,
+                                      TimeNs timeout) {
+  auto* reader =
+      dds.subscriber->create_datareader(dds.manifest_topic, DdsContext::reader_qos(Flow::registry));
+  const TimeNs deadline = monotonic_now() + timeout;
+  std::vector<EndpointInfo> found;
+  while (found.empty()) {
+    saw_msgs::msg::Manifest m;
+    fdds::SampleInfo info;
+    while (reader->take_next_sample(&m, &info) == ReturnCode_t::RETCODE_OK) {
+      if (!info.valid_data || m.gateway() == self || m.state() != "ENABLED") continue;
+      std::vector<EndpointInfo> mine;
+      for (const auto& e : m.endpoints())
+        if (e.component_name() == component && !e.topic().empty() && e.kind() != "import" &&
+            e.kind() != "mirror")
+          mine.push_back({e.component_name(), e.interface_name(), e.name(), e.kind(), e.saw_type(),
+                          e.saw_size(), e.saw_version(), e.dds_type(), e.topic()});
+      if (!mine.empty()) found = std::move(mine);
+    }
+    if (!found.empty()) break;
+    if (monotonic_now() >= deadline) {
+      dds.subscriber->delete_datareader(reader);
+      throw std::runtime_error("mirror " + component + ": no other gateway serves it (waited " +
+                               std::to_string(timeout / 1'000'000) + " ms)");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  dds.subscriber->delete_datareader(reader);
+  return found;
+}
+
+}  // namespace saw::gateway

@@ -1,0 +1,56 @@
+// Mirror: a component served by a gateway on another host, rebuilt here from its manifest (internal).
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dds_context.hpp"
+#include "saw/gateway/gateway.hpp"
+#include "saw/task.hpp"
+
+namespace saw::gateway {
+
+// The remote component's mapped interface, as a local component that this host's bridge exports
+// under the same name: `connect()` from an RT process here reaches it exactly as a local one.
+// Reads are state columns fed by the remote topics; the row is stamped with the newest
+// sample's arrival, so a stream that stops ages (a client's stale check sees the remote host
+// die). Write and void commands, run in this task's thread, are published to the remote
+// gateway; remote events are emitted here. A 1 ms task of normal priority.
+class Mirror : public Task {
+ public:
+  Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote);
+  void run() override;
+  const std::string& interface_name() const noexcept { return interface_; }
+  std::uint64_t samples() const noexcept { return samples_.load(std::memory_order_relaxed); }
+
+ private:
+  struct Stream {
+    const Mapping* mapping;
+    fdds::DataReader* reader;
+    std::unique_ptr<std::byte[]> value;
+    EventBase* event = nullptr;  // for events; state columns read `value`
+  };
+  struct Out {
+    const Mapping* mapping;
+    fdds::DataWriter* writer;
+    std::string frame;
+  };
+  TypeInfo type(const EndpointInfo& e);
+
+  DdsContext& dds_;
+  std::string interface_;
+  std::deque<std::string> type_names_;  // TypeInfo points into these
+  std::vector<Stream> states_, events_;
+  std::vector<std::unique_ptr<Out>> outs_;
+  TimeNs arrival_ = 0;
+  std::atomic<std::uint64_t> samples_{0};
+};
+
+// The endpoints of `component` in a manifest of another gateway (not `self`), waiting up to
+// `timeout`; throws naming what is missing.
+std::vector<EndpointInfo> find_remote(DdsContext& dds, const std::string& component, const std::string& self,
+                                      TimeNs timeout);
+
+}  // namespace saw::gateway
