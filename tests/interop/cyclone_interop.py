@@ -127,6 +127,9 @@ exports:
         rejected = [l for l in out.splitlines() if "rejected" in l]
         check(bool(rejected) and " 1 rejected" in rejected[-1], "the new gateway counted its refused command")
         os.unlink(f.name)
+        # kill -9 leaves the RT process's segment behind (a new server would take it over).
+        if os.path.exists(f"/dev/shm/saw.{name}"):
+            os.unlink(f"/dev/shm/saw.{name}")
     return 1 if failures else 0
 
 

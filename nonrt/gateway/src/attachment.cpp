@@ -1,11 +1,16 @@
 #include "attachment.hpp"
 
 #include <chrono>
+#include <cstring>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <thread>
 
 #include "crtk_msgs/msg/OperatingState.h"
 #include "crtk_msgs/msg/StringStamped.h"
 #include "saw/crtk.hpp"
+#include "saw_msgs/msg/QueryPubSubTypes.h"
+#include "saw_msgs/msg/QueryReplyPubSubTypes.h"
 
 namespace saw::gateway {
 
@@ -107,7 +112,25 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
   for (const auto& c : p.commands()) {
     const Signature& sig = c->signature;
     EndpointInfo info = describe(name_, p.name(), c->name, sig);
-    if (sig.kind == CommandKind::qualified_read) {  // request/reply topics: not mapped yet
+    if (sig.kind == CommandKind::qualified_read) {
+      if (query_component_ == nullptr) query_component_ = resolve(component, timeout);
+      const Command* q = query_component_->provided_interfaces().front()->find_command(c->name);
+      info.dds_type = "saw_msgs::msg::dds_::Query_";
+      info.topic = "rq/" + name_ + "/" + c->name + "Request";
+      fdds::TypeSupport rq(new saw_msgs::msg::QueryPubSubType()),
+          rr(new saw_msgs::msg::QueryReplyPubSubType());
+      rq.register_type(dds_.participant);
+      rr.register_type(dds_.participant);
+      auto* req_topic =
+          dds_.participant->create_topic(info.topic, rq.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+      auto* rep_topic = dds_.participant->create_topic("rr/" + name_ + "/" + c->name + "Reply",
+                                                       rr.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+      if (q == nullptr || req_topic == nullptr || rep_topic == nullptr)
+        throw std::runtime_error("attach " + name_ + ": could not map the qualified read " + c->name);
+      queries_.push_back(
+          {q, dds_.subscriber->create_datareader(req_topic, DdsContext::reader_qos(Flow::command)),
+           dds_.publisher->create_datawriter(rep_topic, DdsContext::writer_qos(Flow::command)), sig.arg.size,
+           sig.result.size});
       endpoints_.push_back(std::move(info));
       continue;
     }
@@ -138,11 +161,53 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
 
 Attachment::~Attachment() {
   stop_.store(true, std::memory_order_release);
+  if (query_stop_ != nullptr) query_stop_->set_trigger_value(true);
+  if (query_thread_.joinable()) query_thread_.join();
   if (thread_.joinable()) thread_.join();
 }
 
 void Attachment::start() {
   thread_ = std::thread([this] { run(); });
+  if (!queries_.empty()) {
+    query_stop_ = std::make_unique<fdds::GuardCondition>();
+    query_thread_ = std::thread([this] { serve_queries(); });
+  }
+}
+
+void Attachment::serve_queries() {
+  fdds::WaitSet waitset;
+  waitset.attach_condition(*query_stop_);
+  for (auto& q : queries_) {
+    q.requests->get_statuscondition().set_enabled_statuses(fdds::StatusMask::data_available());
+    waitset.attach_condition(q.requests->get_statuscondition());
+  }
+  saw_msgs::msg::Query request;
+  saw_msgs::msg::QueryReply reply;
+  fdds::SampleInfo info;
+  alignas(16) std::byte arg[256], result[256];
+  while (!stop_.load(std::memory_order_acquire)) {
+    for (auto& q : queries_) {
+      while (q.requests->take_next_sample(&request, &info) == ReturnCode_t::RETCODE_OK) {
+        if (!info.valid_data) continue;
+        reply.client(request.client());
+        reply.number(request.number());
+        Status st = Status::invalid;  // a qualifier of the wrong size never reaches the bridge
+        if (request.data().size() == q.arg_size) {
+          std::memcpy(arg, request.data().data(), q.arg_size);
+          st = q.command->read(arg, result);
+        }
+        reply.status(static_cast<std::int32_t>(st));
+        const auto* bytes = reinterpret_cast<const std::uint8_t*>(result);
+        reply.data().assign(bytes, bytes + (st == Status::ok ? q.result_size : 0));
+        q.replies->write(&reply);
+        queries_served_.fetch_add(1, std::memory_order_relaxed);
+      }
+    }
+    fdds::ConditionSeq active;
+    waitset.wait(active, eprosima::fastrtps::Duration_t(0, 100'000'000));
+  }
+  for (auto& q : queries_) waitset.detach_condition(q.requests->get_statuscondition());
+  waitset.detach_condition(*query_stop_);
 }
 
 void Attachment::add_stats(GatewayStats& s) const {
@@ -151,6 +216,7 @@ void Attachment::add_stats(GatewayStats& s) const {
   s.commands += commands_in_.load(std::memory_order_relaxed);
   s.rejected += rejected_.load(std::memory_order_relaxed);
   s.reconnects += proxy_->reconnects();
+  s.queries += queries_served_.load(std::memory_order_relaxed);
 }
 
 void Attachment::reject(const std::string& command, const std::string& why) {

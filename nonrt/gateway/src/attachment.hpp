@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <fastdds/dds/core/condition/GuardCondition.hpp>
 #include <functional>
 #include <memory>
 #include <string>
@@ -40,6 +41,12 @@ class Attachment {
     const Mapping* mapping;
     fdds::DataWriter* writer;
   };
+  struct QueryIn {
+    const Command* command;  // of the query proxy (its own slot, used by the query thread only)
+    fdds::DataReader* requests;
+    fdds::DataWriter* replies;
+    std::size_t arg_size, result_size;
+  };
   struct CommandIn {
     const Command* command;
     const Mapping* mapping;
@@ -48,6 +55,7 @@ class Attachment {
   };
 
   void run();
+  void serve_queries();
   void reject(const std::string& command, const std::string& why);
   void publish_fault();
 
@@ -61,6 +69,12 @@ class Attachment {
   std::vector<StateOut> states_;
   std::vector<std::unique_ptr<EventOut>> events_;
   std::vector<CommandIn> commands_;
+  // Qualified reads block for the server's answer: their own proxy (slot) and thread.
+  std::unique_ptr<Component> query_component_;
+  std::vector<QueryIn> queries_;
+  std::unique_ptr<fdds::GuardCondition> query_stop_;
+  std::thread query_thread_;
+  std::atomic<std::uint64_t> queries_served_{0};
   fdds::DataWriter* error_writer_ = nullptr;
   fdds::DataWriter* fault_writer_ = nullptr;  // the OperatingState topic, if the component has one
   std::atomic<bool> alive_{true};

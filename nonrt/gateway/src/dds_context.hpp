@@ -62,6 +62,9 @@ struct DdsContext {
         q.history().depth = 1;
         break;
     }
+    // No data-sharing: its /dev/shm files outlive a killed process; the SHM transport (loopback
+    // deployments) already avoids the network stack between processes of one host.
+    q.data_sharing().off();
     // A lost sample is repaired, and an acknowledgment asked for, within 50 ms (default: 3 s).
     q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 50'000'000);
     return q;
@@ -75,6 +78,7 @@ struct DdsContext {
     q.reliability().kind =
         f == Flow::state ? fdds::BEST_EFFORT_RELIABILITY_QOS : fdds::RELIABLE_RELIABILITY_QOS;
     if (f == Flow::registry) q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+    q.data_sharing().off();
     return q;
   }
 

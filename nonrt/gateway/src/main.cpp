@@ -71,9 +71,9 @@ int main(int argc, char** argv) {
     const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf(
         "saw-gateway: published %llu state samples, %llu events; %llu commands in, %llu rejected; "
-        "%llu reconnects; imported %llu samples, %llu rejected; mirrored %llu samples\n",
-        u(s.published), u(s.events), u(s.commands), u(s.rejected), u(s.reconnects), u(s.imported),
-        u(s.imported_rejected), u(s.mirrored));
+        "%llu reconnects; %llu queries; imported %llu samples, %llu rejected; mirrored %llu samples\n",
+        u(s.published), u(s.events), u(s.commands), u(s.rejected), u(s.reconnects), u(s.queries),
+        u(s.imported), u(s.imported_rejected), u(s.mirrored));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "saw-gateway: %s\n", e.what());
     return 1;

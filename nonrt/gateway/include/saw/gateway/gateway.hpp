@@ -52,6 +52,7 @@ struct GatewayStats {
   std::uint64_t commands = 0;   // commands from DDS passed to the bridge
   std::uint64_t rejected = 0;   // commands from DDS refused (invalid value, full ring, server gone)
   std::uint64_t reconnects = 0;
+  std::uint64_t queries = 0;            // qualified reads answered
   std::uint64_t imported = 0;           // samples taken from imported arms' topics
   std::uint64_t imported_rejected = 0;  // of which not valid values (dropped, counted)
   std::uint64_t mirrored = 0;           // state samples taken for mirrored components
