@@ -49,6 +49,9 @@ EndpointInfo describe(const std::string& component, const std::string& interface
   e.saw_type = sig.arg.name;
   e.saw_size = static_cast<std::uint32_t>(sig.arg.size);
   e.saw_version = sig.arg.version;
+  e.result_type = sig.result.name;
+  e.result_size = static_cast<std::uint32_t>(sig.result.size);
+  e.result_version = sig.result.version;
   return e;
 }
 

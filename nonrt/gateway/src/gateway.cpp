@@ -128,6 +128,9 @@ void Gateway::publish_manifest() {
     out.saw_type(e.saw_type);
     out.saw_size(e.saw_size);
     out.saw_version(e.saw_version);
+    out.result_type(e.result_type);
+    out.result_size(e.result_size);
+    out.result_version(e.result_version);
     out.dds_type(e.dds_type);
     out.topic(e.topic);
     m.endpoints().push_back(std::move(out));

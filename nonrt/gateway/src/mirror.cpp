@@ -94,7 +94,8 @@ std::vector<EndpointInfo> find_remote(DdsContext& dds, const std::string& compon
         if (e.component_name() == component && !e.topic().empty() && e.kind() != "import" &&
             e.kind() != "mirror")
           mine.push_back({e.component_name(), e.interface_name(), e.name(), e.kind(), e.saw_type(),
-                          e.saw_size(), e.saw_version(), e.dds_type(), e.topic()});
+                          e.saw_size(), e.saw_version(), e.dds_type(), e.topic(), e.result_type(),
+                          e.result_size(), e.result_version()});
       if (!mine.empty()) found = std::move(mine);
     }
     if (!found.empty()) break;

@@ -168,6 +168,9 @@ class Endpoint(IdlStruct, typename="saw_msgs::msg::dds_::Endpoint_"):
     saw_version: t.uint32 = 0
     dds_type: str = ""
     topic: str = ""
+    result_type: str = ""
+    result_size: t.uint32 = 0
+    result_version: t.uint32 = 0
 
 
 @final

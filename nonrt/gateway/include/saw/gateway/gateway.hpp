@@ -41,7 +41,9 @@ struct EndpointInfo {
   std::string saw_type;  // the value's rt type name ("" for none)
   std::uint32_t saw_size = 0, saw_version = 0;
   std::string dds_type, topic;  // "" when not mapped
-  std::string label() const {   // "Pose v1"
+  std::string result_type;      // a qualified read's result
+  std::uint32_t result_size = 0, result_version = 0;
+  std::string label() const {  // "Pose v1"
     return saw_type.empty() ? "" : saw_type + " v" + std::to_string(saw_version);
   }
 };
