@@ -1,5 +1,11 @@
 #include "builtin_types.hpp"
 
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstring>
 #include <filesystem>
 
 #include "saw/bridge/exporter.hpp"
@@ -8,6 +14,8 @@
 #include "saw/eigen.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
 #include "saw/teleop/delay_task.hpp"
+
+extern char** environ;
 
 namespace saw::apps {
 namespace {
@@ -103,6 +111,43 @@ std::unique_ptr<Component> make_delay(FactoryContext& ctx) {
                                              static_cast<double>(delay.count()) * 1e-9);
 }
 
+// saw-gateway, from the directory saw-rt runs from (both are built into bin/): an ordinary
+// process, so that DDS never runs in the RT process. SIGTERM and a wait when the handle goes.
+struct GatewayProcess {
+  pid_t pid = -1;
+  ~GatewayProcess() {
+    if (pid <= 0) return;
+    kill(pid, SIGTERM);
+    waitpid(pid, nullptr, 0);
+  }
+};
+
+std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec) {
+  char self[4096] = {};
+  const auto n = readlink("/proc/self/exe", self, sizeof self - 1);
+  const std::string dir =
+      n > 0 ? std::filesystem::path(std::string(self, static_cast<std::size_t>(n))).parent_path().string()
+            : ".";
+  const std::string exe = dir + "/saw-gateway";
+  if (access(exe.c_str(), X_OK) != 0)
+    throw std::runtime_error("gateway: " + exe + " not found (build the nonrt/ targets)");
+  std::vector<std::string> args{exe,
+                                "--exit-with-parent",
+                                "--domain",
+                                std::to_string(spec.domain),
+                                "--decimation",
+                                std::to_string(spec.decimation)};
+  for (const auto& a : spec.attach) args.insert(args.end(), {"--attach", a});
+  for (const auto& i : spec.interfaces) args.insert(args.end(), {"--interface", i});
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  auto p = std::make_shared<GatewayProcess>();
+  if (const int err = posix_spawn(&p->pid, exe.c_str(), nullptr, nullptr, argv.data(), environ); err != 0)
+    throw std::runtime_error("gateway: cannot start " + exe + ": " + std::strerror(err));
+  return p;
+}
+
 }  // namespace
 
 void register_builtin_types(deploy::ComponentRegistry& registry) {
@@ -115,6 +160,7 @@ void register_builtin_types(deploy::ComponentRegistry& registry) {
   registry.set_exporter([](Component& c, const std::string& provided) -> std::shared_ptr<void> {
     return std::make_shared<bridge::Exporter>(c, provided);
   });
+  registry.set_gateway_launcher(launch_gateway);
 }
 
 }  // namespace saw::apps

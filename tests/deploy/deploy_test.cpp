@@ -264,3 +264,41 @@ TEST(Integration, TwoProcessesTeleoperateThroughTheBridge) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string gateway_error(const std::string& tail) {
+  try {
+    (void)saw::deploy::parse_deployment(std::string(good) + tail, "cfg.yaml", registry());
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no error for: " << tail;
+  return "";
+}
+
+void expect_error(const std::string& tail, const char* pattern) {
+  const auto message = gateway_error(tail);
+  EXPECT_TRUE(std::regex_search(message, std::regex(pattern)))
+      << "message: " << message << "\nexpected: " << pattern;
+}
+
+TEST(Deployment, AGatewaySectionIsCheckedLikeTheRest) {
+  expect_error("gateway: {domain: 3}\n", R"(^cfg\.yaml:17:\d+: key 'gateway': nothing to map)");
+  const std::string exported = "exports:\n  - {component: master, provided: arm}\n";
+  expect_error(exported + "gateway: {attach: [slave]}\n",
+               R"(^cfg\.yaml:19:\d+: key 'gateway\.attach': 'slave' is not exported)");
+  expect_error(exported + "gateway: {domain: 300}\n",
+               R"(^cfg\.yaml:19:\d+: key 'gateway\.domain': .*out of range)");
+  expect_error(exported + "gateway: {domian: 3}\n",
+               R"(^cfg\.yaml:19:\d+: key 'gateway\.domian': unknown parameter)");
+  // A good one parses, naming what it maps; nothing is started until the deployment starts.
+  auto d = saw::deploy::parse_deployment(std::string(good) + exported + "gateway: {domain: 3}\n", "cfg.yaml",
+                                         registry());
+  ASSERT_TRUE(d.gateway().has_value());
+  EXPECT_EQ(d.gateway()->attach, std::vector<std::string>{"master"});
+  EXPECT_EQ(d.gateway()->domain, 3);
+  EXPECT_EQ(d.gateway()->interfaces, std::vector<std::string>{"127.0.0.1"});
+}
+
+}  // namespace

@@ -1,4 +1,7 @@
 // saw-gateway: maps components exported by an RT process on this host to DDS.
+#include <sys/prctl.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
@@ -40,7 +43,13 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
+  bool exit_with_parent = false;
+  app.add_flag("--exit-with-parent", exit_with_parent, "stop when the parent process (saw-rt) is gone");
   CLI11_PARSE(app, argc, argv);
+  if (exit_with_parent) {
+    prctl(PR_SET_PDEATHSIG, SIGTERM);  // the RT process died (even kill -9): go too
+    if (getppid() == 1) return 0;      // it died before we asked
+  }
   if (config.attach.empty() && imports.empty() && config.mirrors.empty()) {
     std::fprintf(stderr, "saw-gateway: nothing to do: give --attach, --import or --mirror\n");
     return 2;

@@ -1,5 +1,6 @@
 #include "saw/deploy/deployment.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -87,12 +88,34 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
       if (!registry.exporter()) e.fail("this program cannot export interfaces");
       try {
         d.exports_.push_back(registry.exporter()(*c, provided));
+        d.exported_names_.push_back(component);
       } catch (const std::exception& ex) {
         e.fail(ex.what());
       }
     }
   }
   for (const auto& make : registry.resolvers()) d.manager_->add_resolver(make());
+
+  // The DDS gateway, started with the deployment: maps the exported interfaces to DDS.
+  if (top.has("gateway")) {
+    Params g = top.child("gateway");
+    GatewaySpec spec;
+    for (const auto& e : d.exported_names_) spec.attach.push_back(e);
+    spec.attach = g.get_or<std::vector<std::string>>("attach", spec.attach);
+    for (const auto& a : spec.attach)
+      if (std::find(d.exported_names_.begin(), d.exported_names_.end(), a) == d.exported_names_.end())
+        g.fail_at("attach", "'" + a + "' is not exported by this deployment (see exports:)");
+    if (spec.attach.empty()) g.fail("nothing to map: this deployment exports no interface (see exports:)");
+    spec.domain = static_cast<int>(g.get_in_range("domain", 0, 232, 0));
+    if (g.has("domain") && g.get<double>("domain") != spec.domain) g.fail_at("domain", "expected an integer");
+    spec.interfaces = g.get_or<std::vector<std::string>>("interfaces", spec.interfaces);
+    if (spec.interfaces.empty()) g.fail_at("interfaces", "at least one interface address");
+    spec.decimation = static_cast<int>(g.get_in_range("decimation", 1, 1000, 1));
+    g.check_all_used();
+    if (!registry.gateway_launcher()) g.fail("this program cannot start a gateway");
+    d.gateway_ = spec;
+    d.launch_gateway_ = registry.gateway_launcher();
+  }
 
   // Connections, checked by the manager (names and types); its message is kept whole.
   top.mark_used("connections");
@@ -179,6 +202,7 @@ void Deployment::start() {
     manager_->start();
     if (recorder_) recorder_->start_thread();
   }
+  if (gateway_) gateway_process_ = launch_gateway_(*gateway_);
 }
 
 void Deployment::run_for(double seconds) {
@@ -195,6 +219,7 @@ void Deployment::run_for(double seconds) {
 }
 
 void Deployment::stop() {
+  gateway_process_.reset();  // the gateway detaches first
   manager_->stop();
   if (recorder_) recorder_->stop();
 }

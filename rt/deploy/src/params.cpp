@@ -91,6 +91,20 @@ std::vector<double> Params::get<std::vector<double>>(const std::string& key) con
   return out;
 }
 template <>
+std::vector<std::string> Params::get<std::vector<std::string>>(const std::string& key) const {
+  const YAML::Node v = value(key);
+  if (!v.IsSequence()) fail_at(key, "expected a list of names");
+  std::vector<std::string> out;
+  for (const auto& e : v) {
+    if (!e.IsScalar()) {
+      const auto [line, column] = location(e);
+      throw ConfigError(file_, line, column, key_path(key), "expected a name");
+    }
+    out.push_back(e.Scalar());
+  }
+  return out;
+}
+template <>
 Vec3 Params::get<Vec3>(const std::string& key) const {
   const auto v = get<std::vector<double>>(key);
   if (v.size() != 3) fail_at(key, "expected a list of exactly 3 numbers, got " + std::to_string(v.size()));
@@ -101,11 +115,13 @@ std::chrono::nanoseconds Params::get<std::chrono::nanoseconds>(const std::string
   const YAML::Node v = value(key);
   if (!v.IsScalar()) fail_at(key, "expected a duration such as 1ms, 500us, 2s or a number of seconds");
   const std::string text = v.Scalar();
-  static const std::vector<std::pair<std::string, double>> units = {{"ns", 1e-9}, {"us", 1e-6}, {"ms", 1e-3}, {"s", 1}};
+  static const std::vector<std::pair<std::string, double>> units = {
+      {"ns", 1e-9}, {"us", 1e-6}, {"ms", 1e-3}, {"s", 1}};
   double scale = 1, number = 0;
   std::string digits = text;
   for (const auto& [suffix, factor] : units)
-    if (text.size() > suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    if (text.size() > suffix.size() &&
+        text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0) {
       digits = text.substr(0, text.size() - suffix.size());
       scale = factor;
       break;
@@ -117,7 +133,8 @@ std::chrono::nanoseconds Params::get<std::chrono::nanoseconds>(const std::string
   } catch (const std::exception&) {
     fail_at(key, "'" + text + "' is not a duration (examples: 1ms, 500us, 2s, 0.001)");
   }
-  if (!(number >= 0) || !std::isfinite(number)) fail_at(key, "'" + text + "' must be a non-negative duration");
+  if (!(number >= 0) || !std::isfinite(number))
+    fail_at(key, "'" + text + "' must be a non-negative duration");
   return std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(number * scale * 1e9)));
 }
 
@@ -128,7 +145,8 @@ double Params::get_in_range(const std::string& key, double lo, double hi, double
   }
   const double d = get<double>(key);
   if (d < lo || d > hi)
-    fail_at(key, std::to_string(d) + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    fail_at(key,
+            std::to_string(d) + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   return d;
 }
 

@@ -23,7 +23,8 @@ void vec(std::string& out, const Vec3& v) {
 }
 
 template <class T>
-std::pair<std::string, ColumnFormat> entry(std::vector<std::string> names, void (*write)(const void*, std::string&)) {
+std::pair<std::string, ColumnFormat> entry(std::vector<std::string> names,
+                                           void (*write)(const void*, std::string&)) {
   return {std::string(type_name<T>()), ColumnFormat{std::move(names), write}};
 }
 
@@ -32,9 +33,12 @@ const std::vector<std::pair<std::string, ColumnFormat>>& formats() {
       entry<double>({""}, [](const void* p, std::string& o) { number(o, as<double>(p)); }),
       entry<float>({""}, [](const void* p, std::string& o) { number(o, as<float>(p)); }),
       entry<bool>({""}, [](const void* p, std::string& o) { o += as<bool>(p) ? ",1" : ",0"; }),
-      entry<std::int32_t>({""}, [](const void* p, std::string& o) { o += "," + std::to_string(as<std::int32_t>(p)); }),
-      entry<std::int64_t>({""}, [](const void* p, std::string& o) { o += "," + std::to_string(as<std::int64_t>(p)); }),
-      entry<std::uint64_t>({""}, [](const void* p, std::string& o) { o += "," + std::to_string(as<std::uint64_t>(p)); }),
+      entry<std::int32_t>(
+          {""}, [](const void* p, std::string& o) { o += "," + std::to_string(as<std::int32_t>(p)); }),
+      entry<std::int64_t>(
+          {""}, [](const void* p, std::string& o) { o += "," + std::to_string(as<std::int64_t>(p)); }),
+      entry<std::uint64_t>(
+          {""}, [](const void* p, std::string& o) { o += "," + std::to_string(as<std::uint64_t>(p)); }),
       entry<Vec3>({".x", ".y", ".z"}, [](const void* p, std::string& o) { vec(o, as<Vec3>(p)); }),
       entry<Pose>({".x", ".y", ".z", ".qx", ".qy", ".qz", ".qw"},
                   [](const void* p, std::string& o) {
@@ -53,12 +57,14 @@ const std::vector<std::pair<std::string, ColumnFormat>>& formats() {
                     }),
       entry<JointState>({".q0", ".q1", ".q2"},
                         [](const void* p, std::string& o) {
-                          for (int i = 0; i < 3; ++i) number(o, as<JointState>(p).position[static_cast<std::size_t>(i)]);
+                          for (int i = 0; i < 3; ++i)
+                            number(o, as<JointState>(p).position[static_cast<std::size_t>(i)]);
                         }),
-      entry<OperatingState>({""}, [](const void* p, std::string& o) {
-        o += ",";
-        o += to_string(as<OperatingState>(p).state);
-      }),
+      entry<OperatingState>({""},
+                            [](const void* p, std::string& o) {
+                              o += ",";
+                              o += to_string(as<OperatingState>(p).state);
+                            }),
   };
   return all;
 }
@@ -75,7 +81,8 @@ Recorder::Recorder(std::string path, std::vector<Column> columns, int decimation
     : path_(std::move(path)), columns_(std::move(columns)), decimation_(decimation < 1 ? 1 : decimation) {
   if (columns_.empty()) throw std::invalid_argument("recorder: no columns");
   file_ = std::fopen(path_.c_str(), "w");
-  if (file_ == nullptr) throw std::runtime_error("recorder: cannot write " + path_ + ": " + std::strerror(errno));
+  if (file_ == nullptr)
+    throw std::runtime_error("recorder: cannot write " + path_ + ": " + std::strerror(errno));
   std::size_t largest = 0;
   std::string header = "time";
   for (const auto& c : columns_) {

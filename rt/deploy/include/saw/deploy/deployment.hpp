@@ -32,6 +32,7 @@ class Deployment {
     return dynamic_cast<T*>(manager_->find(name));
   }
   const std::optional<RecordSpec>& record() const noexcept { return record_; }
+  const std::optional<GatewaySpec>& gateway() const noexcept { return gateway_; }
   // Overrides the file's record file (or records the file's columns somewhere else).
   void set_record_file(std::string path);
 
@@ -52,6 +53,10 @@ class Deployment {
   std::optional<RecordSpec> record_;
   std::unique_ptr<Recorder> recorder_;
   std::vector<std::shared_ptr<void>> exports_;  // keeps exported interfaces exported
+  std::vector<std::string> exported_names_;
+  std::optional<GatewaySpec> gateway_;
+  GatewayLauncher launch_gateway_;
+  std::shared_ptr<void> gateway_process_;  // while running
   int record_line_ = 0, record_column_ = 0;
 };
 

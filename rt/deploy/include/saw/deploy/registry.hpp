@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "saw/component.hpp"
 #include "saw/deploy/params.hpp"
@@ -28,6 +29,16 @@ using Factory = std::function<std::unique_ptr<Component>(FactoryContext&)>;
 // Exports a component's provided interface to other processes; the handle keeps it exported.
 using Exporter = std::function<std::shared_ptr<void>(Component& component, const std::string& provided)>;
 
+// The deployment's DDS gateway (a `gateway:` section): what to map and where.
+struct GatewaySpec {
+  std::vector<std::string> attach;  // exported components to map (default: every export)
+  int domain = 0;
+  std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
+  int decimation = 1;
+};
+// Starts the gateway process for a running deployment; the handle stops it when released.
+using GatewayLauncher = std::function<std::shared_ptr<void>(const GatewaySpec& spec)>;
+
 // What a deployment can build: component types, plus (from the composition root, so that this
 // library depends on neither) how to reach components elsewhere and how to export one.
 class ComponentRegistry {
@@ -37,6 +48,8 @@ class ComponentRegistry {
     resolvers_.push_back(std::move(make));
   }
   void set_exporter(Exporter e) { exporter_ = std::move(e); }
+  void set_gateway_launcher(GatewayLauncher l) { gateway_launcher_ = std::move(l); }
+  const GatewayLauncher& gateway_launcher() const noexcept { return gateway_launcher_; }
   const std::vector<std::function<std::unique_ptr<RemoteResolver>()>>& resolvers() const noexcept {
     return resolvers_;
   }
@@ -50,6 +63,7 @@ class ComponentRegistry {
   std::map<std::string, std::pair<Factory, std::string>> types_;
   std::vector<std::function<std::unique_ptr<RemoteResolver>()>> resolvers_;
   Exporter exporter_;
+  GatewayLauncher gateway_launcher_;
 };
 
 }  // namespace saw::deploy
