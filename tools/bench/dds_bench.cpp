@@ -2,6 +2,8 @@
 // process → Fast DDS → saw-gateway → shared-memory bridge → the RT server process, and back;
 // beside it, in the same run, raw Fast DDS: the same request/reply types, QoS and wait, answered
 // directly by an echo process. Loopback only.
+#include <fcntl.h>
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -51,11 +53,29 @@ class Server : public saw::Task {
   std::_Exit(0);
 }
 
-[[noreturn]] void gateway(const std::string& name, int domain) {
+// Across the veth pair: this process joins network namespace `ns` (made by main) first.
+void enter(const std::string& ns) {
+  if (ns.empty()) return;
+  const int fd = open(("/var/run/netns/" + ns).c_str(), O_RDONLY);
+  if (fd < 0 || setns(fd, CLONE_NEWNET) != 0) {
+    std::perror(("saw-bench-dds: setns " + ns).c_str());
+    std::_Exit(3);
+  }
+  close(fd);
+}
+
+struct Where {
+  std::string ns;  // "" on this host's loopback
+  std::vector<std::string> interfaces{"127.0.0.1"};
+};
+
+[[noreturn]] void gateway(const std::string& name, int domain, const Where& at) {
   (void)saw::rt::set_affinity(1);
+  enter(at.ns);
   saw::gateway::GatewayConfig c;
   c.attach = {name};
   c.dds.domain = domain;
+  c.dds.interfaces = at.interfaces;
   c.attach_timeout = 10'000'000'000;
   saw::gateway::Gateway g(c);
   pause();
@@ -63,10 +83,12 @@ class Server : public saw::Task {
 }
 
 // Raw Fast DDS: the same topics' types and QoS, the same WaitSet wait, answered at once.
-[[noreturn]] void echo(int domain) {
+[[noreturn]] void echo(int domain, const Where& at) {
   (void)saw::rt::set_affinity(1);
+  enter(at.ns);
   saw::gateway::ParticipantConfig pc;
   pc.domain = domain;
+  pc.interfaces = at.interfaces;
   pc.name = "raw-echo";
   auto* p = saw::gateway::make_participant(pc);
   fdds::TypeSupport rq(new saw_msgs::msg::QueryPubSubType()), rr(new saw_msgs::msg::QueryReplyPubSubType());
@@ -140,7 +162,35 @@ int main(int argc, char** argv) {
   app.add_option("--calls", n, "calls per repetition");
   app.add_option("--reps", reps, "repetitions");
   app.add_flag("--markdown", markdown, "Markdown table");
+  bool veth = false;
+  app.add_flag("--veth", veth,
+               "Network 1H: the server side in one network namespace, the client in another, joined by a "
+               "veth pair (made and removed by this run; needs root)");
   CLI11_PARSE(app, argc, argv);
+  Where server_side, client_side;
+  std::string ns_a, ns_b;
+  if (veth) {
+    const std::string tag = std::to_string(getpid());
+    ns_a = "sawbench-a-" + tag;
+    ns_b = "sawbench-b-" + tag;
+    const std::string net = "10.212." + std::to_string(getpid() % 200 + 10);
+    const std::string va = ("ba" + tag).substr(0, 15), vb = ("bb" + tag).substr(0, 15);
+    const std::string setup = "ip netns add " + ns_a + " && ip netns add " + ns_b + " && ip link add " + va +
+                              " type veth peer name " + vb + " && ip link set " + va + " netns " + ns_a +
+                              " && ip link set " + vb + " netns " + ns_b + " && ip -n " + ns_a +
+                              " addr add " + net + ".1/24 dev " + va + " && ip -n " + ns_b + " addr add " +
+                              net + ".2/24 dev " + vb + " && ip -n " + ns_a + " link set " + va +
+                              " up && ip -n " + ns_b + " link set " + vb + " up && ip -n " + ns_a +
+                              " link set lo up && ip -n " + ns_b + " link set lo up";
+    if (std::system(setup.c_str()) != 0) {
+      std::fprintf(stderr, "saw-bench-dds: cannot make the two namespaces and the veth pair (root needed)\n");
+      (void)std::system(
+          ("ip netns del " + ns_a + " 2>/dev/null; ip netns del " + ns_b + " 2>/dev/null").c_str());
+      return 2;
+    }
+    server_side = {ns_a, {net + ".1"}};
+    client_side = {ns_b, {net + ".2"}};
+  }
   saw::rt::DmaLatencyHold dma;
   const std::string name = "benchdds" + std::to_string(getpid());
   const int domain = 150 + getpid() % 80;
@@ -151,25 +201,28 @@ int main(int argc, char** argv) {
       if (k == 0) serve(name);
       if (k == 1) {
         std::this_thread::sleep_for(200ms);  // the server exports first (the gateway also waits)
-        gateway(name, domain);
+        gateway(name, domain, server_side);
       }
-      echo(domain);
+      echo(domain, server_side);
     }
     children.push_back(pid);
   }
   (void)saw::rt::set_affinity(0);
+  enter(client_side.ns);
   std::uint64_t failed = 0;
   std::vector<std::int64_t> ours, raw;
   {
     saw::gateway::ParticipantConfig pc;
     pc.domain = domain;
     pc.name = "bench-client";
+    pc.interfaces = client_side.interfaces;
     auto* p = saw::gateway::make_participant(pc);
     {
       saw::gateway::QueryClient via_gateway(p, name, "add_one"), direct(p, "raw", "add_one");
       if (!via_gateway.wait_matched(20'000'000'000) || !direct.wait_matched(20'000'000'000)) {
         std::fprintf(stderr, "saw-bench-dds: the gateway or the echo process did not match\n");
         for (pid_t c : children) kill(c, SIGKILL);
+        if (veth) (void)std::system(("ip netns del " + ns_a + "; ip netns del " + ns_b).c_str());
         return 1;
       }
       (void)run(via_gateway, 200, failed);  // warm-up: first calls carry discovery's tail
@@ -188,10 +241,11 @@ int main(int argc, char** argv) {
     kill(c, SIGKILL);
     waitpid(c, nullptr, 0);
   }
+  if (veth) (void)std::system(("ip netns del " + ns_a + "; ip netns del " + ns_b).c_str());
   std::printf(
       "# saw-bench-dds: %d × %d calls, client on CPU 0; RT server, saw-gateway and raw echo on CPU 1; "
-      "loopback, Fast DDS reliable, WaitSet waits\n",
-      reps, n);
+      "%s, Fast DDS reliable, WaitSet waits\n",
+      reps, n, veth ? "across a veth pair between two network namespaces (UDP)" : "loopback (UDP + SHM)");
   saw::bench::print_header(markdown);
   const auto a = saw::bench::summarize(ours), b = saw::bench::summarize(raw);
   saw::bench::print_row(markdown, "qualified read<double> over DDS (gateway + bridge)", a);
