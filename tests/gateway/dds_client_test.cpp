@@ -8,34 +8,13 @@
 #include <atomic>
 #include <thread>
 
-#include "saw/bridge/exporter.hpp"
 #include "saw/gateway/dds_resolver.hpp"
-#include "saw/gateway/gateway.hpp"
-#include "saw/manager.hpp"
+#include "served_device.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
-
-class Device : public saw::Task {
- public:
-  explicit Device(std::string name) : Task(std::move(name), saw::TaskConfig::periodic(1ms, 0)) {
-    auto& p = provide("arm");
-    p.add_command_read("count", state_table().add_column("count", &count_));
-    p.add_command_write<std::int64_t>("add", [this](const std::int64_t& v) { count_ += v; });
-    p.add_command_qualified_read<std::int64_t, std::int64_t>(
-        "tripled", [](const std::int64_t& q, std::int64_t& r) { r = 3 * q; });
-    ticked_ = &p.add_event_write<std::int64_t>("ticked");
-  }
-  void run() override {
-    ++count_;
-    if (count_ % 10 == 0) (void)(*ticked_)(count_);
-  }
-
- private:
-  std::int64_t count_ = 0;
-  saw::EventWrite<std::int64_t>* ticked_;
-};
+using saw::testing::wait_for;
 
 class RemoteClient : public saw::Task {
  public:
@@ -56,16 +35,6 @@ class RemoteClient : public saw::Task {
   std::atomic<std::int64_t> last_tick{0};
 };
 
-template <class F>
-bool wait_for(F done, std::chrono::milliseconds limit = 10s) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(1ms);
-  }
-  return true;
-}
-
 saw::gateway::DdsResolver::Options options(int domain) {
   saw::gateway::DdsResolver::Options o;
   o.dds.domain = domain;
@@ -74,23 +43,12 @@ saw::gateway::DdsResolver::Options options(int domain) {
 }
 
 TEST(DdsClient, TheSameConnectAndFunctionsReachAComponentThroughItsGateway) {
-  const std::string name = "dc" + std::to_string(getpid());
-  const int domain = 40 + getpid() % 60;
-  Device device(name);
-  saw::bridge::Exporter exporter(device, "arm");
-  saw::Manager server;
-  server.add(device);
-  server.start();
-  saw::gateway::GatewayConfig config;
-  config.attach = {name};
-  config.dds.domain = domain;
-  saw::gateway::Gateway gateway(config);
-
+  saw::testing::ServedDevice s("dc", 40);
   RemoteClient client;
   saw::Manager m;
-  m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(domain)));
+  m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(s.domain)));
   m.add(client);
-  m.connect("remote_client", "arm", name, "arm");  // as for a local server
+  m.connect("remote_client", "arm", s.name, "arm");  // as for a local server
   m.start();
   std::int64_t v = 0;
   ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::ok && v > 10; })) << "no state arrived";
@@ -104,38 +62,26 @@ TEST(DdsClient, TheSameConnectAndFunctionsReachAComponentThroughItsGateway) {
   ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::ok && v > before + 1'000'000; }))
       << "the write command did not reach the server";
   m.stop();
-  server.stop();
 }
 
 TEST(DdsClient, ATypeMismatchFailsAtConnectNamingBothTypes) {
-  const std::string name = "dct" + std::to_string(getpid());
-  const int domain = 110 + getpid() % 60;
-  Device device(name);
-  saw::bridge::Exporter exporter(device, "arm");
-  saw::Manager server;
-  server.add(device);
-  server.start();
-  saw::gateway::GatewayConfig config;
-  config.attach = {name};
-  config.dds.domain = domain;
-  saw::gateway::Gateway gateway(config);
+  saw::testing::ServedDevice s("dct", 110);
   class Wrong : public saw::Component {
    public:
     Wrong() : Component("wrong") { require("arm").add_function("add", add); }
     saw::FunctionWrite<double> add;
   } wrong;
   saw::Manager m;
-  m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(domain)));
+  m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(s.domain)));
   m.add(wrong);
   try {
-    m.connect("wrong", "arm", name, "arm");
+    m.connect("wrong", "arm", s.name, "arm");
     ADD_FAILURE() << "connected despite the type mismatch";
   } catch (const saw::ConnectError& e) {
     const std::string msg = e.what();
     EXPECT_NE(msg.find("write command<double>"), std::string::npos) << msg;
     EXPECT_NE(msg.find("write command<long int>"), std::string::npos) << msg;
   }
-  server.stop();
 }
 
 }  // namespace

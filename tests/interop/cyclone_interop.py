@@ -12,28 +12,9 @@ import sys
 import tempfile
 import time
 
-here = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(here, "..", "..", "tools", "python"))
 
+from harness import check, exit_code, wait_for  # noqa: E402
 from sawdds import Client, msgs  # noqa: E402
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
-
-
-def wait_for(reader, pred, timeout):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        for s in reader.take(N=64):
-            if pred(s):
-                return s
-        time.sleep(0.001)
-    return None
 
 
 def main(saw_rt, saw_gateway):
@@ -130,7 +111,7 @@ exports:
         # kill -9 leaves the RT process's segment behind (a new server would take it over).
         if os.path.exists(f"/dev/shm/saw.{name}"):
             os.unlink(f"/dev/shm/saw.{name}")
-    return 1 if failures else 0
+    return exit_code()
 
 
 if __name__ == "__main__":

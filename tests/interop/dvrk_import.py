@@ -16,20 +16,11 @@ import tempfile
 import threading
 import time
 
-here = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(here, "..", "..", "tools", "python"))
 
+from harness import check, exit_code  # noqa: E402
 from sawdds import Client, msgs  # noqa: E402
 from cyclonedds.core import Policy, Qos  # noqa: E402
 from cyclonedds.pub import DataWriter  # noqa: E402
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
 
 
 class SyntheticMaster(threading.Thread):
@@ -136,7 +127,7 @@ record:
         imported = [l for l in out.splitlines() if "imported" in l]
         check(bool(imported) and " 0 rejected" in imported[-1].split("imported")[1],
               "every imported sample was a valid value")
-    return 1 if failures else 0
+    return exit_code()
 
 
 if __name__ == "__main__":

@@ -10,14 +10,7 @@ import signal
 import subprocess
 import sys
 import tempfile
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
+from harness import check, exit_code  # noqa: E402
 
 
 def main(saw_rt, saw_gateway, sawctl):
@@ -77,7 +70,7 @@ gateway:
         check(rt.returncode == 0 and m is not None, "saw-rt ended normally and printed its task summary")
         if m:
             print(f"figure: {m.group(2)} overruns in {m.group(1)} cycles, the gateway killed with -9 meanwhile")
-    return 1 if failures else 0
+    return exit_code()
 
 
 if __name__ == "__main__":

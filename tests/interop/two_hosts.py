@@ -13,14 +13,7 @@ import re
 import subprocess
 import sys
 import tempfile
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
+from harness import check, exit_code  # noqa: E402
 
 
 def sh(*args):
@@ -133,7 +126,7 @@ record:
                 p.kill()
         sh("ip", "netns", "del", ns_a)
         sh("ip", "netns", "del", ns_b)
-    return 1 if failures else 0
+    return exit_code()
 
 
 if __name__ == "__main__":

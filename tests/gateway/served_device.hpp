@@ -1,0 +1,75 @@
+// ServedDevice: a 1 kHz task exported through the bridge and mapped to DDS by a gateway, all in
+// this process, on a DDS domain of its own (tests side by side do not see each other).
+#pragma once
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <string>
+#include <thread>
+
+#include "saw/bridge/exporter.hpp"
+#include "saw/gateway/gateway.hpp"
+#include "saw/manager.hpp"
+
+namespace saw::testing {
+
+// Provided "arm": count (read), add (write), tripled (qualified read), ticked (event, every 10th cycle).
+class CountingDevice : public Task {
+ public:
+  explicit CountingDevice(std::string name)
+      : Task(std::move(name), TaskConfig::periodic(std::chrono::milliseconds(1), 0)) {
+    auto& p = provide("arm");
+    p.add_command_read("count", state_table().add_column("count", &count_));
+    p.add_command_write<std::int64_t>("add", [this](const std::int64_t& v) { count_ += v; });
+    p.add_command_qualified_read<std::int64_t, std::int64_t>(
+        "tripled", [](const std::int64_t& q, std::int64_t& r) { r = 3 * q; });
+    ticked_ = &p.add_event_write<std::int64_t>("ticked");
+  }
+  void run() override {
+    ++count_;
+    if (count_ % 10 == 0) (void)(*ticked_)(count_);
+  }
+
+ private:
+  std::int64_t count_ = 0;
+  EventWrite<std::int64_t>* ticked_;
+};
+
+struct ServedDevice {
+  explicit ServedDevice(const std::string& prefix, int domain_base)
+      : name(prefix + std::to_string(getpid())),
+        domain(domain_base + getpid() % 60),
+        device(name),
+        exporter(device, "arm") {
+    manager.add(device);
+    manager.start();
+    gateway::GatewayConfig config;
+    config.attach = {name};
+    config.dds.domain = domain;
+    served = std::make_unique<gateway::Gateway>(config);
+  }
+  ~ServedDevice() {
+    served.reset();
+    manager.stop();
+  }
+  std::string name;
+  int domain;
+  CountingDevice device;
+  bridge::Exporter exporter;
+  Manager manager;
+  std::unique_ptr<gateway::Gateway> served;
+};
+
+template <class F>
+bool wait_for(F done, std::chrono::milliseconds limit = std::chrono::seconds(10)) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
+}  // namespace saw::testing

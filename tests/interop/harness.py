@@ -1,0 +1,30 @@
+"""What the interop tests share: the sawdds import path, a checklist that fails the test at the
+end (every check is printed, met or not), and a bounded wait for a matching DDS sample."""
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "python"))
+
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def wait_for(reader, pred, timeout):
+    """The first sample from `reader` for which pred(sample) holds, or None after `timeout` s."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for s in reader.take(N=64):
+            if pred(s):
+                return s
+        time.sleep(0.001)
+    return None
+
+
+def exit_code():
+    return 1 if failures else 0
