@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <thread>
 
 #include "saw/bridge/exporter.hpp"
 #include "saw/bridge/proxy.hpp"
@@ -139,12 +140,32 @@ std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec) {
                                 std::to_string(spec.decimation)};
   for (const auto& a : spec.attach) args.insert(args.end(), {"--attach", a});
   for (const auto& i : spec.interfaces) args.insert(args.end(), {"--interface", i});
+  for (const auto& m : spec.mirrors) args.insert(args.end(), {"--mirror", m});
+  args.insert(args.end(), {"--wait", "30"});  // our own exports go live when the manager starts
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   auto p = std::make_shared<GatewayProcess>();
   if (const int err = posix_spawn(&p->pid, exe.c_str(), nullptr, nullptr, argv.data(), environ); err != 0)
     throw std::runtime_error("gateway: cannot start " + exe + ": " + std::strerror(err));
+  // Mirrors of other hosts' components: connect() will look for them in this host's bridge.
+  for (const auto& m : spec.mirrors) {
+    const auto deadline = std::chrono::steady_clock::now() + 30s;
+    for (;;) {
+      try {
+        if (bridge::ShmResolver().resolve(m) != nullptr) break;
+      } catch (const std::exception&) {  // there, not live yet
+      }
+      int status = 0;
+      if (waitpid(p->pid, &status, WNOHANG) == p->pid) {
+        p->pid = -1;
+        throw std::runtime_error("gateway: exited before it could mirror '" + m + "' (see its output)");
+      }
+      if (std::chrono::steady_clock::now() > deadline)
+        throw std::runtime_error("gateway: '" + m + "' was not mirrored within 30 s: is its host running?");
+      std::this_thread::sleep_for(50ms);
+    }
+  }
   return p;
 }
 

@@ -68,6 +68,8 @@ int main(int argc, char** argv) {
   app.add_option("--record", record, "CSV file for the deployment's record: columns")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.add_flag("--list-types", list, "list the component types and exit");
+  std::string host;
+  app.add_option("--host", host, "the host (of the file's hosts: section) whose components to run here");
   CLI11_PARSE(app, argc, argv);
 
   saw::deploy::ComponentRegistry registry;
@@ -83,7 +85,7 @@ int main(int argc, char** argv) {
   }
   std::optional<saw::deploy::Deployment> d;
   try {
-    d.emplace(saw::deploy::load_deployment(config, registry));
+    d.emplace(saw::deploy::load_deployment(config, registry, host));
     if (stepped) d->set_clock(saw::deploy::Clock::stepped);
     if (!record.empty()) d->set_record_file(record);
   } catch (const saw::deploy::ConfigError& e) {

@@ -302,3 +302,64 @@ TEST(Deployment, AGatewaySectionIsCheckedLikeTheRest) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Integration, OneFileOnTwoHostsRunsAsTwoProcessesWithHost) {
+  const std::string tag = std::to_string(getpid());  // component names no other run uses
+  const std::string dir = ::testing::TempDir();
+  std::string text = read_file(SAW_SOURCE_DIR "/config/teleop-sim-hosts.yaml");
+  for (const char* c : {"master", "slave", "teleop"}) {
+    text = replace_all(text, std::string("name: ") + c, std::string("name: ") + c + tag);
+    text = replace_all(text, std::string("server: ") + c, std::string("server: ") + c + tag);
+    text = replace_all(text, std::string("client: ") + c, std::string("client: ") + c + tag);
+    text = replace_all(text, std::string(c) + ".", std::string(c) + tag + ".");
+  }
+  std::ofstream(dir + "hosts.yaml") << text;
+  const std::string operator_cmd = std::string(SAW_RT_PATH) + " " + dir +
+                                   "hosts.yaml --host operator --duration 8 > " + dir + "op.log 2>&1 &";
+  ASSERT_EQ(std::system(operator_cmd.c_str()), 0);
+  std::string out;
+  int rc = 2;
+  for (int attempt = 0; attempt < 50 && rc != 0; ++attempt) {  // until the operator has exported (bounded)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    rc = run(dir + "hosts.yaml --host patient --duration 1.5", out);
+  }
+  ASSERT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("ENABLED"), std::string::npos) << out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(RMS ([0-9.]+) mm)"))) << out;
+  EXPECT_LT(std::stod(m[1]), 1.0) << out;
+}
+
+std::string hosts_error(const std::string& text, const std::string& host) {
+  try {
+    (void)saw::deploy::parse_deployment(text, "cfg.yaml", registry(), host);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no error for host '" << host << "'";
+  return "";
+}
+
+TEST(Deployment, HostsAreCheckedLikeTheRest) {
+  const std::string placed =
+      replace_all(
+          replace_all(replace_all(std::string(good), "  - name: master\n", "  - name: master\n    host: a\n"),
+                      "  - name: slave\n", "  - name: slave\n    host: b\n"),
+          "  - name: teleop\n", "  - name: teleop\n    host: b\n") +
+      "hosts: {a: {}, b: {}}\n";
+  EXPECT_TRUE(
+      std::regex_search(hosts_error(placed, ""), std::regex(R"(key 'hosts': .*run saw-rt with --host)")));
+  EXPECT_TRUE(
+      std::regex_search(hosts_error(placed, "c"), std::regex(R"(key 'hosts': no host 'c' \(hosts: a, b\))")));
+  EXPECT_TRUE(std::regex_search(hosts_error(replace_all(placed, "host: a", "host: z"), "a"),
+                                std::regex(R"(cfg\.yaml:4:\d+: key 'components\[0\]\.host': no host 'z')")));
+  EXPECT_TRUE(std::regex_search(hosts_error(good, "a"), std::regex(R"(--host a given, but)")));
+  // Host b builds its two components only, and its connections; a's master is someone else's.
+  auto b = saw::deploy::parse_deployment(replace_all(placed, "server: master", "server: slave"), "cfg.yaml",
+                                         registry(), "b");
+  EXPECT_EQ(b.components().size(), 2u);
+}
+
+}  // namespace

@@ -1,8 +1,10 @@
 """One connect(), three distances — the third: two hosts. Two network namespaces joined by a veth
-pair, each with its own /dev/shm (a mount namespace) so they share nothing but the link. Host A
-runs the master device (saw-rt) and a gateway attaching it; host B runs a gateway mirroring
-"master" from A, and saw-rt with the slave and the teleoperation task, whose deployment connects
-to "master" exactly as in the one- and two-process files. The slave follows; forces go back.
+pair, each with its own /dev/shm (a mount namespace) so they share nothing but the link. One
+deployment file, placed on hosts "operator" (the master device) and "patient" (the slave and the
+teleoperation task) with the namespaces' addresses: `saw-rt FILE --host operator` in one,
+`--host patient` in the other. Each starts its gateway (the operator's attaches the master, the
+patient's mirrors it) and the connections are those of config/teleop-sim.yaml. The slave
+follows; forces go back.
 
 Exit 77 (ctest: skipped, the reason printed) where namespaces cannot be created.
 usage: two_hosts.py SAW_RT SAW_GATEWAY
@@ -45,51 +47,50 @@ def main(saw_rt, saw_gateway):
                 print(f"SKIP: cannot build the two-host network ({' '.join(cmd)}): {r.stderr.strip()}")
                 return 77
         domain = str(7 + os.getpid() % 90)
-        with open(os.path.join(work, "a.yaml"), "w") as f:
-            f.write("""deployment:
-  name: host-a
+        # One deployment file for both hosts: each runs its part with --host; the addresses say
+        # that they are two machines, so each host's saw-rt starts its gateway (attach / mirror).
+        record = os.path.join(work, "patient.csv")
+        deploy = os.path.join(work, "hosts.yaml")
+        with open(deploy, "w") as f:
+            f.write(f"""deployment:
+  name: two-hosts
+hosts:
+  operator: {{address: {ip_a}}}
+  patient: {{address: {ip_b}}}
+gateway:
+  domain: {domain}
 components:
   - name: master
+    host: operator
     type: sim_haptic_device
-    task: {period: 1ms, priority: 80}
+    task: {{period: 1ms, priority: 80}}
     params:
       model: omni
-      hand: {type: sinusoid, amplitude: [0.03, 0.0, 0.0], frequency: 0.5, stiffness: 200, damping: 2}
-exports:
-  - {component: master, provided: arm}
-""")
-        record = os.path.join(work, "b.csv")
-        with open(os.path.join(work, "b.yaml"), "w") as f:
-            f.write("""deployment:
-  name: host-b
-components:
+      hand: {{type: sinusoid, amplitude: [0.03, 0.0, 0.0], frequency: 0.5, stiffness: 200, damping: 2}}
   - name: slave
+    host: patient
     type: sim_haptic_device
-    task: {period: 1ms, priority: 80}
-    params: {model: omni}
+    task: {{period: 1ms, priority: 80}}
+    params: {{model: omni}}
   - name: teleop
+    host: patient
     type: teleop
-    task: {period: 1ms, priority: 79}
+    task: {{period: 1ms, priority: 79}}
     params:
-      gains: {master: 300, slave: 300}
-      force_limits: {master: 3.0, slave: 3.0}
+      gains: {{master: 300, slave: 300}}
+      force_limits: {{master: 3.0, slave: 3.0}}
       stale_timeout: 50ms
       startup_timeout: 5s
 connections:
-  - {client: teleop, required: master, server: master, provided: arm}
-  - {client: teleop, required: slave, server: slave, provided: arm}
+  - {{client: teleop, required: master, server: master, provided: arm}}
+  - {{client: teleop, required: slave, server: slave, provided: arm}}
 record:
   columns: [slave.measured_cp, teleop.operating_state, teleop.tracking_error]
 """)
         # Each host: its own /dev/shm (mount namespace), so the bridge cannot shortcut the link.
         host = "mount -t tmpfs tmpfs /dev/shm && exec sh -c \"$0\""
-        a = (f"{saw_rt} {work}/a.yaml --duration 12 > {work}/a-rt.log 2>&1 & "
-             f"{saw_gateway} --attach master --interface {ip_a} --domain {domain} --wait 10 --duration 11 "
-             f"> {work}/a-gw.log 2>&1; wait")
-        b = (f"{saw_gateway} --mirror master --interface {ip_b} --domain {domain} --wait 10 --duration 10 "
-             f"> {work}/b-gw.log 2>&1 & "
-             f"n=0; while [ ! -e /dev/shm/saw.master ] && [ $n -lt 200 ]; do sleep 0.05; n=$((n+1)); done; "
-             f"{saw_rt} {work}/b.yaml --duration 5 --record {record} > {work}/b-rt.log 2>&1; echo rt=$?; wait")
+        a = f"{saw_rt} {deploy} --host operator --duration 12 > {work}/a-rt.log 2>&1"
+        b = f"{saw_rt} {deploy} --host patient --duration 5 --record {record} > {work}/b-rt.log 2>&1; echo rt=$?"
         procs.append(subprocess.Popen(["ip", "netns", "exec", ns_a, "unshare", "--mount", "--propagation",
                                        "private", "sh", "-c", host, a]))
         pb = subprocess.Popen(["ip", "netns", "exec", ns_b, "unshare", "--mount", "--propagation", "private",
@@ -97,7 +98,7 @@ record:
         procs.append(pb)
         out, _ = pb.communicate(timeout=60)
         procs[0].wait(timeout=60)
-        logs = {n: open(os.path.join(work, n)).read() for n in ("a-rt.log", "a-gw.log", "b-gw.log", "b-rt.log")
+        logs = {n: open(os.path.join(work, n)).read() for n in ("a-rt.log", "b-rt.log")
                 if os.path.exists(os.path.join(work, n))}
         for n, text in logs.items():
             print(f"--- {n}\n{text.strip()}")
@@ -116,7 +117,7 @@ record:
             rms = 1e3 * (sum(e * e for e in settled) / len(settled)) ** 0.5
             print(f"figure: tracking error RMS across two hosts {m.group(1)} mm over the run, "
                   f"{rms:.2f} mm after the first second (max {1e3 * max(settled):.2f} mm)")
-        a_gw = logs.get("a-gw.log", "")
+        a_gw = logs.get("a-rt.log", "")
         cmds = re.search(r"(\d+) commands in", a_gw)
         check(cmds is not None and int(cmds.group(1)) > 1000,
               f"forces from B's teleoperation reach the master on A ({cmds.group(1) if cmds else 0} commands)")

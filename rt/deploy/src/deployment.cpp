@@ -27,7 +27,7 @@ std::optional<TaskConfig> parse_task(Params& p) {
 }  // namespace
 
 Deployment parse_deployment(const std::string& yaml_text, const std::string& file,
-                            const ComponentRegistry& registry) {
+                            const ComponentRegistry& registry, const std::string& host) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
@@ -41,6 +41,7 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
   Params head = top.child("deployment");
   d.name_ = head.get_or<std::string>("name", std::filesystem::path(file).stem().string());
   d.clock_ = head.get_enum<Clock>("clock", {{"real", Clock::real}, {"stepped", Clock::stepped}}, Clock::real);
+  Placement place = parse_placement(root, top, host);
 
   // Components: each built by its registered factory from its own parameters.
   top.mark_used("components");  // a list: walked below
@@ -55,8 +56,22 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     const Factory* factory = registry.find(type);
     if (factory == nullptr)
       entry.fail_at("type", "unknown component type '" + type + "' (known: " + registry.type_list() + ")");
-    if (d.manager_->find(name) != nullptr)
+    if (d.manager_->find(name) != nullptr || place.host_of.count(name) != 0)
       entry.fail_at("name", "a component named '" + name + "' exists already");
+    if (place.active) {
+      const auto h = entry.get<std::string>("host");
+      if (place.address.count(h) == 0)
+        entry.fail_at("host", "no host '" + h + "' (hosts: " + place.names() + ")");
+      place.host_of[name] = h;
+      if (h != place.self) {  // another process's part of the file: checked there
+        entry.mark_used("task");
+        entry.mark_used("params");
+        entry.check_all_used();
+        continue;
+      }
+    } else if (entry.has("host")) {
+      entry.fail_at("host", "placing a component needs a hosts: section");
+    }
     auto task = parse_task(entry);
     Params params = entry.child("params");
     FactoryContext ctx{name, task, params, directory};
@@ -89,6 +104,7 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
       try {
         d.exports_.push_back(registry.exporter()(*c, provided));
         d.exported_names_.push_back(component);
+        d.exported_interface_[component] = provided;
       } catch (const std::exception& ex) {
         e.fail(ex.what());
       }
@@ -96,7 +112,45 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
   }
   for (const auto& make : registry.resolvers()) d.manager_->add_resolver(make());
 
+  // Placed on hosts: a server here with a client elsewhere is exported (and, for another
+  // machine, attached by this host's gateway); a server on another machine is mirrored here by
+  // the gateway, so that connect() finds it in this host's bridge.
+  std::vector<std::string> remote_attach, mirrors;
+  const auto add_unique = [](std::vector<std::string>& v, const std::string& x) {
+    if (std::find(v.begin(), v.end(), x) == v.end()) v.push_back(x);
+  };
+  if (place.active && root["connections"].IsSequence()) {
+    const YAML::Node connections = root["connections"];
+    for (std::size_t i = 0; i < connections.size(); ++i) {
+      const YAML::Node c = connections[i];
+      if (!c.IsMap() || !c["client"] || !c["server"] || !c["provided"]) continue;  // reported below
+      const auto client = c["client"].as<std::string>(), server = c["server"].as<std::string>();
+      const auto provided = c["provided"].as<std::string>();
+      if (place.host_of.count(client) == 0 || place.host_of.count(server) == 0) continue;
+      const auto& client_host = place.host_of[client];
+      const auto& server_host = place.host_of[server];
+      if (server_host == place.self && client_host != place.self) {
+        if (auto it = d.exported_interface_.find(server); it == d.exported_interface_.end()) {
+          Component* comp = d.manager_->find(server);
+          if (comp == nullptr || comp->provided(provided) == nullptr) continue;  // reported below
+          if (!registry.exporter())
+            throw ConfigError(file, 0, 0, "hosts", "this program cannot export interfaces");
+          d.exports_.push_back(registry.exporter()(*comp, provided));
+          d.exported_names_.push_back(server);
+          d.exported_interface_[server] = provided;
+        } else if (it->second != provided) {
+          Params(c, file, "connections[" + std::to_string(i) + "]")
+              .fail("'" + server + "' is already exported with '" + it->second +
+                    "'; one interface per component crosses to other hosts");
+        }
+        if (place.remote_machine(client_host)) add_unique(remote_attach, server);
+      }
+      if (client_host == place.self && server_host != place.self && place.remote_machine(server_host))
+        add_unique(mirrors, server);
+    }
+  }
   // The DDS gateway, started with the deployment: maps the exported interfaces to DDS.
+  bool interfaces_named = false;
   if (top.has("gateway")) {
     Params g = top.child("gateway");
     GatewaySpec spec;
@@ -105,9 +159,11 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     for (const auto& a : spec.attach)
       if (std::find(d.exported_names_.begin(), d.exported_names_.end(), a) == d.exported_names_.end())
         g.fail_at("attach", "'" + a + "' is not exported by this deployment (see exports:)");
-    if (spec.attach.empty()) g.fail("nothing to map: this deployment exports no interface (see exports:)");
+    if (spec.attach.empty() && remote_attach.empty() && mirrors.empty())
+      g.fail("nothing to map: this deployment exports no interface (see exports:)");
     spec.domain = static_cast<int>(g.get_in_range("domain", 0, 232, 0));
     if (g.has("domain") && g.get<double>("domain") != spec.domain) g.fail_at("domain", "expected an integer");
+    interfaces_named = g.has("interfaces");
     spec.interfaces = g.get_or<std::vector<std::string>>("interfaces", spec.interfaces);
     if (spec.interfaces.empty()) g.fail_at("interfaces", "at least one interface address");
     spec.decimation = static_cast<int>(g.get_in_range("decimation", 1, 1000, 1));
@@ -115,6 +171,26 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     if (!registry.gateway_launcher()) g.fail("this program cannot start a gateway");
     d.gateway_ = spec;
     d.launch_gateway_ = registry.gateway_launcher();
+  }
+  if (!remote_attach.empty() || !mirrors.empty()) {
+    if (!registry.gateway_launcher())
+      throw ConfigError(file, 0, 0, "hosts", "this program cannot start a gateway to reach other hosts");
+    if (!d.gateway_) {
+      d.gateway_ = GatewaySpec{};
+      d.gateway_->attach.clear();
+    }
+    for (const auto& a : remote_attach) add_unique(d.gateway_->attach, a);
+    if (!interfaces_named) d.gateway_->interfaces = {place.address[place.self]};
+    d.gateway_->mirrors = mirrors;
+    d.launch_gateway_ = registry.gateway_launcher();
+    // Mirrors must be in this host's bridge before connect() looks for them.
+    if (!mirrors.empty()) {
+      try {
+        d.gateway_process_ = d.launch_gateway_(*d.gateway_);
+      } catch (const std::exception& e) {
+        throw ConfigError(file, 0, 0, "hosts", e.what());
+      }
+    }
   }
 
   // Connections, checked by the manager (names and types); its message is kept whole.
@@ -127,6 +203,11 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
       const auto client = c.get<std::string>("client"), required = c.get<std::string>("required");
       const auto server = c.get<std::string>("server"), provided = c.get<std::string>("provided");
       c.check_all_used();
+      if (place.active) {
+        for (const auto& [key, who] : {std::pair{"client", client}, std::pair{"server", server}})
+          if (place.host_of.count(who) == 0) c.fail_at(key, "no component named '" + who + "'");
+        if (!place.here(client)) continue;  // made by the client's host
+      }
       try {
         d.manager_->connect(client, required, server, provided);
       } catch (const ConnectError& e) {
@@ -151,6 +232,10 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
       const auto text = n.as<std::string>();
       const auto dot = text.find('.');
       const auto [line, column] = location(n);
+      // Placed on hosts: each host records its own components' columns.
+      if (dot != std::string::npos && place.active && place.host_of.count(text.substr(0, dot)) != 0 &&
+          !place.here(text.substr(0, dot)))
+        continue;
       const Component* comp = dot == std::string::npos ? nullptr : d.manager_->find(text.substr(0, dot));
       const int index = comp == nullptr ? -1 : comp->state_table().find_column(text.substr(dot + 1));
       if (index < 0)
@@ -171,12 +256,13 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
   return d;
 }
 
-Deployment load_deployment(const std::string& path, const ComponentRegistry& registry) {
+Deployment load_deployment(const std::string& path, const ComponentRegistry& registry,
+                           const std::string& host) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path, 0, 0, "", "cannot read the deployment file");
   std::stringstream ss;
   ss << in.rdbuf();
-  return parse_deployment(ss.str(), path, registry);
+  return parse_deployment(ss.str(), path, registry, host);
 }
 
 void Deployment::set_record_file(std::string path) {
@@ -186,7 +272,7 @@ void Deployment::set_record_file(std::string path) {
 }
 
 void Deployment::start() {
-  if (record_ && !record_->file.empty()) {
+  if (record_ && !record_->file.empty() && !record_->columns.empty()) {
     std::vector<Recorder::Column> columns;
     for (const auto& text : record_->columns) {
       const auto dot = text.find('.');
@@ -202,7 +288,7 @@ void Deployment::start() {
     manager_->start();
     if (recorder_) recorder_->start_thread();
   }
-  if (gateway_) gateway_process_ = launch_gateway_(*gateway_);
+  if (gateway_ && !gateway_process_) gateway_process_ = launch_gateway_(*gateway_);
 }
 
 void Deployment::run_for(double seconds) {
@@ -219,8 +305,10 @@ void Deployment::run_for(double seconds) {
 }
 
 void Deployment::stop() {
-  gateway_process_.reset();  // the gateway detaches first
   manager_->stop();
+  // Then the gateway: its mirrors served the tasks until they stopped, and its attachments now
+  // publish FAULT for this host's components, as they would for a crash.
+  gateway_process_.reset();
   if (recorder_) recorder_->stop();
 }
 

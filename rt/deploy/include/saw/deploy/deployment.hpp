@@ -1,11 +1,13 @@
 // Deployment: a YAML file's components, tasks and connections, validated before anything starts.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "saw/deploy/placement.hpp"
 #include "saw/deploy/recorder.hpp"
 #include "saw/deploy/registry.hpp"
 #include "saw/manager.hpp"
@@ -44,7 +46,8 @@ class Deployment {
   const Recorder* recorder() const noexcept { return recorder_.get(); }
 
  private:
-  friend Deployment parse_deployment(const std::string&, const std::string&, const ComponentRegistry&);
+  friend Deployment parse_deployment(const std::string&, const std::string&, const ComponentRegistry&,
+                                     const std::string&);
   Deployment() : manager_(std::make_unique<Manager>()) {}
 
   std::string name_, file_;
@@ -54,15 +57,19 @@ class Deployment {
   std::unique_ptr<Recorder> recorder_;
   std::vector<std::shared_ptr<void>> exports_;  // keeps exported interfaces exported
   std::vector<std::string> exported_names_;
+  std::map<std::string, std::string> exported_interface_;  // component → its exported interface
   std::optional<GatewaySpec> gateway_;
   GatewayLauncher launch_gateway_;
   std::shared_ptr<void> gateway_process_;  // while running
   int record_line_ = 0, record_column_ = 0;
 };
 
-// Throws ConfigError (file:line:column: key '…': what) for anything wrong, having started nothing.
+// Throws ConfigError (file:line:column: key '…': what) for anything wrong, having started nothing
+// (a file placed on hosts whose servers are on other machines starts its gateway first, to
+// mirror them; it is stopped again on error). `host`: the part of a file with `hosts:` to run.
 Deployment parse_deployment(const std::string& yaml_text, const std::string& file,
-                            const ComponentRegistry& registry);
-Deployment load_deployment(const std::string& path, const ComponentRegistry& registry);
+                            const ComponentRegistry& registry, const std::string& host = "");
+Deployment load_deployment(const std::string& path, const ComponentRegistry& registry,
+                           const std::string& host = "");
 
 }  // namespace saw::deploy

@@ -35,6 +35,7 @@ struct GatewaySpec {
   int domain = 0;
   std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
   int decimation = 1;
+  std::vector<std::string> mirrors;  // components of other machines to present here (started before connect)
 };
 // Starts the gateway process for a running deployment; the handle stops it when released.
 using GatewayLauncher = std::function<std::shared_ptr<void>(const GatewaySpec& spec)>;
