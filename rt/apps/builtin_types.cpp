@@ -141,6 +141,9 @@ std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec) {
   for (const auto& a : spec.attach) args.insert(args.end(), {"--attach", a});
   for (const auto& i : spec.interfaces) args.insert(args.end(), {"--interface", i});
   for (const auto& m : spec.mirrors) args.insert(args.end(), {"--mirror", m});
+  for (const auto& [component, arm] : spec.imports)
+    args.insert(args.end(), {"--import", component + "=" + arm});
+  if (!spec.ros_namespace.empty()) args.insert(args.end(), {"--ros-namespace", spec.ros_namespace});
   args.insert(args.end(), {"--wait", "30"});  // our own exports go live when the manager starts
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
@@ -148,8 +151,11 @@ std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec) {
   auto p = std::make_shared<GatewayProcess>();
   if (const int err = posix_spawn(&p->pid, exe.c_str(), nullptr, nullptr, argv.data(), environ); err != 0)
     throw std::runtime_error("gateway: cannot start " + exe + ": " + std::strerror(err));
-  // Mirrors of other hosts' components: connect() will look for them in this host's bridge.
-  for (const auto& m : spec.mirrors) {
+  // Mirrors of other hosts' components and imported arms: connect() will look for them in this
+  // host's bridge.
+  std::vector<std::string> wanted = spec.mirrors;
+  for (const auto& im : spec.imports) wanted.push_back(im.first);
+  for (const auto& m : wanted) {
     const auto deadline = std::chrono::steady_clock::now() + 30s;
     for (;;) {
       try {
@@ -159,10 +165,11 @@ std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec) {
       int status = 0;
       if (waitpid(p->pid, &status, WNOHANG) == p->pid) {
         p->pid = -1;
-        throw std::runtime_error("gateway: exited before it could mirror '" + m + "' (see its output)");
+        throw std::runtime_error("gateway: exited before it could present '" + m + "' (see its output)");
       }
       if (std::chrono::steady_clock::now() > deadline)
-        throw std::runtime_error("gateway: '" + m + "' was not mirrored within 30 s: is its host running?");
+        throw std::runtime_error("gateway: '" + m +
+                                 "' was not presented here within 30 s (a mirror: is its host running?)");
       std::this_thread::sleep_for(50ms);
     }
   }

@@ -61,6 +61,14 @@ TEST(DdsClient, TheSameConnectAndFunctionsReachAComponentThroughItsGateway) {
   ASSERT_EQ(client.add(1'000'000), saw::Status::ok);
   ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::ok && v > before + 1'000'000; }))
       << "the write command did not reach the server";
+
+  // The server's RT loop stops: its state goes stale, reads say disconnected, never hang.
+  s.manager.stop();
+  ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::disconnected; }));
+  EXPECT_NE(client.tripled(1, r), saw::Status::ok);
+  // The gateway goes: nothing reads the commands any more, so they are refused.
+  s.served.reset();
+  ASSERT_TRUE(wait_for([&] { return client.add(1) == saw::Status::disconnected; }));
   m.stop();
 }
 

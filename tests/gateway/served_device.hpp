@@ -52,7 +52,7 @@ struct ServedDevice {
   }
   ~ServedDevice() {
     served.reset();
-    manager.stop();
+    manager.stop();  // (stopping twice is allowed)
   }
   std::string name;
   int domain;

@@ -1,8 +1,8 @@
 """The da Vinci stream, imported: a Cyclone DDS publisher (Python) replays a synthetic dVRK master
-(rt/MTML/measured_cp, measured_cv, operating_state, as the dVRK's ROS 2 stack publishes them);
-saw-gateway --import presents it through the shared-memory bridge; a real saw-rt process runs a
-simulated slave and the teleoperation task connected to it exactly as to a local master. The
-slave follows; when the stream stops, teleoperation goes to FAULT.
+(rt/MTML/measured_cp, measured_cv, operating_state, as the dVRK's ROS 2 stack publishes them); a
+real saw-rt process whose deployment imports it (`gateway: import:` by arm name) runs a simulated
+slave and the teleoperation task connected to it exactly as to a local master. The slave follows;
+when the stream stops, teleoperation goes to FAULT.
 
 usage: dvrk_import.py SAW_RT SAW_GATEWAY
 """
@@ -60,8 +60,6 @@ def main(saw_rt, saw_gateway):
     client = Client(domain)
     master = SyntheticMaster(client, arm)
     master.start()
-    gw = subprocess.Popen([saw_gateway, "--import", f"{component}={arm}", "--domain", str(domain)],
-                          stdout=subprocess.PIPE, text=True)
     work = tempfile.mkdtemp()
     record = os.path.join(work, "run.csv")
     yaml = f"""deployment:
@@ -85,23 +83,24 @@ connections:
   - {{client: teleop{tag}, required: slave, server: slave{tag}, provided: arm}}
 record:
   columns: [slave{tag}.measured_cp, teleop{tag}.operating_state]
+gateway:
+  domain: {domain}
+  import:
+    - {{component: {component}, arm: {arm}}}
 """
     path = os.path.join(work, "deploy.yaml")
     with open(path, "w") as f:
         f.write(yaml)
     rt = None
+    out = None
     try:
-        # The gateway exports the imported arm once it runs: wait for its segment.
-        deadline = time.monotonic() + 10
-        while not os.path.exists(f"/dev/shm/saw.{component}") and time.monotonic() < deadline:
-            time.sleep(0.01)
-        check(os.path.exists(f"/dev/shm/saw.{component}"), "the gateway exports the imported arm on this host")
         rt = subprocess.Popen([saw_rt, path, "--duration", "4", "--record", record], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         time.sleep(2.5)  # teleoperate for 2.5 s (the run's length, not a wait for a result)
         master.running = False
         out, _ = rt.communicate(timeout=30)
         print(out)
-        check(rt.returncode == 0, f"saw-rt ran and connected to the imported master (exit {rt.returncode})")
+        check(rt.returncode == 0, f"saw-rt started its gateway, which imported the master, and connected to it "
+                                  f"(exit {rt.returncode})")
         rows = list(csv.DictReader(open(record)))
         check(len(rows) > 1000, f"recorded {len(rows)} rows")
         t0 = float(rows[0]["time"]) if rows else 0
@@ -121,10 +120,8 @@ record:
         master.running = False
         if rt is not None and rt.poll() is None:
             rt.kill()
-        gw.send_signal(signal.SIGTERM)
-        out, _ = gw.communicate(timeout=10)
-        print(out.strip().splitlines()[-1] if out.strip() else "(no gateway output)")
-        imported = [l for l in out.splitlines() if "imported" in l]
+        imported = [l for l in (out or "").splitlines() if "imported" in l and l.startswith("saw-gateway:")]
+        print(imported[-1] if imported else "(no gateway statistics)")
         check(bool(imported) and " 0 rejected" in imported[-1].split("imported")[1],
               "every imported sample was a valid value")
     return exit_code()

@@ -14,7 +14,7 @@ TypeInfo DdsComponent::type(const std::string& name, std::uint32_t size, std::ui
 }
 
 DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& name,
-                           const std::vector<EndpointInfo>& remote, TimeNs query_timeout)
+                           const std::vector<EndpointInfo>& remote, TimeNs query_timeout, TimeNs stale_after)
     : Component(name), dds_(std::move(dds)) {
   auto& ctx = dds_->ctx;
   auto& p = provide(remote.front().interface_name);
@@ -45,7 +45,9 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
       c.name = e.name;
       c.signature = {CommandKind::read, t};
       // The newest sample, stamped with its arrival (this process's monotonic clock).
-      c.read_stamped = [s = states_.back().get()](void* out, RowStamp& stamp) {
+      // A gateway gone (no writer matched) or a server silent for `stale_after` (its RT process
+      // died: the gateway publishes FAULT and stops the state): disconnected, as over the bridge.
+      c.read_stamped = [s = states_.back().get(), stale_after](void* out, RowStamp& stamp) {
         std::string why;
         for (auto k = s->mapping->take(*s->reader, s->value.get(), why); k != Mapping::Take::none;
              k = s->mapping->take(*s->reader, s->value.get(), why))
@@ -53,7 +55,11 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
             s->valid = true;
             s->arrival = monotonic_now();
           }
+        fdds::SubscriptionMatchedStatus matched;
+        s->reader->get_subscription_matched_status(matched);
+        if (matched.current_count == 0) return Status::disconnected;
         if (!s->valid) return Status::no_data;
+        if (monotonic_now() - s->arrival > stale_after) return Status::disconnected;
         std::memcpy(out, s->value.get(), s->mapping->size());
         stamp.time = s->arrival;
         stamp.tick = 0;
@@ -73,6 +79,9 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
       c.signature = {e.kind == "write" ? CommandKind::write : CommandKind::void_command, t};
       c.execute = [](const void*) {};  // never used: forward takes the call
       c.forward = [o = outs_.back().get()](const void* arg) {
+        fdds::PublicationMatchedStatus matched;  // no gateway reads it: it would go nowhere
+        o->writer->get_publication_matched_status(matched);
+        if (matched.current_count == 0) return Status::disconnected;
         return o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()), o->frame)
                    ? Status::ok
                    : Status::disconnected;

@@ -23,7 +23,7 @@ struct OwnedDds {
 class DdsComponent : public Component {
  public:
   DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& name,
-               const std::vector<EndpointInfo>& remote, TimeNs query_timeout);
+               const std::vector<EndpointInfo>& remote, TimeNs query_timeout, TimeNs stale_after);
   ~DdsComponent() override;
 
   Mailbox* remote_events() noexcept override { return events_.get(); }

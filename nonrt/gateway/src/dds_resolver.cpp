@@ -32,7 +32,8 @@ std::unique_ptr<Component> DdsResolver::resolve(std::string_view name) {
   } catch (const std::runtime_error&) {
     return nullptr;  // no gateway serves it: not ours to resolve
   }
-  return std::make_unique<DdsComponent>(dds_, std::string(name), remote, options_.query_timeout);
+  return std::make_unique<DdsComponent>(dds_, std::string(name), remote, options_.query_timeout,
+                                        options_.stale_after);
 }
 
 }  // namespace saw::gateway

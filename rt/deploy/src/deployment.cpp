@@ -156,10 +156,26 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     GatewaySpec spec;
     for (const auto& e : d.exported_names_) spec.attach.push_back(e);
     spec.attach = g.get_or<std::vector<std::string>>("attach", spec.attach);
+    // The da Vinci stream: foreign CRTK arms presented here (rt/[namespace/]<arm>/measured_cp, ...).
+    if (g.has("import")) {
+      g.mark_used("import");
+      const YAML::Node import_list = root["gateway"]["import"];
+      if (!import_list.IsSequence()) g.fail_at("import", "expected a list of {component, arm}");
+      for (std::size_t i = 0; i < import_list.size(); ++i) {
+        Params im(import_list[i], file, "gateway.import[" + std::to_string(i) + "]");
+        const auto component = im.get<std::string>("component");
+        const auto arm = im.get_or<std::string>("arm", component);
+        im.check_all_used();
+        if (d.manager_->find(component) != nullptr || place.host_of.count(component) != 0)
+          im.fail_at("component", "a component named '" + component + "' exists already");
+        spec.imports.emplace_back(component, arm);
+      }
+    }
+    spec.ros_namespace = g.get_or<std::string>("namespace", "");
     for (const auto& a : spec.attach)
       if (std::find(d.exported_names_.begin(), d.exported_names_.end(), a) == d.exported_names_.end())
         g.fail_at("attach", "'" + a + "' is not exported by this deployment (see exports:)");
-    if (spec.attach.empty() && remote_attach.empty() && mirrors.empty())
+    if (spec.attach.empty() && spec.imports.empty() && remote_attach.empty() && mirrors.empty())
       g.fail("nothing to map: this deployment exports no interface (see exports:)");
     spec.domain = static_cast<int>(g.get_in_range("domain", 0, 232, 0));
     if (g.has("domain") && g.get<double>("domain") != spec.domain) g.fail_at("domain", "expected an integer");
@@ -172,7 +188,8 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
     d.gateway_ = spec;
     d.launch_gateway_ = registry.gateway_launcher();
   }
-  if (!remote_attach.empty() || !mirrors.empty()) {
+  const bool imports = d.gateway_ && !d.gateway_->imports.empty();
+  if (!remote_attach.empty() || !mirrors.empty() || imports) {
     if (!registry.gateway_launcher())
       throw ConfigError(file, 0, 0, "hosts", "this program cannot start a gateway to reach other hosts");
     if (!d.gateway_) {
@@ -180,11 +197,12 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
       d.gateway_->attach.clear();
     }
     for (const auto& a : remote_attach) add_unique(d.gateway_->attach, a);
-    if (!interfaces_named) d.gateway_->interfaces = {place.address[place.self]};
+    if (!interfaces_named && place.active && !place.address[place.self].empty())
+      d.gateway_->interfaces = {place.address[place.self]};
     d.gateway_->mirrors = mirrors;
     d.launch_gateway_ = registry.gateway_launcher();
-    // Mirrors must be in this host's bridge before connect() looks for them.
-    if (!mirrors.empty()) {
+    // Mirrors and imports must be in this host's bridge before connect() looks for them.
+    if (!mirrors.empty() || imports) {
       try {
         d.gateway_process_ = d.launch_gateway_(*d.gateway_);
       } catch (const std::exception& e) {
@@ -204,8 +222,13 @@ Deployment parse_deployment(const std::string& yaml_text, const std::string& fil
       const auto server = c.get<std::string>("server"), provided = c.get<std::string>("provided");
       c.check_all_used();
       if (place.active) {
+        const auto imported = [&](const std::string& n) {
+          return d.gateway_ && std::any_of(d.gateway_->imports.begin(), d.gateway_->imports.end(),
+                                           [&](const auto& im) { return im.first == n; });
+        };
         for (const auto& [key, who] : {std::pair{"client", client}, std::pair{"server", server}})
-          if (place.host_of.count(who) == 0) c.fail_at(key, "no component named '" + who + "'");
+          if (place.host_of.count(who) == 0 && !imported(who))
+            c.fail_at(key, "no component named '" + who + "'");
         if (!place.here(client)) continue;  // made by the client's host
       }
       try {

@@ -36,6 +36,10 @@ struct GatewaySpec {
   std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
   int decimation = 1;
   std::vector<std::string> mirrors;  // components of other machines to present here (started before connect)
+  // Foreign CRTK arms (a dVRK's masters) to present here as components, read-only: component
+  // name → arm name; topics rt/[ros_namespace/]<arm>/... (started before connect).
+  std::vector<std::pair<std::string, std::string>> imports;
+  std::string ros_namespace;
 };
 // Starts the gateway process for a running deployment; the handle stops it when released.
 using GatewayLauncher = std::function<std::shared_ptr<void>(const GatewaySpec& spec)>;
