@@ -10,7 +10,7 @@ apt_packages=(
   libeigen3-dev liborocos-kdl-dev libusb-1.0-0-dev
   libfastrtps-dev libfastcdr-dev fastddsgen
   libyaml-cpp-dev libcli11-dev libfmt-dev
-  libgtest-dev libbenchmark-dev rt-tests clang-format
+  libgtest-dev libbenchmark-dev rt-tests stress-ng clang-format
 )
 
 missing=()
