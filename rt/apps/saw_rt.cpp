@@ -43,6 +43,15 @@ void print_summary(saw::deploy::Deployment& d, double seconds) {
           static_cast<unsigned long long>(t->enabled_cycles()),
           static_cast<unsigned long long>(t->rejected_commands()),
           static_cast<unsigned long long>(t->refused_sends()));
+    if (const auto* t = dynamic_cast<saw::teleop::CollaborativeControlForce*>(c);
+        t && t->enabled_cycles() != 0)
+      std::printf(
+          "  %s: master sample -> force command: mean %.1f us, max %.1f us; %llu of %llu cycles used a "
+          "sample "
+          "from an earlier cycle\n",
+          t->name().c_str(), t->master_age_mean() / 1e3, static_cast<double>(t->master_age_max()) / 1e3,
+          static_cast<unsigned long long>(t->master_age_late()),
+          static_cast<unsigned long long>(t->enabled_cycles()));
     if (const auto* s = dynamic_cast<saw::drivers::SimHapticDevice*>(c))
       if (s->rejected_commands() != 0)
         std::printf("  %s: %llu force commands rejected (non-finite or over the limit)\n", s->name().c_str(),

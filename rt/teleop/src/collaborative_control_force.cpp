@@ -228,6 +228,12 @@ void CollaborativeControlForce::run() {
   tracking_sum_sq_ += tracking_error_ * tracking_error_;
   tracking_max_ = std::max(tracking_max_, tracking_error_);
   ++enabled_cycles_;
+  // End-to-end: how old the master sample is when the force computed from it is sent (its row
+  // time, from this process or another, to this cycle's time).
+  master_age_ = now() - last_master_.time;
+  master_age_sum_ += static_cast<double>(master_age_);
+  master_age_max_ = std::max(master_age_max_, master_age_);
+  if (2 * master_age_ >= config().period.count()) ++master_age_late_;
   send_forces(law.master_force, law.slave_force);
 }
 

@@ -77,6 +77,14 @@ class CollaborativeControlForce : public Task {
   }
   double tracking_max() const noexcept { return tracking_max_; }
   std::uint64_t enabled_cycles() const noexcept { return enabled_cycles_; }
+  // End-to-end latency, master sample → the force command computed from it (ENABLED cycles):
+  // mean and max in ns, and how many cycles used a sample half a period old or more (a row of
+  // an earlier cycle).
+  double master_age_mean() const noexcept {
+    return enabled_cycles_ ? master_age_sum_ / static_cast<double>(enabled_cycles_) : 0.0;
+  }
+  TimeNs master_age_max() const noexcept { return master_age_max_; }
+  std::uint64_t master_age_late() const noexcept { return master_age_late_; }
 
   // State-table columns (for tests and the recorder).
   struct Columns {
@@ -116,6 +124,9 @@ class CollaborativeControlForce : public Task {
   std::uint64_t rejected_ = 0, refused_sends_ = 0;
   double tracking_sum_sq_ = 0, tracking_max_ = 0;
   std::uint64_t enabled_cycles_ = 0;
+  TimeNs master_age_ = 0, master_age_max_ = 0;
+  double master_age_sum_ = 0;
+  std::uint64_t master_age_late_ = 0;
 
   // State-table sources.
   OperatingState state_{};
