@@ -66,7 +66,10 @@ void Task::account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t over
 
 void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) noexcept {
   RtContextScope rt_scope;
-  Pacer pacer(first_wakeup, config_.period.count());
+  // The first multiple of the period at or after the common start, plus this task's offset.
+  const TimeNs period = config_.period.count();
+  const TimeNs first = (first_wakeup + period - 1) / period * period + config_.offset.count();
+  Pacer pacer(first, period);
   while (running.load(std::memory_order_acquire)) {
     const TimeNs scheduled = pacer.next_wakeup();
     const timespec ts = to_timespec(scheduled);

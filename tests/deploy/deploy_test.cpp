@@ -94,6 +94,8 @@ TEST(Deployment, EveryErrorNamesFileLineColumnAndKey) {
        R"(^cfg\.yaml:1:\d+: key '': YAML syntax)"},
       {"    params: {gains: {master: 100, slave: 100}}", "    params: {gains: {master: 100, slave: -5}}",
        R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.gains\.slave': .*out of range)"},
+      {"task: {period: 1ms}\n    params: {gains", "task: {period: 1ms, offset: 1ms}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.offset': the phase must be at least 0 and less than the period)"},
   };
   for (const auto& c : cases) {
     const auto message = error_of(c.from, c.to);

@@ -144,3 +144,36 @@ TEST(Log, FormatsArgumentsAndCountsDrops) {
 }
 
 }  // namespace
+
+namespace {
+
+// Periodic tasks wake on a grid aligned to the monotonic clock plus their offset: in every
+// process of a host, and in a fixed order within a period (producers before consumers).
+TEST(Task, WakeUpsAreOnTheClockAlignedGridPlusTheOffset) {
+  class Ticker : public saw::Task {
+   public:
+    explicit Ticker(std::chrono::nanoseconds offset)
+        : Task("ticker" + std::to_string(offset.count()), [&] {
+            auto c = saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0);
+            c.offset = offset;
+            return c;
+          }()) {}
+    void run() override {}
+  } a(std::chrono::nanoseconds(0)), b(std::chrono::microseconds(300));
+  saw::Manager m;
+  m.add(a);
+  m.add(b);
+  m.start();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while ((a.statistics().cycles < 20 || b.statistics().cycles < 20) &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  m.stop();
+  ASSERT_GE(a.statistics().cycles, 20u);
+  ASSERT_GE(b.statistics().cycles, 20u);
+  // Scheduled (not actual) wake-up times: exact, whatever the machine does.
+  EXPECT_EQ(a.statistics().last_wakeup % 1'000'000, 0);
+  EXPECT_EQ(b.statistics().last_wakeup % 1'000'000, 300'000);
+}
+
+}  // namespace

@@ -21,6 +21,9 @@ std::optional<TaskConfig> parse_task(Params& p) {
   c.cpu = static_cast<int>(t.get_in_range("cpu", -1, 1023, -1));
   if (c.period.count() != 0 && c.period < std::chrono::microseconds(10))
     t.fail_at("period", "a period under 10 us is not supported");
+  c.offset = t.get_or<std::chrono::nanoseconds>("offset", std::chrono::nanoseconds(0));
+  if (c.offset.count() < 0 || (c.offset.count() != 0 && c.offset >= c.period))
+    t.fail_at("offset", "the phase must be at least 0 and less than the period");
   return c;
 }
 

@@ -15,6 +15,10 @@ struct TaskConfig {
   std::chrono::nanoseconds period{0};  // zero: continuous (run() back to back)
   int priority = 0;                    // SCHED_FIFO 1..99; 0: SCHED_OTHER
   int cpu = -1;                        // pinned CPU, -1: any
+  // Phase within the period. Periodic tasks wake on a grid aligned to CLOCK_MONOTONIC (the same
+  // in every process of the host) plus this offset: a consumer placed after its producers reads
+  // the rows of the same period, in this process and in others.
+  std::chrono::nanoseconds offset{0};
   std::size_t stack_prefault = 256 * 1024;
   std::size_t histogram_bins = 1000;  // 1 µs each
 
