@@ -64,14 +64,16 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
       const auto& e = imports_->arms.back()->endpoints();
       endpoints_.insert(endpoints_.end(), e.begin(), e.end());
     }
-    for (const auto& name : config_.mirrors) {
+    for (const auto& arg : config_.mirrors) {
+      const auto [name, local] = split_mirror(arg);
       auto remote = find_remote(ctx, name, config_.name, config_.attach_timeout);
-      imports_->mirrors.push_back(std::make_unique<Mirror>(ctx, name, remote));
+      imports_->mirrors.push_back(std::make_unique<Mirror>(ctx, name, remote, local));
       Mirror& m = *imports_->mirrors.back();
       imports_->exporters.push_back(std::make_unique<bridge::Exporter>(m, m.interface_name()));
       imports_->manager.add(m);
       for (auto& e : remote) {
         e.kind = "mirror";  // served here through the bridge; the topics are the remote gateway's
+        e.component = local;
         endpoints_.push_back(std::move(e));
       }
     }

@@ -27,8 +27,10 @@ int main(int argc, char** argv) {
   app.add_option("--import", imports,
                  "foreign CRTK arm to present through the bridge: NAME or NAME=ARM (topics rt/[NS/]ARM/...; "
                  "repeatable)");
-  app.add_option("--mirror", config.mirrors,
-                 "component served by a gateway on another host, to present on this host (repeatable)");
+  app.add_option(
+      "--mirror", config.mirrors,
+      "component served by a gateway on another host, to present on this host: NAME, or NAME=LOCAL to "
+      "present it under another name (repeatable)");
   app.add_option("--ros-namespace", ros_namespace, "namespace of the imported arms' topics");
   app.add_option("--clutch-topic", defaults.clutch_topic, "sensor_msgs/Joy topic of the clutch (\"\": none)");
   app.add_option("--operator-present-topic", defaults.operator_present_topic,

@@ -7,23 +7,46 @@
 
 namespace saw::gateway {
 
-TypeInfo Mirror::type(const EndpointInfo& e) {
-  if (e.saw_size == 0) return {};
-  type_names_.push_back(e.saw_type);
-  return {type_names_.back(), e.saw_size, e.saw_version};
+TypeInfo Mirror::type(const std::string& name, std::uint32_t size, std::uint32_t version) {
+  if (size == 0) return {};
+  type_names_.push_back(name);
+  return {type_names_.back(), size, version};
 }
 
-Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote)
-    : Task(component, TaskConfig::periodic(std::chrono::milliseconds(1), 0)), dds_(dds) {
+std::pair<std::string, std::string> split_mirror(const std::string& arg) {
+  const auto eq = arg.find('=');
+  if (eq == std::string::npos) return {arg, arg};
+  return {arg.substr(0, eq), arg.substr(eq + 1)};
+}
+
+Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote,
+               const std::string& local_name, TimeNs query_timeout)
+    : Task(local_name.empty() ? component : local_name,
+           TaskConfig::periodic(std::chrono::milliseconds(1), 0)),
+      dds_(dds) {
   if (remote.empty()) throw std::runtime_error("mirror " + component + ": the remote manifest lists nothing");
   interface_ = remote.front().interface_name;
   auto& p = provide(interface_);
   for (const auto& e : remote) {
     if (e.interface_name != interface_ || e.topic.empty())
       continue;  // one interface per segment; mapped only
+    if (e.kind == "qualified_read") {
+      queries_.push_back(std::unique_ptr<Query>(new Query{
+          {}, QueryClient(dds_.participant, component, e.name), e.saw_size, e.result_size, query_timeout}));
+      Command c;
+      c.name = e.name;
+      c.signature = {CommandKind::qualified_read, type(e.saw_type, e.saw_size, e.saw_version),
+                     type(e.result_type, e.result_size, e.result_version)};
+      c.read = [q = queries_.back().get()](const void* arg, void* out) {
+        std::lock_guard lock(q->lock);
+        return q->client.call(arg, q->arg_size, out, q->result_size, q->timeout);
+      };
+      p.add_command(std::move(c));
+      continue;
+    }
     const Mapping* m = find_mapping_by_dds(e.dds_type);
     if (m == nullptr || (e.saw_size != 0 && m->size() != e.saw_size)) continue;
-    const TypeInfo t = type(e);
+    const TypeInfo t = type(e.saw_type, e.saw_size, e.saw_version);
     if (e.kind == "read") {
       auto* r =
           dds_.subscriber->create_datareader(dds_.topic(e.topic, *m), DdsContext::reader_qos(Flow::state));

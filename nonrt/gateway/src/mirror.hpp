@@ -3,11 +3,13 @@
 
 #include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "dds_context.hpp"
 #include "saw/gateway/gateway.hpp"
+#include "saw/gateway/query_client.hpp"
 #include "saw/task.hpp"
 
 namespace saw::gateway {
@@ -17,10 +19,13 @@ namespace saw::gateway {
 // Reads are state columns fed by the remote topics; the row is stamped with the newest
 // sample's arrival, so a stream that stops ages (a client's stale check sees the remote host
 // die). Write and void commands, run in this task's thread, are published to the remote
-// gateway; remote events are emitted here. A 1 ms task of normal priority.
+// gateway; remote events are emitted here; qualified reads, called by the bridge's service
+// thread, are requests to the remote gateway (waiting at most `query_timeout`). A 1 ms task of
+// normal priority. `local_name` is the name it has here (the remote one by default).
 class Mirror : public Task {
  public:
-  Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote);
+  Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote,
+         const std::string& local_name = "", TimeNs query_timeout = 100'000'000);
   void run() override;
   const std::string& interface_name() const noexcept { return interface_; }
   std::uint64_t samples() const noexcept { return samples_.load(std::memory_order_relaxed); }
@@ -37,16 +42,27 @@ class Mirror : public Task {
     fdds::DataWriter* writer;
     std::string frame;
   };
-  TypeInfo type(const EndpointInfo& e);
+  struct Query {  // QueryClient is one caller at a time; callers here are non-RT threads
+    std::mutex lock;
+    QueryClient client;
+    std::size_t arg_size, result_size;
+    TimeNs timeout;
+  };
+  TypeInfo type(const std::string& name, std::uint32_t size, std::uint32_t version);
 
   DdsContext& dds_;
   std::string interface_;
   std::deque<std::string> type_names_;  // TypeInfo points into these
   std::vector<Stream> states_, events_;
   std::vector<std::unique_ptr<Out>> outs_;
+  std::vector<std::unique_ptr<Query>> queries_;
   TimeNs arrival_ = 0;
   std::atomic<std::uint64_t> samples_{0};
 };
+
+// Splits a --mirror argument: "NAME" (here as there) or "NAME=LOCAL" (here under another name,
+// e.g. when a component of that name already runs on this host). Returns {remote, local}.
+std::pair<std::string, std::string> split_mirror(const std::string& arg);
 
 // The endpoints of `component` in a manifest of another gateway (not `self`), waiting up to
 // `timeout`; throws naming what is missing.

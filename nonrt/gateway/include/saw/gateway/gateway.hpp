@@ -28,6 +28,7 @@ struct GatewayConfig {
   std::vector<ImportConfig> imports;
   // Components served by gateways on other hosts, to present on this host (one connect(),
   // three distances): each becomes a local component exported through this host's bridge.
+  // "NAME" or "NAME=LOCAL" (exported here as LOCAL).
   std::vector<std::string> mirrors;
   ParticipantConfig dds;
   unsigned decimation = 1;    // publish state every Nth row of the server's task
