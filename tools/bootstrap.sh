@@ -11,6 +11,7 @@ apt_packages=(
   libfastrtps-dev libfastcdr-dev fastddsgen
   libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libbenchmark-dev rt-tests stress-ng clang-format
+  libzeroc-ice-dev zeroc-ice-compilers iproute2
 )
 
 missing=()

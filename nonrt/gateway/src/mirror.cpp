@@ -13,6 +13,11 @@ TypeInfo Mirror::type(const std::string& name, std::uint32_t size, std::uint32_t
   return {type_names_.back(), size, version};
 }
 
+void Mirror::watch(fdds::DataReader* r) {
+  r->get_statuscondition().set_enabled_statuses(fdds::StatusMask::data_available());
+  arrivals_.attach_condition(r->get_statuscondition());
+}
+
 std::pair<std::string, std::string> split_mirror(const std::string& arg) {
   const auto eq = arg.find('=');
   if (eq == std::string::npos) return {arg, arg};
@@ -51,6 +56,7 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
       auto* r =
           dds_.subscriber->create_datareader(dds_.topic(e.topic, *m), DdsContext::reader_qos(Flow::state));
       states_.push_back({m, r, std::make_unique<std::byte[]>(m->size())});
+      watch(r);
       const auto column = state_table().add_column_erased(e.name, t, states_.back().value.get());
       Command c;
       c.name = e.name;
@@ -67,6 +73,7 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
       EventBase& ev = p.add_event_remote(
           e.name, {e.kind == "write_event" ? CommandKind::write_event : CommandKind::void_event, t});
       events_.push_back({m, r, std::make_unique<std::byte[]>(std::max<std::size_t>(m->size(), 1)), &ev});
+      watch(r);
     } else if (e.kind == "write" || e.kind == "void") {
       auto* w =
           dds_.publisher->create_datawriter(dds_.topic(e.topic, *m), DdsContext::writer_qos(Flow::command));
@@ -83,6 +90,8 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
 }
 
 void Mirror::run() {
+  fdds::ConditionSeq active;
+  (void)arrivals_.wait(active, eprosima::fastrtps::Duration_t(0, 1'000'000));
   std::string why;
   for (auto& s : states_) {
     bool got = false;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <deque>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -20,8 +21,10 @@ namespace saw::gateway {
 // sample's arrival, so a stream that stops ages (a client's stale check sees the remote host
 // die). Write and void commands, run in this task's thread, are published to the remote
 // gateway; remote events are emitted here; qualified reads, called by the bridge's service
-// thread, are requests to the remote gateway (waiting at most `query_timeout`). A 1 ms task of
-// normal priority. `local_name` is the name it has here (the remote one by default).
+// thread, are requests to the remote gateway (waiting at most `query_timeout`). A continuous
+// task of normal priority that waits for samples (at most 1 ms): a row leaves for this host's
+// clients as soon as the remote one arrives, not on a polling grid. `local_name` is the name it has here (the
+// remote one by default).
 class Mirror : public Task {
  public:
   Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote,
@@ -48,6 +51,7 @@ class Mirror : public Task {
     std::size_t arg_size, result_size;
     TimeNs timeout;
   };
+  void watch(fdds::DataReader* r);
   TypeInfo type(const std::string& name, std::uint32_t size, std::uint32_t version);
 
   DdsContext& dds_;
@@ -56,6 +60,7 @@ class Mirror : public Task {
   std::vector<Stream> states_, events_;
   std::vector<std::unique_ptr<Out>> outs_;
   std::vector<std::unique_ptr<Query>> queries_;
+  fdds::WaitSet arrivals_;
   TimeNs arrival_ = 0;
   std::atomic<std::uint64_t> samples_{0};
 };
