@@ -38,6 +38,21 @@ struct Hist {
   }
 };
 
+// Adds `h`'s wake-ups to `into` (same bins).
+void merge(Hist& into, const Hist& h) {
+  if (into.total == 0) {
+    into = h;
+    return;
+  }
+  for (std::size_t i = 0; i < into.bins.size() && i < h.bins.size(); ++i) into.bins[i] += h.bins[i];
+  const double n = static_cast<double>(into.total), m = static_cast<double>(h.total);
+  if (n + m > 0) into.avg_us = (into.avg_us * n + h.avg_us * m) / (n + m);
+  into.total += h.total;
+  into.overflows += h.overflows;
+  into.min_us = std::min(into.min_us, h.min_us);
+  into.max_us = std::max(into.max_us, h.max_us);
+}
+
 Hist from(const saw::LatencyHistogram& h) {
   Hist r;
   for (std::size_t i = 0; i < h.bins(); ++i) r.bins.push_back(h.count(i));
@@ -105,30 +120,48 @@ struct Run {
   std::uint64_t overruns = 0, cycles = 0;
 };
 
-Run run_both(double seconds, int priority, int cpu, std::size_t bins, const std::string& dir,
+// sawrt and cyclictest in turn, `chunks` times each (seconds in all for each), so that a slow
+// stretch of the machine falls on both alike; the histograms are summed.
+Run run_both(double seconds, int chunks, int priority, int cpu, std::size_t bins, const std::string& dir,
              const std::string& tag) {
   Run r;
-  {
-    Idle task(priority, cpu);
-    saw::Manager m;
-    m.add(task);
-    m.start();
-    std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
-    m.stop();
-    r.saw = from(task.wakeup_histogram());
-    r.overruns = task.statistics().overruns;
-    r.cycles = task.statistics().cycles;
-  }
+  const double part = seconds / chunks;
   const std::string out = dir + "/cyclictest-" + tag + ".txt";
-  const pid_t c = spawn(
-      {"cyclictest", "-m", "-q", "-p", std::to_string(priority), "-a", std::to_string(cpu), "-i", "1000",
-       "-l", std::to_string(static_cast<long long>(seconds * 1000)), "-h", std::to_string(bins), "-t", "1"},
-      out);
-  if (c > 0) waitpid(c, nullptr, 0);
-  std::ifstream in(out);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.cyclic = parse_cyclictest(ss.str(), bins);
+  for (int k = 0; k < chunks; ++k) {
+    {
+      Idle task(priority, cpu);
+      saw::Manager m;
+      m.add(task);
+      m.start();
+      std::this_thread::sleep_for(std::chrono::duration<double>(part));
+      m.stop();
+      merge(r.saw, from(task.wakeup_histogram()));
+      r.overruns += task.statistics().overruns;
+      r.cycles += task.statistics().cycles;
+    }
+    const pid_t c = spawn(
+        {"cyclictest", "-m", "-q", "-p", std::to_string(priority), "-a", std::to_string(cpu), "-i", "1000",
+         "-l", std::to_string(static_cast<long long>(part * 1000)), "-h", std::to_string(bins), "-t", "1"},
+        out);
+    if (c > 0) waitpid(c, nullptr, 0);
+    std::ifstream in(out);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    merge(r.cyclic, parse_cyclictest(ss.str(), bins));
+  }
+  {  // cyclictest's summed histogram, in its own format
+    std::ofstream sum(out);
+    sum << "# Histogram\n";
+    for (std::size_t i = 0; i < r.cyclic.bins.size(); ++i) {
+      char b[64];
+      std::snprintf(b, sizeof b, "%06zu %06llu\n", i, static_cast<unsigned long long>(r.cyclic.bins[i]));
+      sum << b;
+    }
+    sum << "# Total: " << r.cyclic.total << "\n# Min Latencies: " << r.cyclic.min_us
+        << "\n# Avg Latencies: " << static_cast<long long>(r.cyclic.avg_us)
+        << "\n# Max Latencies: " << r.cyclic.max_us << "\n# Histogram Overflows: " << r.cyclic.overflows
+        << "\n";
+  }
   // Ours in the same format, for the same tools (and tools/plot_jitter.py).
   std::ofstream hist(dir + "/saw-" + tag + ".txt");
   hist << "# Histogram\n";
@@ -144,7 +177,6 @@ Run run_both(double seconds, int priority, int cpu, std::size_t bins, const std:
 }
 
 void print(bool markdown, const std::string& label, const Run& r) {
-  const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
   const double p99 = r.saw.percentile(0.99), c99 = r.cyclic.percentile(0.99);
   const double p999 = r.saw.percentile(0.999), c999 = r.cyclic.percentile(0.999);
   if (markdown) {
@@ -160,10 +192,18 @@ void print(bool markdown, const std::string& label, const Run& r) {
     std::printf("%-6s cyclictest  n=%llu avg %.1f p99 %.0f p99.9 %.0f max %lld us\n", label.c_str(),
                 static_cast<unsigned long long>(r.cyclic.total), r.cyclic.avg_us, c99, c999, r.cyclic.max_us);
   }
-  std::printf("%s%s ratios sawrt/cyclictest: p99 %.2f, p99.9 %.2f, max %.2f%s\n", markdown ? "\n" : "",
-              label.c_str(), ratio(p99, c99), ratio(p999, c999),
-              ratio(static_cast<double>(r.saw.max_us), static_cast<double>(r.cyclic.max_us)),
-              markdown ? "\n" : "");
+}
+
+void print_ratios(const std::string& label, const Run& r) {
+  const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+  const double p99 = ratio(r.saw.percentile(0.99), r.cyclic.percentile(0.99));
+  std::printf(
+      "%s ratios sawrt/cyclictest: p99 %.2f (goal ≤ 1.2: %s), p99.9 %.2f, max %.2f; sawrt overruns %llu in "
+      "%llu cycles\n\n",
+      label.c_str(), p99, p99 <= 1.2 ? "met" : "missed",
+      ratio(r.saw.percentile(0.999), r.cyclic.percentile(0.999)),
+      ratio(static_cast<double>(r.saw.max_us), static_cast<double>(r.cyclic.max_us)),
+      static_cast<unsigned long long>(r.overruns), static_cast<unsigned long long>(r.cycles));
 }
 
 }  // namespace
@@ -179,6 +219,9 @@ int main(int argc, char** argv) {
   app.add_option("--priority", priority, "SCHED_FIFO priority of both")->check(CLI::Range(1, 99));
   app.add_option("--cpu", cpu, "CPU both run on");
   app.add_flag("--load", load, "also run under load: stress-ng --cpu 2 --vm 1 (must be installed)");
+  int chunks = 6;
+  app.add_option("--chunks", chunks, "alternate sawrt and cyclictest this many times per condition")
+      ->check(CLI::PositiveNumber);
   app.add_option("--out", dir, "directory for the histograms (cyclictest format)");
   app.add_flag("--markdown", markdown, "Markdown table");
   CLI11_PARSE(app, argc, argv);
@@ -188,8 +231,9 @@ int main(int argc, char** argv) {
     std::printf(
         "| load | who | wake-ups | avg µs | p99 µs | p99.9 µs | max µs | overruns "
         "|\n|---|---|---|---|---|---|---|---|\n");
-  const Run idle = run_both(seconds, priority, cpu, bins, dir, "idle");
+  const Run idle = run_both(seconds, chunks, priority, cpu, bins, dir, "idle");
   print(markdown, "idle", idle);
+  Run loaded;
   if (load) {
     const pid_t stress = spawn({"stress-ng", "--cpu", "2", "--vm", "1", "--vm-bytes", "256M", "--timeout",
                                 std::to_string(static_cast<int>(2 * seconds + 10)) + "s"});
@@ -198,11 +242,14 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::this_thread::sleep_for(std::chrono::seconds(1));
-    const Run loaded = run_both(seconds, priority, cpu, bins, dir, "load");
+    loaded = run_both(seconds, chunks, priority, cpu, bins, dir, "load");
     kill(stress, SIGTERM);
     waitpid(stress, nullptr, 0);
     print(markdown, "load", loaded);
   }
+  std::printf("\n");
+  print_ratios("idle", idle);
+  if (load) print_ratios("load", loaded);
   std::printf("histograms (cyclictest format): %s/{saw,cyclictest}-*.txt\n", dir.c_str());
   return 0;
 }

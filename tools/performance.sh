@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# One command: runs every benchmark of sawrt on this machine and rewrites docs/performance.md
+# (machine, kernel, date, commands, tables, goals) and the plots in docs/img/. Takes about 8
+# minutes; --quick (about 3) shortens the jitter runs and the benchmark loops for a first look.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+quick=0
+[[ "${1:-}" == "--quick" ]] && quick=1
+tools/bootstrap.sh
+cmake --preset release >/dev/null
+cmake --build --preset release --target saw-rt saw-bench-core saw-bench-shm saw-bench-2p saw-latency saw-jitter
+out=build/perf
+rm -rf "$out" && mkdir -p "$out" docs/img
+bin=build/release/tools/bench
+calls=10000 jitter=60 e2e=10
+if ((quick)); then calls=2000 jitter=10 e2e=5; fi
+run() {  # name, command...: the command line and its output into $out/name.{cmd,md}
+  local name=$1; shift
+  echo "== $name: $*" >&2
+  echo "$*" >"$out/$name.cmd"
+  "$@" >"$out/$name.md" 2>"$out/$name.err" || echo "exit $?" >>"$out/$name.md"
+}
+run core $bin/saw-bench-core --markdown --calls $calls
+run shm $bin/saw-bench-shm --markdown --calls $calls
+run local2p $bin/saw-bench-2p --markdown --calls $calls
+run latency $bin/saw-latency --calls $calls --csv $out/latency.csv
+run jitter $bin/saw-jitter --load --markdown --duration $jitter --out $out/jitter
+run e2e_one build/release/bin/saw-rt config/teleop-sim.yaml --duration $e2e
+# Two processes: the operator's side (master) and the patient's side (slave + teleoperation).
+echo "build/release/bin/saw-rt config/teleop-sim-hosts.yaml --host operator & ... --host patient" >$out/e2e_two.cmd
+build/release/bin/saw-rt config/teleop-sim-hosts.yaml --host operator --duration $((e2e + 2)) >$out/e2e_operator.md 2>&1 &
+operator=$!
+sleep 0.5
+build/release/bin/saw-rt config/teleop-sim-hosts.yaml --host patient --duration $e2e >$out/e2e_two.md 2>&1 || true
+wait $operator || true
+.venv/bin/python tools/plot_latency.py $out/latency.csv docs/img/latency.png
+.venv/bin/python tools/plot_jitter.py $out/jitter docs/img/jitter
+.venv/bin/python tools/write_performance.py $out docs/performance.md
+echo "wrote docs/performance.md" >&2
