@@ -53,6 +53,20 @@ void merge(Hist& into, const Hist& h) {
   into.max_us = std::max(into.max_us, h.max_us);
 }
 
+// In cyclictest's -h format.
+void write_histogram(const std::string& path, const Hist& h) {
+  std::ofstream f(path);
+  f << "# Histogram\n";
+  for (std::size_t i = 0; i < h.bins.size(); ++i) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%06zu %06llu\n", i, static_cast<unsigned long long>(h.bins[i]));
+    f << b;
+  }
+  f << "# Total: " << h.total << "\n# Min Latencies: " << h.min_us
+    << "\n# Avg Latencies: " << static_cast<long long>(h.avg_us) << "\n# Max Latencies: " << h.max_us
+    << "\n# Histogram Overflows: " << h.overflows << "\n";
+}
+
 Hist from(const saw::LatencyHistogram& h) {
   Hist r;
   for (std::size_t i = 0; i < h.bins(); ++i) r.bins.push_back(h.count(i));
@@ -149,30 +163,9 @@ Run run_both(double seconds, int chunks, int priority, int cpu, std::size_t bins
     ss << in.rdbuf();
     merge(r.cyclic, parse_cyclictest(ss.str(), bins));
   }
-  {  // cyclictest's summed histogram, in its own format
-    std::ofstream sum(out);
-    sum << "# Histogram\n";
-    for (std::size_t i = 0; i < r.cyclic.bins.size(); ++i) {
-      char b[64];
-      std::snprintf(b, sizeof b, "%06zu %06llu\n", i, static_cast<unsigned long long>(r.cyclic.bins[i]));
-      sum << b;
-    }
-    sum << "# Total: " << r.cyclic.total << "\n# Min Latencies: " << r.cyclic.min_us
-        << "\n# Avg Latencies: " << static_cast<long long>(r.cyclic.avg_us)
-        << "\n# Max Latencies: " << r.cyclic.max_us << "\n# Histogram Overflows: " << r.cyclic.overflows
-        << "\n";
-  }
-  // Ours in the same format, for the same tools (and tools/plot_jitter.py).
-  std::ofstream hist(dir + "/saw-" + tag + ".txt");
-  hist << "# Histogram\n";
-  for (std::size_t i = 0; i < r.saw.bins.size(); ++i) {
-    char b[64];
-    std::snprintf(b, sizeof b, "%06zu %06llu\n", i, static_cast<unsigned long long>(r.saw.bins[i]));
-    hist << b;
-  }
-  hist << "# Total: " << r.saw.total << "\n# Min Latencies: " << r.saw.min_us
-       << "\n# Avg Latencies: " << static_cast<long long>(r.saw.avg_us)
-       << "\n# Max Latencies: " << r.saw.max_us << "\n# Histogram Overflows: " << r.saw.overflows << "\n";
+  // Both summed, in cyclictest's format, for the same tools (and tools/plot_jitter.py).
+  write_histogram(out, r.cyclic);
+  write_histogram(dir + "/saw-" + tag + ".txt", r.saw);
   return r;
 }
 
