@@ -47,20 +47,19 @@ class Run:
     def md(self, name):
         """A tool's output as Markdown: comment lines as emphasis, text lines as paragraphs."""
         out, header = [], None
-        for line in self.text(name).splitlines():
+        lines = self.text(name).splitlines()
+        for k, line in enumerate(lines):
             is_row = line.startswith("|")
             was_row = bool(out) and out[-1].startswith("|")
-            if is_row and not was_row:
-                if line.startswith("|---"):
-                    continue
-                out.append("")
-            if not is_row and was_row:
+            if is_row != was_row and out and out[-1] != "":
                 out.append("")
             if line.startswith("#"):
                 out.append("*" + line.lstrip("#").strip() + "*")
                 out.append("")
             elif is_row:
-                if out and out[-1] == "" and header and "---" not in line and not line.startswith(header[0]):
+                starts_table = not was_row
+                has_own_header = k + 1 < len(lines) and lines[k + 1].startswith("|---")
+                if starts_table and not has_own_header and header and line.count("|") == header[0].count("|"):
                     out.extend(header)  # a table continued after text: repeat its header
                 out.append(line)
                 if line.startswith("|---") and len(out) >= 2:
