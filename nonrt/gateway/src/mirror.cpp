@@ -26,9 +26,7 @@ std::pair<std::string, std::string> split_mirror(const std::string& arg) {
 
 Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote,
                const std::string& local_name, TimeNs query_timeout)
-    : Task(local_name.empty() ? component : local_name,
-           TaskConfig::periodic(std::chrono::milliseconds(1), 0)),
-      dds_(dds) {
+    : Task(local_name.empty() ? component : local_name, TaskConfig::continuous()), dds_(dds) {
   if (remote.empty()) throw std::runtime_error("mirror " + component + ": the remote manifest lists nothing");
   interface_ = remote.front().interface_name;
   auto& p = provide(interface_);

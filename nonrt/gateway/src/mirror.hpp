@@ -23,8 +23,8 @@ namespace saw::gateway {
 // gateway; remote events are emitted here; qualified reads, called by the bridge's service
 // thread, are requests to the remote gateway (waiting at most `query_timeout`). A continuous
 // task of normal priority that waits for samples (at most 1 ms): a row leaves for this host's
-// clients as soon as the remote one arrives, not on a polling grid. `local_name` is the name it has here (the
-// remote one by default).
+// clients as soon as the remote one arrives, not on a polling grid. `local_name` is its name
+// here (the remote one by default).
 class Mirror : public Task {
  public:
   Mirror(DdsContext& dds, const std::string& component, const std::vector<EndpointInfo>& remote,
