@@ -5,9 +5,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
-tools/bootstrap.sh
-cmake --preset release >/dev/null
-cmake --build --preset release --target saw-jitter
+tools/build.sh saw-jitter
 mkdir -p build/jitter docs/img
 build/release/tools/bench/saw-jitter --load --markdown --out build/jitter "$@" | tee build/jitter/table.md
 .venv/bin/python tools/plot_jitter.py build/jitter docs/img/jitter

@@ -6,9 +6,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
-tools/bootstrap.sh
-cmake --preset release >/dev/null
-cmake --build --preset release --target saw-latency
+tools/build.sh saw-latency
 mkdir -p build/latency docs/img
 build/release/tools/bench/saw-latency --csv build/latency/table.csv "$@" | tee build/latency/table.md
 .venv/bin/python tools/plot_latency.py build/latency/table.csv docs/img/latency.png

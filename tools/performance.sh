@@ -7,9 +7,7 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 quick=0
 [[ "${1:-}" == "--quick" ]] && quick=1
-tools/bootstrap.sh
-cmake --preset release >/dev/null
-cmake --build --preset release --target saw-rt saw-bench-core saw-bench-shm saw-bench-2p saw-latency saw-jitter
+tools/build.sh saw-rt saw-bench-core saw-bench-shm saw-bench-2p saw-latency saw-jitter
 out=build/perf
 rm -rf "$out" && mkdir -p "$out" docs/img
 bin=build/release/tools/bench

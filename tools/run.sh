@@ -5,7 +5,5 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
-tools/bootstrap.sh
-cmake --preset release >/dev/null
-cmake --build --preset release --target saw-rt
+tools/build.sh saw-rt
 exec build/release/bin/saw-rt config/teleop-sim.yaml --duration 10 --record build/teleop-sim.csv "$@"

@@ -3,7 +3,5 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
-tools/bootstrap.sh
-cmake --preset release >/dev/null
-cmake --build --preset release
+tools/build.sh
 ctest --preset release --timeout 300 "$@"

@@ -57,6 +57,7 @@ class Caller : public saw::Component {
 
 struct Plan {
   int calls = 10000, reps = 5, rows = 3000, warmup = 200;
+  int gateway_cpu = 1;  // of the gateways, the raw echo and the Ice server (-1: any)
 };
 
 // A qualified-read loop: `call(x, r)` returns true on success with r = x + 1.
@@ -278,11 +279,11 @@ class Suite {
     b.mirrors = {name + "=" + mirrored};
     b.dds.domain = domain;
     b.dds.interfaces = {client.address};
-    servers.spawn(server.ns, gateway_cpu, [&] { run_gateway(a); });
-    servers.spawn(server.ns, gateway_cpu, [&] { saw::bench::raw_dds_echo(domain, {server.address}); });
+    servers.spawn(server.ns, plan_.gateway_cpu, [&] { run_gateway(a); });
+    servers.spawn(server.ns, plan_.gateway_cpu, [&] { saw::bench::raw_dds_echo(domain, {server.address}); });
     int fds[2];
     if (pipe(fds) != 0) return;
-    servers.spawn(server.ns, gateway_cpu, [&] {
+    servers.spawn(server.ns, plan_.gateway_cpu, [&] {
       close(fds[0]);
       saw::bench::ice_serve(server.address, fds[1]);
     });
@@ -312,7 +313,7 @@ class Suite {
     run(config, paths);
     // Then the client's gateway, mirroring the server: not earlier, because the server's gateway
     // sends every reply to every matched reader, and the mirror's would tax the paths above.
-    servers.spawn(client.ns, gateway_cpu, [&] { run_gateway(b); });
+    servers.spawn(client.ns, plan_.gateway_cpu, [&] { run_gateway(b); });
     paths.clear();
     paths.push_back({"qualified read, both gateways (bridge, DDS, bridge)", dds, client,
                      [&](auto& f) { return bridge_client(plan_, mirrored, false, f); }});
@@ -321,10 +322,6 @@ class Suite {
     run(config, paths);
   }
 
- public:
-  int gateway_cpu = 1;
-
- private:
   Plan plan_;
   std::vector<Row> rows_;
 };
@@ -365,15 +362,13 @@ int main(int argc, char** argv) {
   app.add_option("--reps", plan.reps, "repetitions");
   app.add_option("--rows", plan.rows, "state rows for the one-way latencies (1 kHz)");
   app.add_option("--csv", csv, "write the table as CSV to this file");
-  int gateway_cpu = 1;
-  app.add_option("--gateway-cpu", gateway_cpu,
+  app.add_option("--gateway-cpu", plan.gateway_cpu,
                  "CPU of the gateways, the raw echo and the Ice server (-1: any; the RT server is on CPU 1)");
   app.add_flag("--no-veth", no_veth, "skip Network 1H (two network namespaces joined by a veth pair)");
   CLI11_PARSE(app, argc, argv);
   saw::rt::DmaLatencyHold dma;
   (void)saw::rt::set_affinity(0);
   Suite suite(plan);
-  suite.gateway_cpu = gateway_cpu;
   std::fprintf(stderr, "saw-latency: %d × %d calls per configuration\n", plan.reps, plan.calls);
   suite.local();
   std::string network_note;
@@ -388,8 +383,12 @@ int main(int argc, char** argv) {
           "Network 1H: skipped — network namespaces or a veth pair cannot be made here (root needed)";
   }
   const auto& rows = suite.rows();
-  std::printf("# saw-latency: %d × %d calls; client on CPU 0, servers and gateways on CPU 1%s\n\n", plan.reps,
-              plan.calls, dma.error().empty() ? "; cpu_dma_latency held at 0" : "");
+  std::printf(
+      "# saw-latency: %d × %d calls; client on CPU 0, RT server on CPU 1, gateways and baselines' servers "
+      "on %s%s\n\n",
+      plan.reps, plan.calls,
+      plan.gateway_cpu < 0 ? "any CPU" : ("CPU " + std::to_string(plan.gateway_cpu)).c_str(),
+      dma.error().empty() ? "; cpu_dma_latency held at 0" : "");
   std::printf(
       "| configuration | path | transport | median µs | p90 µs | p99 µs | p99.9 µs | max µs | n | failed "
       "|\n");
