@@ -311,8 +311,8 @@ class Suite {
                        return saw::bench::ice_calls(endpoint, plan_.calls, 0, f);
                      }});
     run(config, paths);
-    // Then the client's gateway, mirroring the server: not earlier, because the server's gateway
-    // sends every reply to every matched reader, and the mirror's would tax the paths above.
+    // Then the client's gateway, mirroring the server: not earlier, because the mirror's 1 kHz
+    // state stream would load the server's gateway during the paths above and not the raw echo.
     servers.spawn(client.ns, plan_.gateway_cpu, [&] { run_gateway(b); });
     paths.clear();
     paths.push_back({"qualified read, both gateways (bridge, DDS, bridge)", dds, client,

@@ -9,6 +9,8 @@
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <stdexcept>
 
+#include "reply_filter.hpp"
+
 namespace saw::gateway {
 
 namespace fdds = eprosima::fastdds::dds;
@@ -62,6 +64,7 @@ fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
   if (p == nullptr)
     throw std::runtime_error("DDS: could not create a participant in domain " +
                              std::to_string(config.domain));
+  register_reply_filter(p);  // so our reply writers filter for their readers (reply_filter.hpp)
   return p;
 }
 

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "dds_context.hpp"
+#include "reply_filter.hpp"
 #include "saw_msgs/msg/QueryPubSubTypes.h"
 #include "saw_msgs/msg/QueryReplyPubSubTypes.h"
 
@@ -17,10 +18,11 @@ struct QueryClient::Impl {
   fdds::Publisher* publisher = nullptr;
   fdds::Subscriber* subscriber = nullptr;
   fdds::Topic *request_topic = nullptr, *reply_topic = nullptr;
+  fdds::ContentFilteredTopic* my_replies = nullptr;
   fdds::DataWriter* writer = nullptr;
   fdds::DataReader* reader = nullptr;
   fdds::WaitSet waitset;
-  std::uint64_t id = std::random_device{}() * 0x100000001ULL ^ static_cast<std::uint64_t>(monotonic_now());
+  std::uint64_t id = (std::random_device{}() * 0x100000001ULL ^ static_cast<std::uint64_t>(monotonic_now()));
   std::uint64_t sequence = 0;
   saw_msgs::msg::Query request;
   saw_msgs::msg::QueryReply reply;
@@ -47,9 +49,17 @@ QueryClient::QueryClient(fdds::DomainParticipant* participant, const std::string
   i.reply_topic = topic(participant, "rr/" + component + "/" + command + "Reply",
                         new saw_msgs::msg::QueryReplyPubSubType());
   i.writer = i.publisher->create_datawriter(i.request_topic, DdsContext::writer_qos(Flow::command));
-  i.reader = i.subscriber->create_datareader(i.reply_topic, DdsContext::reader_qos(Flow::command));
+  // Only this client's replies: with the filter in the reader's discovery data, Fast DDS's
+  // writer sends them to this reader alone instead of to every client of the command.
+  const std::string filtered = "rr/" + component + "/" + command + "Reply/" + std::to_string(i.id);
+  register_reply_filter(participant);
+  i.my_replies = participant->create_contentfilteredtopic(filtered, i.reply_topic, "client = %0",
+                                                          {std::to_string(i.id)}, reply_filter_class);
+  if (i.my_replies != nullptr)
+    i.reader = i.subscriber->create_datareader(i.my_replies, DdsContext::reader_qos(Flow::command));
   if (i.writer == nullptr || i.reader == nullptr)
-    throw std::runtime_error("query client: could not create the request writer or reply reader");
+    throw std::runtime_error(
+        "query client: could not create the request writer or the filtered reply reader");
   i.reader->get_statuscondition().set_enabled_statuses(fdds::StatusMask::data_available());
   i.waitset.attach_condition(i.reader->get_statuscondition());
 }
@@ -58,6 +68,7 @@ QueryClient::~QueryClient() {
   auto& i = *impl_;
   i.waitset.detach_condition(i.reader->get_statuscondition());
   i.subscriber->delete_datareader(i.reader);
+  i.participant->delete_contentfilteredtopic(i.my_replies);
   i.publisher->delete_datawriter(i.writer);
   i.participant->delete_subscriber(i.subscriber);
   i.participant->delete_publisher(i.publisher);
