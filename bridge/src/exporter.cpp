@@ -84,6 +84,7 @@ Exporter::Exporter(Component& component, const std::string& provided, ExportOpti
     ManifestEntry& e = m[index];
     copy_name(e.name, sizeof e.name, name);
     e.kind = static_cast<std::uint8_t>(sig.kind);
+    e.has_limits = 0;
     e.arg_size = static_cast<std::uint32_t>(sig.arg.size);
     e.result_size = static_cast<std::uint32_t>(sig.result.size);
     e.arg_version = sig.arg.version;
@@ -97,6 +98,11 @@ Exporter::Exporter(Component& component, const std::string& provided, ExportOpti
   };
   for (const auto& c : p.commands()) {
     describe(c->name, c->signature);
+    if (c->limits) {
+      m[index].has_limits = 1;
+      m[index].limit_min = c->limits->min;
+      m[index].limit_max = c->limits->max;
+    }
     if (c->signature.kind == CommandKind::read) {
       m[index].mirror_offset = offset;
       reads_.push_back({c.get(), offset, static_cast<std::uint32_t>(c->signature.arg.size)});

@@ -82,6 +82,7 @@ Proxy::Proxy(ShmSegment segment, int slot_index, ProxyOptions options)
     Command c;
     c.name = e.name;
     c.signature = sig;
+    if (e.has_limits != 0) c.limits = Limits{e.limit_min, e.limit_max};
     if (kind == CommandKind::read) {
       const std::uint32_t offset = e.mirror_offset, size = e.arg_size;
       c.read_stamped = [this, offset, size](void* out, RowStamp& stamp) {

@@ -1,3 +1,4 @@
+#include <cmath>
 #include <stdexcept>
 
 #include "saw/component.hpp"
@@ -29,6 +30,18 @@ Command* ProvidedInterface::find_command(std::string_view name) const noexcept {
   for (const auto& c : commands_)
     if (c->name == name) return c.get();
   return nullptr;
+}
+
+void ProvidedInterface::limit(std::string_view name, double min, double max) {
+  const std::string where = "component '" + owner_.name() + "' provided interface '" + name_ +
+                            "': limits of '" + std::string(name) + "': ";
+  check_setup(owner_, name_, std::string(name));
+  Command* c = find_command(name);
+  if (c == nullptr || c->signature.kind != CommandKind::write)
+    throw std::invalid_argument(where + "no write command of that name");
+  if (!std::isfinite(min) || !std::isfinite(max) || min > max)
+    throw std::invalid_argument(where + "bounds must be finite with min <= max");
+  c->limits = Limits{min, max};
 }
 
 EventBase* ProvidedInterface::find_event(std::string_view name) const noexcept {

@@ -92,4 +92,26 @@ TEST(DdsClient, ATypeMismatchFailsAtConnectNamingBothTypes) {
   }
 }
 
+// A value outside the range the component declares is refused by the gateway before the bridge,
+// counted, and answered on the error topic; a value inside passes.
+TEST(DdsClient, AWriteOutsideTheDeclaredLimitsIsRefusedAtTheGateway) {
+  saw::testing::ServedDevice s("dcl", 120);
+  RemoteClient client;
+  saw::Manager m;
+  m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(s.domain)));
+  m.add(client);
+  m.connect("remote_client", "arm", s.name, "arm");
+  m.start();
+  std::int64_t v = 0;
+  ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::ok && v > 10; }));
+  ASSERT_EQ(client.add(20'000'000), saw::Status::ok);  // published; refused at the gateway
+  ASSERT_TRUE(wait_for([&] { return s.served->stats().rejected == 1; })) << "not refused";
+  ASSERT_EQ(client.add(5'000'000), saw::Status::ok);
+  ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::ok && v > 5'000'000; }))
+      << "the value inside the limits did not arrive";
+  EXPECT_LT(v, 20'000'000) << "the refused value reached the server";
+  EXPECT_EQ(s.served->stats().rejected, 1u);
+  m.stop();
+}
+
 }  // namespace

@@ -15,7 +15,8 @@
 
 namespace saw::testing {
 
-// Provided "arm": count (read), add (write), tripled (qualified read), ticked (event, every 10th cycle).
+// Provided "arm": count (read), add (write, limited to ±10,000,000), tripled (qualified read),
+// ticked (event, every 10th cycle).
 class CountingDevice : public Task {
  public:
   explicit CountingDevice(std::string name)
@@ -23,6 +24,7 @@ class CountingDevice : public Task {
     auto& p = provide("arm");
     p.add_command_read("count", state_table().add_column("count", &count_));
     p.add_command_write<std::int64_t>("add", [this](const std::int64_t& v) { count_ += v; });
+    p.limit("add", -10'000'000, 10'000'000);
     p.add_command_qualified_read<std::int64_t, std::int64_t>(
         "tripled", [](const std::int64_t& q, std::int64_t& r) { r = 3 * q; });
     ticked_ = &p.add_event_write<std::int64_t>("ticked");

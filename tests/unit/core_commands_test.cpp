@@ -1,6 +1,9 @@
 // Every command and event kind, queued (server is a task) and direct (server has no thread).
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <stdexcept>
+
 #include "core_fixtures.hpp"
 
 namespace {
@@ -122,6 +125,24 @@ TEST(Interfaces, ACommandAndAnEventMayShareANameTwoCommandsMayNot) {
   EXPECT_NO_THROW(p.add_event_void("state"));
   EXPECT_THROW(p.add_command_write<int>("state", [](const int&) {}), std::invalid_argument);
   EXPECT_THROW(p.add_event_write<int>("state"), std::invalid_argument);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(Commands, LimitsAreDeclaredOnWriteCommandsOnlyWithFiniteOrderedBounds) {
+  saw::testing::TaskServer server("server", saw::testing::one_ms());
+  auto& p = *server.provided("p");
+  EXPECT_FALSE(p.find_command("push")->limits.has_value());
+  p.limit("push", -3, 5);
+  ASSERT_TRUE(p.find_command("push")->limits.has_value());
+  EXPECT_EQ(p.find_command("push")->limits->min, -3);
+  EXPECT_EQ(p.find_command("push")->limits->max, 5);
+  EXPECT_THROW(p.limit("position", 0, 1), std::invalid_argument);  // a read command
+  EXPECT_THROW(p.limit("nothing", 0, 1), std::invalid_argument);
+  EXPECT_THROW(p.limit("push", 2, 1), std::invalid_argument);
+  EXPECT_THROW(p.limit("push", 0, std::numeric_limits<double>::infinity()), std::invalid_argument);
 }
 
 }  // namespace

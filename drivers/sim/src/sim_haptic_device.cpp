@@ -53,6 +53,8 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   arm.add_command_read("measured_js", columns_.measured_js);
   arm.add_command_read("operating_state", st.add_column("operating_state", &operating_state_));
   arm.add_command_write<Wrench>("servo_cf", [this](const Wrench& w) { servo_cf(w); });
+  // Declared for callers outside the host (the gateway checks it); servo_cf() checks the norm.
+  arm.limit("servo_cf", -config_.max_force, config_.max_force);
   arm.add_command_write<StateCommand>("state_command", [this](const StateCommand& c) { state_command(c); });
   state_event_ = &arm.add_event_write<OperatingState>("operating_state");
   clutch_event_ = &arm.add_event_write<ButtonEvent>("clutch");

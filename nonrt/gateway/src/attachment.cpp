@@ -155,7 +155,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
       } else {
         auto* r = dds_.subscriber->create_datareader(dds_.topic(info.topic, *m),
                                                      DdsContext::reader_qos(Flow::command));
-        commands_.push_back({c.get(), m, r, std::vector<std::byte>(std::max<std::size_t>(m->size(), 1))});
+        commands_.push_back({c.get(), m, r, std::vector<std::byte>(std::max<std::size_t>(m->size(), 1)), {}});
       }
     }
     endpoints_.push_back(std::move(info));
@@ -240,6 +240,21 @@ void Attachment::publish_fault() {
       ->write(*fault_writer_, &fault, wall_from_monotonic(monotonic_now()), name_);
 }
 
+bool Attachment::within_limits(CommandIn& c, std::string& why) {
+  if (!c.command->limits) return true;
+  const Limits& l = *c.command->limits;
+  c.numbers.clear();
+  c.mapping->numbers(c.value.data(), c.numbers);
+  for (const double x : c.numbers)
+    if (!(x >= l.min && x <= l.max)) {
+      char b[160];
+      std::snprintf(b, sizeof b, "%g is outside [%g, %g], the range the component declares", x, l.min, l.max);
+      why = b;
+      return false;
+    }
+  return true;
+}
+
 void Attachment::run() {
   std::uint32_t seen = 0;
   unsigned rows = 0;
@@ -268,7 +283,7 @@ void Attachment::run() {
       for (;;) {
         const auto t = c.mapping->take(*c.reader, c.value.data(), why);
         if (t == Mapping::Take::none) break;
-        if (t == Mapping::Take::rejected) {
+        if (t == Mapping::Take::rejected || !within_limits(c, why)) {
           reject(c.command->name, why);
           continue;
         }

@@ -52,10 +52,13 @@ class Attachment {
     const Mapping* mapping;
     fdds::DataReader* reader;
     std::vector<std::byte> value;
+    std::vector<double> numbers;  // the value's numbers, for its declared limits
   };
 
   void run();
   void serve_queries();
+  // A command value against the limits its component declares; the reason in `why` if outside.
+  static bool within_limits(CommandIn& c, std::string& why);
   void reject(const std::string& command, const std::string& why);
   void publish_fault();
 

@@ -132,6 +132,10 @@ class Typed final : public Mapping {
   }
 
   std::string to_text(const void* value) const override { return Conv::text(*static_cast<const Rt*>(value)); }
+  void numbers(const void* value, std::vector<double>& out) const override {
+    if constexpr (requires(const Rt& r, std::vector<double>& o) { Conv::each(r, o); })
+      Conv::each(*static_cast<const Rt*>(value), out);
+  }
 
   bool from_text(std::string_view text, void* value, std::string& why) const override {
     Rt v{};
@@ -150,6 +154,9 @@ class Typed final : public Mapping {
 };
 
 struct PoseConv {
+  static void each(const Pose& p, std::vector<double>& o) {
+    o.insert(o.end(), p.position.begin(), p.position.end());
+  }
   static bool parse(std::string_view t, Pose& p, std::string& why) {
     const auto v = numbers(t, why);
     if (!count_is(v, {3, 7}, why)) return false;
@@ -186,6 +193,10 @@ struct PoseConv {
 };
 
 struct TwistConv {
+  static void each(const Twist& t, std::vector<double>& o) {
+    o.insert(o.end(), t.linear.begin(), t.linear.end());
+    o.insert(o.end(), t.angular.begin(), t.angular.end());
+  }
   static bool parse(std::string_view t, Twist& w, std::string& why) {
     const auto v = numbers(t, why);
     if (!count_is(v, {3, 6}, why)) return false;
@@ -208,6 +219,10 @@ struct TwistConv {
 };
 
 struct WrenchConv {
+  static void each(const Wrench& w, std::vector<double>& o) {
+    o.insert(o.end(), w.force.begin(), w.force.end());
+    o.insert(o.end(), w.torque.begin(), w.torque.end());
+  }
   static bool parse(std::string_view t, Wrench& w, std::string& why) {
     const auto v = numbers(t, why);
     if (!count_is(v, {3, 6}, why)) return false;
@@ -230,6 +245,7 @@ struct WrenchConv {
 };
 
 struct Vec3Conv {
+  static void each(const Vec3& v, std::vector<double>& o) { o.insert(o.end(), v.begin(), v.end()); }
   static bool parse(std::string_view t, Vec3& a, std::string& why) {
     const auto v = numbers(t, why);
     if (!count_is(v, {3}, why)) return false;
@@ -245,6 +261,13 @@ struct Vec3Conv {
 };
 
 struct JointStateConv {
+  static void each(const JointState& j, std::vector<double>& o) {
+    for (std::uint32_t i = 0; i < j.size && i < JointState::max_joints; ++i) {
+      o.push_back(j.position[i]);
+      o.push_back(j.velocity[i]);
+      o.push_back(j.effort[i]);
+    }
+  }
   static bool parse(std::string_view t, JointState& j, std::string& why) {
     const auto v = numbers(t, why);
     if (!why.empty()) return false;
@@ -377,6 +400,9 @@ struct ButtonConv {
 
 template <class T, class Msg>
 struct DataConv {
+  static void each(const T& v, std::vector<double>& o) {
+    if constexpr (!std::is_same_v<T, bool>) o.push_back(static_cast<double>(v));
+  }
   static void to_msg(const T& v, Msg& m) { m.data(v); }
   static bool from_msg(const Msg& m, T& v, std::string& why) {
     v = m.data();

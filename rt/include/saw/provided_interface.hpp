@@ -4,6 +4,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,13 @@ class Component;
 
 // One provided command. void/write commands are executed by `execute` in the server's
 // thread; read and qualified-read commands are run by `read` in the caller's thread.
+// Bounds a component declares for every number in a write command's argument (Pose: its
+// position). Checked where values enter from outside the host's processes — the DDS gateway —
+// before they reach the bridge; the component still validates what it receives.
+struct Limits {
+  double min = 0, max = 0;
+};
+
 struct Command {
   std::string name;
   Signature signature;
@@ -30,6 +38,7 @@ struct Command {
   std::function<Status(void* out, RowStamp& stamp)> read_stamped;
   const StateTable* table = nullptr;  // read commands backed by a column
   std::uint32_t column = 0;
+  std::optional<Limits> limits;  // write commands (see Limits)
 
   Invoker invoker() {
     return {[](void* self, const void* arg) { static_cast<Command*>(self)->execute(arg); }, this};
@@ -167,6 +176,9 @@ class ProvidedInterface {
   std::size_t mailbox_capacity() const noexcept { return mailbox_capacity_; }
 
   Command* find_command(std::string_view name) const noexcept;
+  // Declares that every number in write command `name`'s argument lies in [min, max] (see
+  // Limits). Throws std::invalid_argument for an unknown or non-write command or bad bounds.
+  void limit(std::string_view name, double min, double max);
   EventBase* find_event(std::string_view name) const noexcept;
   const std::vector<std::unique_ptr<Command>>& commands() const noexcept { return commands_; }
   const std::vector<std::unique_ptr<EventBase>>& events() const noexcept { return events_; }

@@ -13,7 +13,7 @@
 namespace saw::bridge {
 
 inline constexpr std::uint64_t segment_magic = 0x3147445242574153ULL;  // "SAWBRDG1", little endian
-inline constexpr std::uint32_t layout_version = 2;                     // any change below bumps this
+inline constexpr std::uint32_t layout_version = 3;                     // any change below bumps this
 
 enum class SegmentState : std::uint32_t { initializing = 0, ready = 1, closed = 2 };
 
@@ -71,13 +71,15 @@ struct alignas(cache_line) ClientSlot {
 // One exported command or event, in the order the manifest gives them (their wire index).
 struct ManifestEntry {
   char name[48];
-  std::uint8_t kind;  // saw::CommandKind
-  std::uint8_t reserved[3];
+  std::uint8_t kind;        // saw::CommandKind
+  std::uint8_t has_limits;  // write commands: 1 when limit_min/limit_max are declared (saw::Limits)
+  std::uint8_t reserved[2];
   std::uint32_t arg_size, result_size;
   std::uint32_t mirror_offset;                // read commands: where the value sits in the state mirror
   std::uint32_t arg_version, result_version;  // the types' layout versions (TypeInfo::version)
   char arg_type[96];
   char result_type[96];
+  double limit_min, limit_max;
 };
 
 struct LayoutParams {

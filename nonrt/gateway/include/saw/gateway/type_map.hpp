@@ -4,6 +4,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "saw/clock.hpp"
 
@@ -39,6 +40,12 @@ class Mapping {
   // a valid rt value, validated as a sample from DDS would be (sawctl call).
   virtual bool from_text(std::string_view text, void* value, std::string& why) const = 0;
   virtual std::size_t size() const = 0;  // of the rt type
+  // Appends the numbers a declared range bounds (saw::Limits): every number of the value, but a
+  // pose's position only; nothing for states, buttons and booleans.
+  virtual void numbers(const void* value, std::vector<double>& out) const {
+    (void)value;
+    (void)out;
+  }
 };
 
 // The mapping for an rt type name (TypeInfo::name), or nullptr if it has none.
