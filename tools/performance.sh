@@ -7,12 +7,12 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 quick=0
 [[ "${1:-}" == "--quick" ]] && quick=1
-tools/build.sh saw-rt saw-bench-core saw-bench-shm saw-bench-2p saw-latency saw-jitter
+tools/build.sh saw-rt saw-gateway saw-bench-core saw-bench-shm saw-bench-2p saw-latency saw-jitter saw-gateway-kill
 out=build/perf
 rm -rf "$out" && mkdir -p "$out" docs/img
 bin=build/release/tools/bench
-calls=10000 jitter=60 e2e=10
-if ((quick)); then calls=2000 jitter=10 e2e=5; fi
+calls=10000 jitter=60 e2e=10 rounds=10
+if ((quick)); then calls=2000 jitter=10 e2e=5 rounds=3; fi
 run() {  # name, command...: the command line and its output into $out/name.{cmd,md}
   local name=$1; shift
   echo "== $name: $*" >&2
@@ -24,6 +24,7 @@ run shm $bin/saw-bench-shm --markdown --calls $calls
 run local2p $bin/saw-bench-2p --markdown --calls $calls
 run latency $bin/saw-latency --calls $calls --csv $out/latency.csv
 run jitter $bin/saw-jitter --load --markdown --duration $jitter --out $out/jitter
+run gateway_kill $bin/saw-gateway-kill --rounds $rounds
 run e2e_one build/release/bin/saw-rt config/teleop-sim.yaml --duration $e2e
 # Two processes: the operator's side (master) and the patient's side (slave + teleoperation).
 echo "build/release/bin/saw-rt config/teleop-sim-hosts.yaml --host operator & ... --host patient" >$out/e2e_two.cmd
