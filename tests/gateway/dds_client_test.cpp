@@ -42,14 +42,22 @@ saw::gateway::DdsResolver::Options options(int domain) {
   return o;
 }
 
-TEST(DdsClient, TheSameConnectAndFunctionsReachAComponentThroughItsGateway) {
-  saw::testing::ServedDevice s("dc", 40);
+// A served device and a client of it through the DDS resolver, connected as for a local server.
+struct Connected {
+  Connected(const char* prefix, int domain_base) : s(prefix, domain_base) {
+    m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(s.domain)));
+    m.add(client);
+    m.connect("remote_client", "arm", s.name, "arm");
+    m.start();
+  }
+  saw::testing::ServedDevice s;
   RemoteClient client;
   saw::Manager m;
-  m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(s.domain)));
-  m.add(client);
-  m.connect("remote_client", "arm", s.name, "arm");  // as for a local server
-  m.start();
+};
+
+TEST(DdsClient, TheSameConnectAndFunctionsReachAComponentThroughItsGateway) {
+  Connected c("dc", 40);
+  auto& [s, client, m] = c;
   std::int64_t v = 0;
   ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::ok && v > 10; })) << "no state arrived";
   ASSERT_TRUE(wait_for([&] { return client.ticks.load() > 3; })) << "no event arrived";
@@ -95,13 +103,8 @@ TEST(DdsClient, ATypeMismatchFailsAtConnectNamingBothTypes) {
 // A value outside the range the component declares is refused by the gateway before the bridge,
 // counted, and answered on the error topic; a value inside passes.
 TEST(DdsClient, AWriteOutsideTheDeclaredLimitsIsRefusedAtTheGateway) {
-  saw::testing::ServedDevice s("dcl", 120);
-  RemoteClient client;
-  saw::Manager m;
-  m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(s.domain)));
-  m.add(client);
-  m.connect("remote_client", "arm", s.name, "arm");
-  m.start();
+  Connected c("dcl", 120);
+  auto& [s, client, m] = c;
   std::int64_t v = 0;
   ASSERT_TRUE(wait_for([&] { return client.count(v) == saw::Status::ok && v > 10; }));
   ASSERT_EQ(client.add(20'000'000), saw::Status::ok);  // published; refused at the gateway

@@ -17,10 +17,7 @@ namespace {
 
 TEST(GatewayQuery, AQualifiedReadCrossesDdsAndTheBridgeAndABadQualifierIsRefused) {
   saw::testing::ServedDevice s("gq", 30);
-  saw::gateway::ParticipantConfig pc;
-  pc.domain = s.domain;
-  pc.name = "query-test";
-  auto* p = saw::gateway::make_participant(pc);
+  auto* p = saw::testing::test_participant(s.domain, "query-test");
   {
     saw::gateway::QueryClient client(p, s.name, "tripled");
     ASSERT_TRUE(client.wait_matched(10'000'000'000)) << "the gateway's request reader did not match";
@@ -68,10 +65,7 @@ struct ReplyCounter {
 // while an unfiltered reader of the same topic sees every reply (so replies did flow).
 TEST(GatewayQuery, RepliesAreFilteredForTheClientThatAsked) {
   saw::testing::ServedDevice s("gf", 90);
-  saw::gateway::ParticipantConfig pc;
-  pc.domain = s.domain;
-  pc.name = "filter-test";
-  auto* p = saw::gateway::make_participant(pc);
+  auto* p = saw::testing::test_participant(s.domain, "filter-test");
   {
     saw::gateway::QueryClient client(p, s.name, "tripled");
     ASSERT_TRUE(client.wait_matched(10'000'000'000));

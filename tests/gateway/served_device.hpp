@@ -11,6 +11,7 @@
 
 #include "saw/bridge/exporter.hpp"
 #include "saw/gateway/gateway.hpp"
+#include "saw/gateway/participant.hpp"
 #include "saw/manager.hpp"
 
 namespace saw::testing {
@@ -63,6 +64,14 @@ struct ServedDevice {
   Manager manager;
   std::unique_ptr<gateway::Gateway> served;
 };
+
+// A participant of ours on `domain` (loopback only), for the tests' own DDS entities.
+inline eprosima::fastdds::dds::DomainParticipant* test_participant(int domain, const char* name) {
+  gateway::ParticipantConfig pc;
+  pc.domain = domain;
+  pc.name = name;
+  return gateway::make_participant(pc);
+}
 
 template <class F>
 bool wait_for(F done, std::chrono::milliseconds limit = std::chrono::seconds(10)) {
