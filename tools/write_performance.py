@@ -28,10 +28,16 @@ def machine():
     kernel = "PREEMPT_RT" if "PREEMPT_RT" in version else ("PREEMPT_DYNAMIC (not PREEMPT_RT)"
                                                               if "PREEMPT_DYNAMIC" in version else "not PREEMPT_RT")
     virt = sh("systemd-detect-virt") or "unknown"
+    # PREEMPT_DYNAMIC kernels choose none/voluntary/full at boot: "none" lets any kernel work of
+    # another process on the RT task's CPU delay it (the VM stalls seen in the tables).
+    mode = sh("cat /sys/kernel/debug/sched/preempt 2>/dev/null")
+    if not mode:
+        m = re.search(r"Dynamic Preempt: (\w+)", sh("dmesg 2>/dev/null | grep -m1 'Dynamic Preempt'"))
+        mode = m.group(1) if m else "unknown"
     return [
         f"- Date: {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}",
         f"- CPU: {os.cpu_count()} × {cpu}; virtualization: {virt}",
-        f"- Kernel: Linux {platform.release()}, {kernel} (`{version}`)",
+        f"- Kernel: Linux {platform.release()}, {kernel} (`{version}`); preemption model: {mode}",
         f"- OS: Debian {sh('cat /etc/debian_version')}; compiler: {sh('c++ --version | head -1')}",
     ]
 
