@@ -17,5 +17,8 @@ else()
 endif()
 
 # Fast DDS 2.9 (Debian): nonrt/ only.
-find_package(fastcdr REQUIRED)
-find_package(fastrtps REQUIRED)
+if(SAW_WITH_DDS)
+  find_package(fastcdr REQUIRED)
+  find_package(fastrtps REQUIRED)
+endif()
+include(SawSanitizers)

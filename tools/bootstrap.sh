@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs everything sawrt needs on Debian 12; idempotent and quick when all is present.
+# --check: look at the Debian packages again even if this package list was checked before.
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -12,20 +13,29 @@ apt_packages=(
   libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libbenchmark-dev rt-tests stress-ng clang-format
   libzeroc-ice-dev zeroc-ice-compilers iproute2
+  clang libclang-rt-14-dev ccache  # the fuzz preset (libFuzzer), faster rebuilds in CI
 )
 
-missing=()
-for p in "${apt_packages[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
-    missing+=("$p")
+# The package check runs once per package list (and with --check): builds call this script
+# every time, and asking dpkg about every package each build is wasted seconds.
+mkdir -p "$cache"
+apt_stamp="$cache/apt-packages.sha256"
+want_apt=$(printf '%s\n' "${apt_packages[@]}" | sha256sum | cut -d' ' -f1)
+if [ "${1:-}" = "--check" ] || [ "$(cat "$apt_stamp" 2>/dev/null)" != "$want_apt" ]; then
+  missing=()
+  for p in "${apt_packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$p")
+    fi
+  done
+  if ((${#missing[@]})); then
+    echo "bootstrap: installing from Debian: ${missing[*]}"
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
   fi
-done
-if ((${#missing[@]})); then
-  echo "bootstrap: installing from Debian: ${missing[*]}"
-  sudo=""
-  [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  echo "$want_apt" > "$apt_stamp"
 fi
 
 # Ruckig: pinned sdist from PyPI, checksum verified, unpacked into an ignored cache.
@@ -36,11 +46,8 @@ if [ ! -f "$ruckig_dir/CMakeLists.txt" ]; then
   mkdir -p "$cache"
   tarball="$cache/ruckig-$ruckig_version.tar.gz"
   if [ ! -f "$tarball" ]; then
-    echo "bootstrap: fetching ruckig==$ruckig_version sdist from PyPI"
-    tmp=$(mktemp -d)
-    python3 -m pip download --quiet --no-binary :all: --no-deps "ruckig==$ruckig_version" -d "$tmp"
-    mv "$tmp/ruckig-$ruckig_version.tar.gz" "$tarball"
-    rm -rf "$tmp"
+    echo "bootstrap: fetching the ruckig==$ruckig_version sdist (by file name, nothing built)"
+    python3 "$root/tools/fetch_sdist.py" ruckig "$ruckig_version" "$ruckig_sha256" "$cache"
   fi
   echo "$ruckig_sha256  $tarball" | sha256sum --check --quiet ||
     { echo "bootstrap: checksum mismatch for $tarball" >&2; rm -f "$tarball"; exit 1; }

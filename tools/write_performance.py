@@ -113,7 +113,7 @@ def main(directory, out):
         f"Command: {r.cmd('shm')}. Round trips between two processes on CPUs 0 and 1 with",
         "`/dev/cpu_dma_latency` held at 0 (as `saw-rt` does): the bare futex and atomic ping-pongs are the",
         "floors; \"bridge rings\" is a command into a real segment's command ring answered through its",
-        "event ring. Goals (issue 4): sleeping ≤ 1.5 × the futex floor, spinning ≤ 1 µs.",
+        "event ring. Goals: sleeping ≤ 1.5 × the futex floor, spinning ≤ 1 µs.",
         "",
         r.md("shm.md"),
         "",

@@ -12,7 +12,7 @@ namespace {
 
 bool ready(const SegmentHeader& h, TimeNs stale_after) noexcept {
   return h.state.load(std::memory_order_acquire) == static_cast<std::uint32_t>(SegmentState::ready) &&
-         monotonic_now() - h.heartbeat.load(std::memory_order_acquire) <= stale_after;
+         elapsed(monotonic_now(), h.heartbeat.load(std::memory_order_acquire)) <= stale_after;
 }
 
 // Spins up to `spin` ns, then sleeps on `word` until it differs from `old`, at most until
@@ -27,48 +27,79 @@ bool await_change(std::atomic<std::uint32_t>& word, std::uint32_t old, std::atom
   }
   for (;;) {
     // Dekker with the waker: it changes `word` then reads `sleeping`; we raise `sleeping` then
-    // re-read `word` (both seq_cst), so one of us sees the other.
-    sleeping.fetch_add(1, std::memory_order_seq_cst);
+    // re-read `word` (both seq_cst), so one of us sees the other. `sleeping` is this client's
+    // own flag (1 or 0): a client that dies asleep leaves at most its own slot's flag raised,
+    // which the server clears when it frees the slot.
+    sleeping.store(1, std::memory_order_seq_cst);
     const bool changed = word.load(std::memory_order_seq_cst) != old;
     const TimeNs left = deadline - monotonic_now();
     if (!changed && left > 0) futex_wait(word, old, left);
-    sleeping.fetch_sub(1, std::memory_order_seq_cst);
+    sleeping.store(0, std::memory_order_seq_cst);
     if (changed || word.load(std::memory_order_acquire) != old) return true;
     if (deadline - monotonic_now() <= 0) return false;
   }
 }
 
+int claim(const SegmentView& v, std::uint64_t token) {
+  const auto pid = static_cast<std::int32_t>(getpid());
+  int index = claim_slot(v, token, pid, monotonic_now());
+  if (index < 0 && reclaim_stale_slots(v, monotonic_now(), v.header().client_timeout) > 0)
+    index = claim_slot(v, token, pid, monotonic_now());
+  return index;
+}
+
 }  // namespace
 
-std::unique_ptr<Proxy::Link> Proxy::make_link(ShmSegment s, std::uint32_t slot_index) {
-  auto l = std::make_unique<Link>(Link{std::move(s), slot_index, nullptr, nullptr});
-  l->commands = make_command_ring(l->segment.data(), slot_index);
-  l->events = make_event_ring(l->segment.data(), slot_index);
+ShmSegment attach_validated(const std::string& path, Layout& layout, std::string& why) {
+  ShmSegment s = ShmSegment::attach(path, /*writable=*/false);
+  why = validate(s.data(), s.size(), &layout);
+  if (why.empty()) s.make_writable(layout.client_offset, layout.total_size - layout.client_offset);
+  return s;
+}
+
+std::unique_ptr<Proxy::Link> Proxy::make_link(ShmSegment s, const Layout& layout, std::uint32_t slot_index,
+                                              std::uint64_t token) {
+  auto l = std::make_unique<Link>(Link{std::move(s), {}, slot_index, token, nullptr, nullptr});
+  l->view = SegmentView(l->segment.data(), layout);
+  l->commands = make_command_ring(l->view, slot_index);
+  l->events = make_event_ring(l->view, slot_index);
   return l;
 }
 
-Proxy::Proxy(ShmSegment segment, int slot_index, ProxyOptions options)
-    : Component(header(segment.data()).component), path_(segment.name()), options_(options) {
-  links_.push_back(make_link(std::move(segment), static_cast<std::uint32_t>(slot_index)));
+Proxy::Proxy(ShmSegment segment, const Layout& layout, int slot_index, std::uint64_t token,
+             ProxyOptions options)
+    : Component([&] {
+        // Validated: terminated inside its field. Copied, as everything else read from the segment.
+        const auto* h = static_cast<const SegmentHeader*>(segment.data());
+        return std::string(h->component);
+      }()),
+      path_(segment.name()),
+      options_(options) {
+  links_.push_back(make_link(std::move(segment), layout, static_cast<std::uint32_t>(slot_index), token));
   link_ = links_.back().get();
   mailbox_on_ = link_;
-  void* mem = link_->segment.data();
-  const SegmentHeader& h = header(mem);
+  build_interface(*link_);
+  monitor_ = std::thread([this] { monitor(); });
+}
+
+// The interface as the manifest describes it (validated: sizes fit, names terminated).
+void Proxy::build_interface(const Link& l) {
+  const SegmentHeader& h = l.view.header();
+  const Layout& layout = l.view.layout();
   interface_hash_ = h.interface_hash;
-  mirror_bytes_ = (h.mirror_words - 1) * 8;
-  auto& slot_ref = slot(mem, link_->slot);
-  events_ = std::make_unique<Mailbox>(std::string(h.component) + " events (shared memory)", &slot_ref.events,
-                                      reinterpret_cast<std::byte*>(&slot_ref) + sizeof(ClientSlot) +
-                                          std::uint64_t{h.ring_capacity} * h.command_slot_size,
-                                      h.ring_capacity, h.event_slot_size);
-  auto& p = provide(h.interface);
-  const ManifestEntry* m = manifest(mem);
+  incarnation_ = h.incarnation;
+  mirror_bytes_ = (std::size_t{layout.mirror_words} - 1) * 8;
+  events_ = std::make_unique<Mailbox>(name() + " events (shared memory)", &l.server().events_head,
+                                      &l.client().events_tail, l.view.event_storage(l.slot),
+                                      layout.ring_capacity, layout.event_slot_size);
+  auto& p = provide(std::string(h.interface));
   const auto type = [&](const char* name, std::uint32_t size, std::uint32_t version) {
     type_names_.emplace_back(name);
     return TypeInfo{type_names_.back(), size, version};
   };
-  for (std::uint32_t i = 0; i < h.manifest_count; ++i) {
-    const ManifestEntry& e = m[i];
+  for (std::uint32_t i = 0; i < layout.manifest_count; ++i) {
+    ManifestEntry e;
+    std::memcpy(&e, &l.view.manifest()[i], sizeof e);
     const auto kind = static_cast<CommandKind>(e.kind);
     const Signature sig{kind, e.arg_size ? type(e.arg_type, e.arg_size, e.arg_version) : TypeInfo{},
                         e.result_size ? type(e.result_type, e.result_size, e.result_version) : TypeInfo{}};
@@ -86,11 +117,10 @@ Proxy::Proxy(ShmSegment segment, int slot_index, ProxyOptions options)
     if (kind == CommandKind::read) {
       const std::uint32_t offset = e.mirror_offset, size = e.arg_size;
       c.read_stamped = [this, offset, size](void* out, RowStamp& stamp) {
-        Link& l = link();
-        if (!alive(l)) return Status::disconnected;
-        alignas(16) std::byte block[4096];
-        if (mirror_bytes_ > sizeof block) return Status::invalid;
-        if (!mirror_read(l.segment.data(), block, mirror_bytes_)) return Status::busy;
+        Link& lk = link();
+        if (!alive(lk)) return Status::disconnected;
+        alignas(16) std::byte block[max_mirror_bytes + 8];
+        if (!mirror_read(lk.view, block, mirror_bytes_)) return Status::busy;
         std::memcpy(&stamp.time, block, sizeof stamp.time);  // the server's row time
         stamp.tick = 0;
         std::memcpy(out, block + offset, size);
@@ -103,32 +133,14 @@ Proxy::Proxy(ShmSegment segment, int slot_index, ProxyOptions options)
     } else if (kind == CommandKind::qualified_read) {
       // Waits for the server's service thread: for non-RT callers only (connect refuses RT ones).
       c.read = [this, i, arg = e.arg_size, res = e.result_size](const void* q, void* r) {
-        Link& l = link();
-        if (!alive(l)) return Status::disconnected;
-        QueryArea& area = slot(l.segment.data(), l.slot).query;
-        SegmentHeader& hdr = header(l.segment.data());
-        std::memcpy(area.arg, q, arg);
-        area.command = i;
-        const auto request = area.request.load(std::memory_order_relaxed) + 1;
-        area.request.store(request, std::memory_order_release);
-        hdr.service_bell.fetch_add(1, std::memory_order_seq_cst);
-        if (hdr.service_sleeping.load(std::memory_order_seq_cst) != 0) futex_wake_all(hdr.service_bell);
-        const TimeNs deadline = monotonic_now() + options_.stale_after;
-        for (;;) {
-          const auto reply = area.reply.load(std::memory_order_acquire);
-          if (reply == request) break;
-          if (!await_change(area.reply, reply, area.waiting, options_.spin, deadline)) return Status::timeout;
-        }
-        const auto st = static_cast<Status>(area.status);
-        if (st == Status::ok) std::memcpy(r, area.result, res);
-        return st;
+        return query(i, arg, res, q, r);
       };
     } else {
       c.execute = [](const void*) {};  // never used: forward takes the call
       c.forward = [this, i, size = e.arg_size](const void* arg) {
-        Link& l = link();
-        if (!alive(l)) return Status::disconnected;
-        std::byte* rec = l.commands->try_reserve();
+        Link& lk = link();
+        if (!alive(lk)) return Status::disconnected;
+        std::byte* rec = lk.commands->try_reserve();
         if (rec == nullptr) {
           commands_refused_.store(commands_refused_.load(std::memory_order_relaxed) + 1,
                                   std::memory_order_relaxed);  // one writer: the calling thread
@@ -136,20 +148,57 @@ Proxy::Proxy(ShmSegment segment, int slot_index, ProxyOptions options)
         }
         std::memcpy(rec, &i, sizeof i);
         if (size != 0) std::memcpy(rec + Mailbox::header_bytes(), arg, size);
-        l.commands->commit();
+        lk.commands->commit();
         return Status::ok;
       };
     }
     p.add_command(std::move(c));
   }
-  monitor_ = std::thread([this] { monitor(); });
+}
+
+Status Proxy::query(std::uint32_t index, std::uint32_t arg_size, std::uint32_t result_size, const void* q,
+                    void* r) noexcept {
+  Link& l = link();
+  if (!alive(l)) return Status::disconnected;
+  ClientSlot& c = l.client();
+  ServerSlot& s = l.server();
+  std::memcpy(c.query_arg, q, arg_size);
+  c.query_command.store(index, std::memory_order_relaxed);
+  const auto request = c.query_request.load(std::memory_order_relaxed) + 1;
+  c.query_request.store(request, std::memory_order_release);
+  auto& bell = l.view.client_common().service_bell;
+  bell.fetch_add(1, std::memory_order_seq_cst);
+  if (l.view.header().service_sleeping.load(std::memory_order_seq_cst) != 0) futex_wake_all(bell);
+  const TimeNs deadline = monotonic_now() + options_.stale_after;
+  for (;;) {
+    const auto reply = s.query_reply.load(std::memory_order_acquire);
+    if (reply == request) break;
+    if (!await_change(s.query_reply, reply, c.query_waiting, options_.spin, deadline)) return Status::timeout;
+  }
+  const auto st = s.query_status.load(std::memory_order_relaxed);
+  if (st > static_cast<std::uint32_t>(Status::invalid)) return Status::invalid;  // not a status we know
+  if (static_cast<Status>(st) == Status::ok) std::memcpy(r, s.query_result, result_size);
+  return static_cast<Status>(st);
 }
 
 Proxy::~Proxy() {
   stop_.store(1, std::memory_order_release);
   futex_wake_all(stop_);
   if (monitor_.joinable()) monitor_.join();
-  for (const auto& l : links_) release_slot(l->segment.data(), l->slot, static_cast<std::int32_t>(getpid()));
+  for (const auto& l : links_) release_slot(l->view, l->slot, l->token);
+}
+
+std::string Proxy::last_error() const {
+  const std::lock_guard lock(error_mutex_);
+  return error_;
+}
+
+void Proxy::set_error(const std::string& why) noexcept {
+  try {
+    const std::lock_guard lock(error_mutex_);
+    error_ = why;
+  } catch (...) {  // out of memory for a message: keep the previous one
+  }
 }
 
 void Proxy::adopt() noexcept {
@@ -160,15 +209,17 @@ void Proxy::adopt() noexcept {
 }
 
 bool Proxy::alive(const Link& l) const noexcept {
-  return ready(header(l.segment.data()), options_.stale_after);
+  // The server is running, and still counts this slot as ours.
+  return ready(l.view.header(), options_.stale_after) &&
+         l.client().owner.load(std::memory_order_acquire) == l.token;
 }
 
 bool Proxy::wait_for_update(std::uint32_t& seen, TimeNs timeout) noexcept {
   Link& l = link();
-  SegmentHeader& h = header(l.segment.data());
+  SegmentHeader& h = l.view.header();
   const TimeNs deadline = monotonic_now() + timeout;
   if (h.update_bell.load(std::memory_order_acquire) == seen &&
-      !await_change(h.update_bell, seen, h.update_sleepers, options_.spin, deadline))
+      !await_change(h.update_bell, seen, l.client().update_waiting, options_.spin, deadline))
     return false;
   seen = h.update_bell.load(std::memory_order_acquire);
   return true;
@@ -176,76 +227,103 @@ bool Proxy::wait_for_update(std::uint32_t& seen, TimeNs timeout) noexcept {
 
 std::unique_ptr<Proxy::Link> Proxy::try_reconnect() {
   std::optional<ShmSegment> s;
+  Layout layout;
+  std::string why;
   try {
-    s.emplace(ShmSegment::attach(path_));
+    s.emplace(attach_validated(path_, layout, why));
   } catch (const BridgeError&) {
     return nullptr;  // no server under that name (yet)
   }
-  if (!validate(s->data(), s->size()).empty()) return nullptr;
-  const SegmentHeader& h = header(s->data());
-  const SegmentHeader& current = header(links_.back()->segment.data());
-  // The same server (stalled, not gone), one still starting, or another interface: not ours.
-  if (h.incarnation == current.incarnation || !ready(h, options_.stale_after) ||
-      h.interface_hash != interface_hash_)
+  if (!why.empty()) {
+    set_error("shared-memory segment " + path_ + " refused: " + why);
     return nullptr;
-  const auto pid = static_cast<std::int32_t>(getpid());
-  int index = claim_slot(s->data(), pid);
-  if (index < 0 && reclaim_dead_slots(s->data()) > 0) index = claim_slot(s->data(), pid);
-  if (index < 0) return nullptr;
-  return make_link(std::move(*s), static_cast<std::uint32_t>(index));
+  }
+  const SegmentHeader& h = *static_cast<const SegmentHeader*>(s->data());
+  const bool same_server = h.incarnation == incarnation_;
+  const bool slot_lost =
+      links_.back()->client().owner.load(std::memory_order_acquire) != links_.back()->token;
+  // One still starting, another interface, or the same server that merely stalled: not ours.
+  if (!ready(h, options_.stale_after) || h.interface_hash != interface_hash_ || (same_server && !slot_lost))
+    return nullptr;
+  const std::uint64_t token = new_claim_token();
+  const SegmentView view(s->data(), layout);
+  const int index = claim(view, token);
+  if (index < 0) {
+    set_error("shared-memory segment " + path_ + ": all client slots are taken");
+    return nullptr;
+  }
+  incarnation_ = h.incarnation;
+  return make_link(std::move(*s), layout, static_cast<std::uint32_t>(index), token);
+}
+
+void Proxy::monitor_once() {
+  Link* newest = links_.back().get();
+  // Our slots stay ours while we beat: the server frees the slots of clients that stop.
+  for (const auto& l : links_) l->client().heartbeat.store(monotonic_now(), std::memory_order_release);
+  if (offered_.load(std::memory_order_acquire) != nullptr || events_->offer_pending())
+    return;  // one switch at a time: wait until both threads have taken the last one
+  // A consumer may have attached to the event mailbox since the last switch.
+  if (mailbox_on_ != newest && events_->consumer_attached() && events_->offer_ring(newest->events.get())) {
+    mailbox_on_ = newest;
+    return;
+  }
+  // The calling thread uses the newest link, the mailbox `mailbox_on_`: the others can go.
+  std::erase_if(links_, [&](const std::unique_ptr<Link>& l) {
+    if (l.get() == newest || l.get() == mailbox_on_) return false;
+    release_slot(l->view, l->slot, l->token);
+    return true;
+  });
+  if (alive(*newest)) return;
+  std::unique_ptr<Link> next = try_reconnect();
+  if (next == nullptr) return;
+  links_.push_back(std::move(next));
+  newest = links_.back().get();
+  if (events_->consumer_attached() && events_->offer_ring(newest->events.get())) mailbox_on_ = newest;
+  offered_.store(newest, std::memory_order_release);
+  reconnects_.fetch_add(1, std::memory_order_relaxed);
 }
 
 void Proxy::monitor() {
   while (stop_.load(std::memory_order_acquire) == 0) {
     futex_wait(stop_, 0, options_.reconnect_poll);
-    if (offered_.load(std::memory_order_acquire) != nullptr || events_->offer_pending())
-      continue;  // one switch at a time: wait until both threads have taken the last one
-    Link* newest = links_.back().get();
-    // A consumer may have attached to the event mailbox since the last switch.
-    if (mailbox_on_ != newest && events_->consumer_attached() && events_->offer_ring(newest->events.get())) {
-      mailbox_on_ = newest;
-      continue;
+    try {
+      monitor_once();
+    } catch (const std::exception& e) {  // a segment we could not use: stay disconnected, say why
+      set_error(std::string("reconnect failed: ") + e.what());
+    } catch (...) {
+      set_error("reconnect failed");
     }
-    // The calling thread uses the newest link, the mailbox `mailbox_on_`: the others can go.
-    std::erase_if(links_, [&](const std::unique_ptr<Link>& l) {
-      if (l.get() == newest || l.get() == mailbox_on_) return false;
-      release_slot(l->segment.data(), l->slot, static_cast<std::int32_t>(getpid()));
-      return true;
-    });
-    if (ready(header(newest->segment.data()), options_.stale_after)) continue;
-    std::unique_ptr<Link> next = try_reconnect();
-    if (next == nullptr) continue;
-    links_.push_back(std::move(next));
-    newest = links_.back().get();
-    if (events_->consumer_attached() && events_->offer_ring(newest->events.get())) mailbox_on_ = newest;
-    offered_.store(newest, std::memory_order_release);
-    reconnects_.fetch_add(1, std::memory_order_relaxed);
   }
 }
 
 std::unique_ptr<Component> ShmResolver::resolve(std::string_view name) {
   const std::string path = "/saw." + std::string(name);
   std::optional<ShmSegment> s;
+  Layout layout;
+  std::string why;
   try {
-    s.emplace(ShmSegment::attach(path));
+    s.emplace(attach_validated(path, layout, why));
   } catch (const BridgeError&) {
     return nullptr;  // not exported on this host
   }
-  if (const auto why = validate(s->data(), s->size()); !why.empty())
-    throw ConnectError("shared-memory segment " + path + " refused: " + why);
-  const SegmentHeader& h = header(s->data());
-  const auto age = monotonic_now() - h.heartbeat.load(std::memory_order_acquire);
+  if (!why.empty()) throw ConnectError("shared-memory segment " + path + " refused: " + why);
+  const SegmentView view(s->data(), layout);
+  const SegmentHeader& h = view.header();
+  const auto age = elapsed(monotonic_now(), h.heartbeat.load(std::memory_order_acquire));
   if (!ready(h, options_.stale_after))
     throw ConnectError("shared-memory segment " + path + ": its server (pid " +
                        std::to_string(h.owner_pid.load()) + ") is not running (heartbeat " +
                        std::to_string(age / 1'000'000) + " ms old)");
-  const auto pid = static_cast<std::int32_t>(getpid());
-  int index = claim_slot(s->data(), pid);
-  if (index < 0 && reclaim_dead_slots(s->data()) > 0) index = claim_slot(s->data(), pid);
+  const std::uint64_t token = new_claim_token();
+  const int index = claim(view, token);
   if (index < 0)
-    throw ConnectError("shared-memory segment " + path + ": all " + std::to_string(h.slot_count) +
+    throw ConnectError("shared-memory segment " + path + ": all " + std::to_string(layout.slot_count) +
                        " client slots are taken");
-  return std::make_unique<Proxy>(std::move(*s), index, options_);
+  try {
+    return std::make_unique<Proxy>(std::move(*s), layout, index, token, options_);
+  } catch (const std::exception& e) {  // a manifest the proxy cannot rebuild: say so at connect
+    throw ConnectError("shared-memory segment " + path + " refused: " + e.what());
+  }
 }
 
 }  // namespace saw::bridge

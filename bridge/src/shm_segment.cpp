@@ -23,7 +23,8 @@ ShmSegment ShmSegment::create(const std::string& name, std::size_t size,
     // Someone left this name: take it over only if its owner is gone.
     ShmSegment old = attach(name);
     if (owner_alive != nullptr && owner_alive(old.data(), old.size()))
-      throw BridgeError("shared-memory segment " + name + " is in use by a live process");
+      throw BridgeError("shared-memory segment " + name +
+                        " is in use by a live process, or is not a sawrt segment: left as it is");
     old.owner_ = true;  // unlinked when `old` goes
     old.release();
     fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL, 0600);
@@ -44,7 +45,7 @@ ShmSegment ShmSegment::create(const std::string& name, std::size_t size,
   return ShmSegment(name, p, size, true);
 }
 
-ShmSegment ShmSegment::attach(const std::string& name) {
+ShmSegment ShmSegment::attach(const std::string& name, bool writable) {
   const int fd = ::shm_open(name.c_str(), O_RDWR, 0);
   if (fd < 0) throw BridgeError(errno_text("shm_open " + name));
   struct stat st {};
@@ -58,10 +59,16 @@ ShmSegment ShmSegment::attach(const std::string& name) {
     ::close(fd);
     throw BridgeError("shared-memory segment " + name + " is empty (truncated)");
   }
-  void* p = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  void* p = ::mmap(nullptr, size, writable ? PROT_READ | PROT_WRITE : PROT_READ, MAP_SHARED, fd, 0);
   ::close(fd);
   if (p == MAP_FAILED) throw BridgeError(errno_text("mmap " + name));
   return ShmSegment(name, p, size, false);
+}
+
+void ShmSegment::make_writable(std::size_t offset, std::size_t length) {
+  if (offset > size_ || length > size_ - offset) throw BridgeError("make_writable: range outside " + name_);
+  if (::mprotect(static_cast<std::byte*>(data_) + offset, length, PROT_READ | PROT_WRITE) != 0)
+    throw BridgeError(errno_text("mprotect " + name_));
 }
 
 ShmSegment::ShmSegment(ShmSegment&& o) noexcept

@@ -1,14 +1,17 @@
-// saw-rt: the RT host. Loads a YAML deployment, validates all of it, runs it, prints a summary.
+// saw-rt: the RT host. Registers the packages' component types, loads a YAML deployment (and its
+// plug-ins), validates all of it, runs it, prints a summary. It knows no concrete component.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <thread>
 
-#include "builtin_types.hpp"
+#include "gateway_process.hpp"
+#include "run_summary.hpp"
+#include "saw/bridge/registration.hpp"
 #include "saw/deploy/deployment.hpp"
-#include "saw/drivers/sim_haptic_device.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/drivers/sim_registration.hpp"
+#include "saw/teleop/registration.hpp"
 
 namespace {
 
@@ -16,57 +19,18 @@ using namespace std::chrono_literals;
 std::atomic<bool> stop_requested{false};
 void on_signal(int) { stop_requested.store(true, std::memory_order_relaxed); }
 
-void print_summary(saw::deploy::Deployment& d, double seconds) {
-  std::printf("summary of '%s' (%s clock, %.3f s):\n", d.name().c_str(),
-              d.clock() == saw::deploy::Clock::stepped ? "stepped" : "real", seconds);
-  std::printf("  %-14s %8s %10s %9s %9s %9s %9s %9s %9s\n", "task", "period", "cycles", "overruns", "missed",
-              "lat.min", "lat.mean", "lat.p99", "lat.max");
-  for (saw::Component* c : d.components()) {
-    const auto* t = dynamic_cast<saw::Task*>(c);
-    if (t == nullptr) continue;
-    const auto s = t->statistics();
-    const auto& h = t->wakeup_histogram();
-    std::printf("  %-14s %6.2fms %10llu %9llu %9llu %7.1fus %7.1fus %7.1fus %7.1fus\n", t->name().c_str(),
-                static_cast<double>(t->config().period.count()) * 1e-6,
-                static_cast<unsigned long long>(s.cycles), static_cast<unsigned long long>(s.overruns),
-                static_cast<unsigned long long>(s.missed_periods), static_cast<double>(h.min()) / 1e3,
-                h.mean() / 1e3, static_cast<double>(h.percentile(0.99)) / 1e3,
-                static_cast<double>(h.max()) / 1e3);
-  }
-  for (saw::Component* c : d.components()) {
-    if (const auto* t = dynamic_cast<saw::teleop::CollaborativeControlForce*>(c))
-      std::printf(
-          "  %s: %s, tracking error |e_s| RMS %.3f mm, max %.3f mm over %llu enabled cycles; "
-          "rejected settings %llu, refused force commands %llu\n",
-          t->name().c_str(), std::string(saw::to_string(t->operating_state())).c_str(),
-          t->tracking_rms() * 1e3, t->tracking_max() * 1e3,
-          static_cast<unsigned long long>(t->enabled_cycles()),
-          static_cast<unsigned long long>(t->rejected_commands()),
-          static_cast<unsigned long long>(t->refused_sends()));
-    if (const auto* t = dynamic_cast<saw::teleop::CollaborativeControlForce*>(c);
-        t && t->enabled_cycles() != 0)
-      std::printf(
-          "  %s: master sample -> force command: mean %.1f us, max %.1f us; %llu of %llu cycles used a "
-          "sample "
-          "from an earlier cycle\n",
-          t->name().c_str(), t->master_age_mean() / 1e3, static_cast<double>(t->master_age_max()) / 1e3,
-          static_cast<unsigned long long>(t->master_age_late()),
-          static_cast<unsigned long long>(t->enabled_cycles()));
-    if (const auto* s = dynamic_cast<saw::drivers::SimHapticDevice*>(c))
-      if (s->rejected_commands() != 0)
-        std::printf("  %s: %llu force commands rejected (non-finite or over the limit)\n", s->name().c_str(),
-                    static_cast<unsigned long long>(s->rejected_commands()));
-  }
-  if (const auto* r = d.recorder())
-    std::printf("  recorder: %llu rows to %s, %llu rows lost\n", static_cast<unsigned long long>(r->rows()),
-                r->path().c_str(), static_cast<unsigned long long>(r->lost_rows()));
+void register_packages(saw::deploy::ComponentRegistry& registry) {
+  saw::bridge::register_components(registry);
+  saw::drivers::sim::register_components(registry);
+  saw::teleop::register_components(registry);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"saw-rt: runs a sawrt deployment (YAML)"};
-  std::string config, record;
+  std::string config, record, host;
+  std::vector<std::string> plugins;
   double duration = 0;
   bool stepped = false, list = false;
   app.add_option("config", config, "deployment file (YAML)");
@@ -76,16 +40,25 @@ int main(int argc, char** argv) {
   app.add_flag("--stepped", stepped, "simulated clock, as fast as possible (needs --duration)");
   app.add_option("--record", record, "CSV file for the deployment's record: columns")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  app.add_flag("--list-types", list, "list the component types and exit");
-  std::string host;
+  app.add_flag("--list-types", list, "list the component types (with --plugin's) and exit");
+  app.add_option("--plugin", plugins, "a plug-in to load before the file's own plugins: (repeatable)");
   app.add_option("--host", host, "the host (of the file's hosts: section) whose components to run here");
   CLI11_PARSE(app, argc, argv);
 
   saw::deploy::ComponentRegistry registry;
-  saw::apps::register_builtin_types(registry);
+  register_packages(registry);
+  for (const auto& p : plugins) {
+    try {
+      registry.load_plugin(p);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "saw-rt: --plugin %s: %s\n", p.c_str(), e.what());
+      return 2;
+    }
+  }
   if (list) {
-    for (const auto& [name, entry] : registry.types())
-      std::printf("%-20s %s\n", name.c_str(), entry.second.c_str());
+    for (const auto& [name, type] : registry.types())
+      std::printf("%-20s %s%s\n", name.c_str(), type.description.c_str(),
+                  type.origin.empty() ? "" : (" [" + type.origin + "]").c_str());
     return 0;
   }
   if (config.empty()) {
@@ -94,8 +67,11 @@ int main(int argc, char** argv) {
   }
   std::optional<saw::deploy::Deployment> d;
   try {
-    d.emplace(saw::deploy::load_deployment(config, registry, host));
-    if (stepped) d->set_clock(saw::deploy::Clock::stepped);
+    auto spec = saw::deploy::load_deployment_spec(config, registry, host);
+    if (stepped) spec.clock = saw::deploy::Clock::stepped;
+    d.emplace(saw::deploy::build_deployment(
+        std::move(spec), registry,
+        [&](const saw::deploy::GatewaySpec& g) { return saw::apps::launch_gateway(g, registry); }));
     if (!record.empty()) d->set_record_file(record);
   } catch (const saw::deploy::ConfigError& e) {
     std::fprintf(stderr, "saw-rt: %s\nnothing was started.\n", e.what());
@@ -120,6 +96,6 @@ int main(int argc, char** argv) {
   const double ran = d->clock() == saw::deploy::Clock::stepped
                          ? duration
                          : std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  print_summary(*d, ran);
+  saw::apps::print_summary(stdout, *d, registry, ran);
   return 0;
 }

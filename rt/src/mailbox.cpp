@@ -9,6 +9,10 @@ Mailbox::Mailbox(std::string name, SpscRingControl* control, std::byte* storage,
                  std::size_t slot_size)
     : name_(std::move(name)), own_(control, storage, capacity, slot_size) {}
 
+Mailbox::Mailbox(std::string name, std::atomic<std::uint64_t>* head, std::atomic<std::uint64_t>* tail,
+                 std::byte* storage, std::size_t capacity, std::size_t slot_size)
+    : name_(std::move(name)), own_(head, tail, storage, capacity, slot_size) {}
+
 void Mailbox::set_target(std::uint32_t index, Invoker target) {
   if (index >= targets_.size()) targets_.resize(index + 1, Invoker{[](void*, const void*) {}, nullptr});
   targets_[index] = target;

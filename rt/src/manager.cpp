@@ -108,6 +108,29 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
             std::to_string(task->config().priority) +
             ") wait for that process. Read state instead, or call it from a non-RT component.");
 
+  // A component in another process has one command ring and one event ring in this process,
+  // each with a single producer or consumer: one client component may command it or observe
+  // its events (any number may read its state).
+  bool uses_rings = false;
+  for (const auto& f : req->functions())
+    if (const Command* c = prov->find_command(f.name);
+        c != nullptr &&
+        (c->signature.kind == CommandKind::write || c->signature.kind == CommandKind::void_command))
+      uses_rings = true;
+  for (const auto& h : req->handlers()) uses_rings = uses_rings || prov->find_event(h->name) != nullptr;
+  if (server.is_remote() && uses_rings)
+    if (auto it = remote_users_.find(server_name); it != remote_users_.end() && it->second != client_name)
+      throw ConnectError(what + "component " + quoted(server_name) +
+                         " is in another process and its commands and events are used by " +
+                         quoted(it->second) + " already: one client component per process may send " +
+                         "its commands or receive its events (each ring has one producer and one "
+                         "consumer); others may read its state");
+  const auto connected = [&] {
+    if (server.is_remote() && uses_rings)
+      remote_users_.emplace(std::string(server_name), std::string(client_name));
+    req->set_connected_to(std::string(server_name) + "." + std::string(provided_name));
+  };
+
   // Commands: queued into a mailbox the server drains, unless the server has no thread.
   std::size_t max_arg = 0;
   bool any_queued = false;
@@ -134,6 +157,7 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
     FunctionBinding b;
     if (c->signature.kind == CommandKind::read || c->signature.kind == CommandKind::qualified_read) {
       b.command = c;
+      b.check_values = server.is_remote();  // bytes from another process: checked as the client's type
     } else if (commands != nullptr) {
       b.mailbox = commands;
       b.target = commands->add_target(c->invoker());
@@ -168,7 +192,7 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
         }
     }
     client.add_inbound(remote);
-    req->set_connected_to(std::string(server_name) + "." + std::string(provided_name));
+    connected();
     return;
   }
   if (any_events && client.has_thread()) {
@@ -192,7 +216,7 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
     e->add_observer(o);
     h->bound = true;
   }
-  req->set_connected_to(std::string(server_name) + "." + std::string(provided_name));
+  connected();
 }
 
 void Manager::check_ready_to_start() {

@@ -12,12 +12,13 @@ constexpr std::size_t word = sizeof(std::uint64_t);
 StateTable::StateTable(std::size_t rows) : capacity_(rows < 4 ? 4 : rows) {}
 StateTable::~StateTable() = default;
 
-std::uint32_t StateTable::add_column_erased(std::string name, TypeInfo type, const void* source) {
+std::uint32_t StateTable::add_column_erased(std::string name, TypeInfo type, const void* source,
+                                            ColumnUse use) {
   if (finalized()) throw std::logic_error("state table: column '" + name + "' added after start");
   if (source == nullptr) throw std::invalid_argument("state table: column '" + name + "' has no source");
   if (find_column(name) >= 0) throw std::invalid_argument("state table: column '" + name + "' added twice");
   const std::size_t words = (type.size + word - 1) / word;
-  columns_.push_back({std::move(name), type, source, row_words_, words});
+  columns_.push_back({std::move(name), type, source, row_words_, words, use});
   row_words_ += words;
   return static_cast<std::uint32_t>(columns_.size() - 1);
 }

@@ -75,6 +75,7 @@ void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) 
     const timespec ts = to_timespec(scheduled);
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
+    const RtCycleScope observed(name().c_str());  // from wake-up to the next sleep
     const TimeNs woke = monotonic_now();
     const TimeNs latency = woke - scheduled;
     histogram_.record(latency);
@@ -88,7 +89,9 @@ void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) 
 }
 
 void Task::continuous_loop(const std::atomic<bool>& running) noexcept {
+  RtContextScope rt_scope(config_.is_rt());
   while (running.load(std::memory_order_acquire)) {
+    const RtCycleScope observed(name().c_str());
     const TimeNs woke = monotonic_now();
     cycle(woke);
     account(woke, woke, monotonic_now(), 0, 0);
@@ -96,7 +99,8 @@ void Task::continuous_loop(const std::atomic<bool>& running) noexcept {
 }
 
 void Task::step(TimeNs t) noexcept {
-  RtContextScope rt_scope;
+  RtContextScope rt_scope(config_.is_rt());
+  const RtCycleScope observed(name().c_str());
   stats_.last_wakeup_latency = 0;
   cycle(t);
   account(t, t, t, 0, 0);

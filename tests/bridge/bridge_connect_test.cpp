@@ -1,11 +1,7 @@
 // One connect(), two distances: a client task connects to a task in another process through
 // the shared-memory bridge exactly as to a local one; the server dying is seen, not hung on.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <spawn.h>
 #include <sys/mman.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -15,10 +11,14 @@
 #include "saw/bridge/proxy.hpp"
 #include "saw/bridge/shm_segment.hpp"
 #include "saw/manager.hpp"
-
-extern char** environ;
+#include "saw/testing/child_process.hpp"
+#include "saw/testing/unique_name.hpp"
+#include "saw/testing/wait_for.hpp"
 
 namespace {
+
+using saw::testing::unique_name;
+using saw::testing::wait_for;
 
 using namespace std::chrono_literals;
 
@@ -54,38 +54,18 @@ class Client : public saw::Task {
   saw::FunctionVoid reset_;
 };
 
-struct Peer {
-  explicit Peer(const std::string& name, const char* mode = nullptr) {
-    char* server[] = {const_cast<char*>(SAW_BRIDGE_PEER), const_cast<char*>(name.c_str()), nullptr};
-    char* client[] = {const_cast<char*>(SAW_BRIDGE_PEER), const_cast<char*>(mode),
-                      const_cast<char*>(name.c_str()), nullptr};
-    char** argv = mode == nullptr ? server : client;
-    if (posix_spawn(&pid, SAW_BRIDGE_PEER, nullptr, nullptr, argv, environ) != 0) pid = -1;
-  }
-  ~Peer() {
-    if (pid > 0) {
-      kill(pid, SIGKILL);
-      waitpid(pid, nullptr, 0);
-    }
-  }
-  pid_t pid = -1;
+// The bridge_peer program: exports `name`, or in `mode` acts on it.
+struct Peer : saw::testing::ChildProcess {
+  explicit Peer(const std::string& name, const char* mode = nullptr)
+      : ChildProcess(mode == nullptr ? std::vector<std::string>{SAW_BRIDGE_PEER, name}
+                                     : std::vector<std::string>{SAW_BRIDGE_PEER, mode, name}) {}
 };
-
-template <class F>
-bool wait_for(F done, std::chrono::milliseconds limit = 10s) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(1ms);
-  }
-  return true;
-}
 
 bool segment_ready(const std::string& name) {
   try {
     auto s = saw::bridge::ShmSegment::attach("/saw." + name);
     return saw::bridge::validate(s.data(), s.size()).empty() &&
-           saw::bridge::header(s.data()).state.load() ==
+           static_cast<const saw::bridge::SegmentHeader*>(s.data())->state.load() ==
                static_cast<std::uint32_t>(saw::bridge::SegmentState::ready);
   } catch (const saw::bridge::BridgeError&) {
     return false;
@@ -93,9 +73,9 @@ bool segment_ready(const std::string& name) {
 }
 
 TEST(BridgeConnect, SameConnectAcrossProcessesAndTheServerDyingIsSeen) {
-  const std::string name = "bdev" + std::to_string(getpid());
+  const std::string name = unique_name("bdev");
   Peer peer(name);
-  ASSERT_GT(peer.pid, 0);
+  ASSERT_GT(peer.pid(), 0);
   ASSERT_TRUE(wait_for([&] { return segment_ready(name); })) << "the server process did not export " << name;
 
   Client client;
@@ -114,9 +94,7 @@ TEST(BridgeConnect, SameConnectAcrossProcessesAndTheServerDyingIsSeen) {
   EXPECT_EQ(client.add_status.load(), saw::Status::ok);
 
   // kill -9 the server: calls fail with `disconnected` instead of hanging, and the client's loop goes on.
-  kill(peer.pid, SIGKILL);
-  waitpid(peer.pid, nullptr, 0);
-  peer.pid = -1;
+  peer.kill9();
   const auto killed = std::chrono::steady_clock::now();
   ASSERT_TRUE(wait_for([&] { return client.status.load() == saw::Status::disconnected; }));
   const auto seen_ms =
@@ -131,7 +109,7 @@ TEST(BridgeConnect, SameConnectAcrossProcessesAndTheServerDyingIsSeen) {
 }
 
 TEST(BridgeConnect, TypeMismatchAcrossProcessesFailsAtConnectNamingBothTypes) {
-  const std::string name = "bdevt" + std::to_string(getpid());
+  const std::string name = unique_name("bdevt");
   Peer peer(name);
   ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
   class Wrong : public saw::Task {
@@ -147,13 +125,13 @@ TEST(BridgeConnect, TypeMismatchAcrossProcessesFailsAtConnectNamingBothTypes) {
     ADD_FAILURE() << "connected despite the type mismatch";
   } catch (const saw::ConnectError& e) {
     const std::string msg = e.what();
-    EXPECT_NE(msg.find("write command<double>"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("write command<long int>"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("write command<float64>"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("write command<int64>"), std::string::npos) << msg;
   }
 }
 
 TEST(BridgeConnect, AStaleSegmentIsRefusedAtConnect) {
-  const std::string name = "bdevs" + std::to_string(getpid());
+  const std::string name = unique_name("bdevs");
   {
     Peer peer(name);
     ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
@@ -195,7 +173,7 @@ class Counter : public saw::Task {
 };
 
 TEST(BridgeConnect, AKilledClientsSlotIsReclaimedAndTheServerRunsOn) {
-  const std::string name = "bsrv" + std::to_string(getpid());
+  const std::string name = unique_name("bsrv");
   Counter counter(name);
   saw::bridge::Exporter exporter(counter, "arm", /*slots=*/1);
   saw::Manager m;
@@ -216,6 +194,9 @@ TEST(BridgeConnect, AKilledClientsSlotIsReclaimedAndTheServerRunsOn) {
   std::printf("server overruns while a client was killed: %llu\n",
               static_cast<unsigned long long>(counter.statistics().overruns - overruns_before));
   EXPECT_LE(counter.adds.load(), adds + 1) << "nothing arrives from a dead client";
+  // Its heartbeat stopped: the slot is freed after the client timeout.
+  ASSERT_TRUE(wait_for([&] { return exporter.slots_reclaimed() == 1; }))
+      << "the dead client's slot stayed taken";
   Peer second(name, "client");  // needs the dead client's slot
   ASSERT_TRUE(wait_for([&] { return counter.adds.load() > adds + 50; }))
       << "the second client could not connect";
@@ -227,7 +208,7 @@ TEST(BridgeConnect, AKilledClientsSlotIsReclaimedAndTheServerRunsOn) {
 namespace {
 
 TEST(BridgeConnect, QualifiedReadsCrossForNonRtCallersAndAreRefusedToRtTasks) {
-  const std::string name = "bdevq" + std::to_string(getpid());
+  const std::string name = unique_name("bdevq");
   Peer peer(name);
   ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
   class Caller : public saw::Component {
@@ -258,9 +239,7 @@ TEST(BridgeConnect, QualifiedReadsCrossForNonRtCallersAndAreRefusedToRtTasks) {
     ASSERT_EQ(caller.tripled(q, r), saw::Status::ok);
     EXPECT_EQ(r, 3 * q);
   }
-  kill(peer.pid, SIGKILL);
-  waitpid(peer.pid, nullptr, 0);
-  peer.pid = -1;
+  peer.kill9();
   // Never hangs: a dead server answers `disconnected` (stale heartbeat) or `timeout`.
   ASSERT_TRUE(wait_for([&] {
     const auto s = caller.tripled(2, r);
@@ -273,7 +252,7 @@ TEST(BridgeConnect, QualifiedReadsCrossForNonRtCallersAndAreRefusedToRtTasks) {
 namespace {
 
 TEST(BridgeConnect, AClientReconnectsWhenANewServerWithTheSameNameStarts) {
-  const std::string name = "bdevr" + std::to_string(getpid());
+  const std::string name = unique_name("bdevr");
   auto first = std::make_unique<Peer>(name);
   ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
   Client client;
@@ -315,6 +294,7 @@ TEST(BridgeConnect, AClientReconnectsWhenANewServerWithTheSameNameStarts) {
 // The test's version of a type the peer's `v2` mode exports with layout version 2.
 namespace probe {
 struct Sample {
+  static constexpr std::string_view type_name = "probe::Sample";
   static constexpr std::uint32_t layout_version = 1;
   double a = 0, b = 0;
 };
@@ -323,7 +303,7 @@ struct Sample {
 namespace {
 
 TEST(BridgeConnect, ATypeWithAnotherLayoutVersionFailsAtConnectNamingBoth) {
-  const std::string name = "bdevv" + std::to_string(getpid());
+  const std::string name = unique_name("bdevv");
   Peer peer(name, "v2");
   ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
   class Setter : public saw::Task {
@@ -350,7 +330,7 @@ TEST(BridgeExport, ATypeWithoutALayoutVersionIsRefusedNamingItAndTheFix) {
   };
   class Owner : public saw::Task {
    public:
-    Owner() : Task("owner" + std::to_string(getpid()), saw::TaskConfig::periodic(1ms, 0)) {
+    Owner() : Task(unique_name("owner"), saw::TaskConfig::periodic(1ms, 0)) {
       provide("arm").add_command_write<Unversioned>("set", [](const Unversioned&) {});
     }
   } owner;
@@ -365,7 +345,7 @@ TEST(BridgeExport, ATypeWithoutALayoutVersionIsRefusedNamingItAndTheFix) {
 }
 
 TEST(BridgeConnect, ANonRtConsumerSleepsUntilTheServerPublishesARow) {
-  const std::string name = "bdevw" + std::to_string(getpid());
+  const std::string name = unique_name("bdevw");
   auto peer = std::make_unique<Peer>(name);
   ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
   saw::bridge::ShmResolver resolver;
@@ -388,7 +368,7 @@ TEST(BridgeConnect, ANonRtConsumerSleepsUntilTheServerPublishesARow) {
 namespace {
 
 TEST(BridgeConnect, AFullCommandRingIsAnErrorReturnedAndCounted) {
-  const std::string name = "bfull" + std::to_string(getpid());
+  const std::string name = unique_name("bfull");
   Counter counter(name);  // never started: nothing drains its slots
   saw::bridge::Exporter exporter(counter, "arm", {.slots = 1, .ring_capacity = 4});
   class Caller : public saw::Component {

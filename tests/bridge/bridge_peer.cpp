@@ -1,5 +1,6 @@
 // A process for the bridge tests: `NAME` exports task NAME's "arm" until killed; `client NAME`
-// sends to it; `v2 NAME` exports a type with another layout version.
+// sends to it; `sleeper NAME` waits for its updates until killed; `v2 NAME` exports a type with another
+// layout version.
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -72,6 +73,7 @@ int run_client(const char* name) {
 // The same type name as the test's, with another layout version (a process built from newer code).
 namespace probe {
 struct Sample {
+  static constexpr std::string_view type_name = "probe::Sample";
   static constexpr std::uint32_t layout_version = 2;
   double a = 0, b = 0;
 };
@@ -109,6 +111,13 @@ int main(int argc, char** argv) {
     return serve(task);
   }
   if (std::string(argv[1]) == "client" && argc == 3) return run_client(argv[2]);
+  if (std::string(argv[1]) == "sleeper" && argc == 3) {  // a non-RT consumer asleep on the update bell
+    auto c = saw::bridge::ShmResolver().resolve(argv[2]);
+    auto* proxy = dynamic_cast<saw::bridge::Proxy*>(c.get());
+    if (proxy == nullptr) return 3;
+    std::uint32_t seen = 0;
+    for (;;) (void)proxy->wait_for_update(seen, 60'000'000'000);
+  }
   Device device(argv[1]);
   return serve(device);
 }

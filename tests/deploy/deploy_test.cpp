@@ -9,7 +9,7 @@
 #include <sstream>
 #include <thread>
 
-#include "builtin_types.hpp"
+#include "packages.hpp"
 #include "saw/deploy/deployment.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
@@ -18,11 +18,8 @@ namespace {
 
 using saw::deploy::ConfigError;
 
-saw::deploy::ComponentRegistry registry() {
-  saw::deploy::ComponentRegistry r;
-  saw::apps::register_builtin_types(r);
-  return r;
-}
+using saw::testing::build;
+using saw::testing::registry;
 
 const char* good = R"(deployment: {name: t, clock: stepped}
 components:
@@ -49,7 +46,7 @@ std::string error_of(const std::string& from, const std::string& to) {
   EXPECT_NE(at, std::string::npos) << from;
   text.replace(at, from.size(), to);
   try {
-    (void)saw::deploy::parse_deployment(text, "cfg.yaml", registry());
+    (void)build(text, "cfg.yaml", registry());
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -58,7 +55,7 @@ std::string error_of(const std::string& from, const std::string& to) {
 }
 
 TEST(Deployment, GoodFileParsesAndNothingRunsYet) {
-  auto d = saw::deploy::parse_deployment(good, "cfg.yaml", registry());
+  auto d = build(good, "cfg.yaml", registry());
   EXPECT_EQ(d.components().size(), 3u);
   for (auto* c : d.components()) EXPECT_EQ(c->lifecycle(), saw::Lifecycle::constructed);
 }
@@ -117,7 +114,7 @@ TEST(Deployment, SteppedRunRecordsEveryRow) {
   const std::string csv = ::testing::TempDir() + "deploy_test.csv";
   std::string text = std::string(good) + "record: {file: " + csv +
                      ", columns: [master.measured_cp, teleop.tracking_error]}\n";
-  auto d = saw::deploy::parse_deployment(text, "cfg.yaml", registry());
+  auto d = build(text, "cfg.yaml", registry());
   d.start();
   d.run_for(1.0);
   d.stop();
@@ -170,7 +167,8 @@ namespace {
 
 // The shipped deployment, on the stepped clock: the slave tracks the master.
 TEST(Integration, ShippedTeleopSimTracksInSteppedMode) {
-  auto d = saw::deploy::load_deployment(SAW_SOURCE_DIR "/config/teleop-sim.yaml", registry());
+  auto d = saw::deploy::load_deployment(SAW_SOURCE_DIR "/config/teleop-sim.yaml", registry(), "",
+                                        saw::testing::no_gateway);
   d.set_clock(saw::deploy::Clock::stepped);
   d.start();
   d.run_for(5.0);
@@ -197,7 +195,7 @@ double delayed_rms(bool predict) {
                std::string("gains: {master: 100, slave: 100}").size(),
                std::string("gains: {master: 0, slave: 300}, stale_timeout: 100ms, prediction: {enabled: ") +
                    (predict ? "true" : "false") + ", master: 20ms}");
-  auto d = saw::deploy::parse_deployment(text, "cfg.yaml", registry());
+  auto d = build(text, "cfg.yaml", registry());
   const auto* master = d.find<saw::drivers::SimHapticDevice>("master");
   const auto* slave = d.find<saw::drivers::SimHapticDevice>("slave");
   d.start();
@@ -271,7 +269,7 @@ namespace {
 
 std::string gateway_error(const std::string& tail) {
   try {
-    (void)saw::deploy::parse_deployment(std::string(good) + tail, "cfg.yaml", registry());
+    (void)build(std::string(good) + tail, "cfg.yaml", registry());
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -295,8 +293,7 @@ TEST(Deployment, AGatewaySectionIsCheckedLikeTheRest) {
   expect_error(exported + "gateway: {domian: 3}\n",
                R"(^cfg\.yaml:19:\d+: key 'gateway\.domian': unknown parameter)");
   // A good one parses, naming what it maps; nothing is started until the deployment starts.
-  auto d = saw::deploy::parse_deployment(std::string(good) + exported + "gateway: {domain: 3}\n", "cfg.yaml",
-                                         registry());
+  auto d = build(std::string(good) + exported + "gateway: {domain: 3}\n", "cfg.yaml", registry());
   ASSERT_TRUE(d.gateway().has_value());
   EXPECT_EQ(d.gateway()->attach, std::vector<std::string>{"master"});
   EXPECT_EQ(d.gateway()->domain, 3);
@@ -336,7 +333,7 @@ TEST(Integration, OneFileOnTwoHostsRunsAsTwoProcessesWithHost) {
 
 std::string hosts_error(const std::string& text, const std::string& host) {
   try {
-    (void)saw::deploy::parse_deployment(text, "cfg.yaml", registry(), host);
+    (void)build(text, "cfg.yaml", registry(), host);
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -359,8 +356,7 @@ TEST(Deployment, HostsAreCheckedLikeTheRest) {
                                 std::regex(R"(cfg\.yaml:4:\d+: key 'components\[0\]\.host': no host 'z')")));
   EXPECT_TRUE(std::regex_search(hosts_error(good, "a"), std::regex(R"(--host a given, but)")));
   // Host b builds its two components only, and its connections; a's master is someone else's.
-  auto b = saw::deploy::parse_deployment(replace_all(placed, "server: master", "server: slave"), "cfg.yaml",
-                                         registry(), "b");
+  auto b = build(replace_all(placed, "server: master", "server: slave"), "cfg.yaml", registry(), "b");
   EXPECT_EQ(b.components().size(), 2u);
 }
 

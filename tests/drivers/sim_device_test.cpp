@@ -1,10 +1,13 @@
 // The simulated haptic devices: kinematics, dynamics, command validation, buttons, the hand.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <utility>
 
+#include "saw/crtk_arm.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/manager.hpp"
 
@@ -45,23 +48,26 @@ TEST(ArmKinematics, JacobianMatchesFiniteDifferences) {
 class Client : public saw::Task {
  public:
   Client() : Task("client", saw::TaskConfig::periodic(1ms, 0)) {
+    namespace arm = saw::crtk::arm;
     auto& r = require("arm");
-    r.add_function("measured_cp", measured_cp);
-    r.add_function("measured_cv", measured_cv);
-    r.add_function("servo_cf", servo_cf);
-    r.add_function("state_command", state_command);
-    r.add_event_handler_write<saw::ButtonEvent>("clutch", [this](const saw::ButtonEvent& b) {
+    saw::crtk::require(r, arm::measured_cp, measured_cp);
+    saw::crtk::require(r, arm::measured_cv, measured_cv);
+    saw::crtk::require(r, arm::measured_js, measured_js);
+    saw::crtk::require(r, arm::servo_cf, servo_cf);
+    saw::crtk::require(r, arm::state_command, state_command);
+    saw::crtk::require(r, arm::clutch, [this](const saw::ButtonEvent& b) {
       clutch_events++;
       clutch = b.pressed;
     });
-    r.add_event_handler_write<saw::OperatingState>(
-        "operating_state", [this](const saw::OperatingState& s) { last_state = s.state; });
+    saw::crtk::require(r, arm::operating_state_event,
+                       [this](const saw::OperatingState& s) { last_state = s.state; });
     auto& s = require("sim");
     s.add_function("set_button", set_button);
     s.add_function("rejected_commands", rejected);
   }
   saw::FunctionRead<saw::Pose> measured_cp;
   saw::FunctionRead<saw::Twist> measured_cv;
+  saw::FunctionRead<saw::JointState> measured_js;
   saw::FunctionWrite<saw::Wrench> servo_cf;
   saw::FunctionWrite<saw::StateCommand> state_command;
   saw::FunctionWrite<saw::drivers::ButtonCommand> set_button;
@@ -71,8 +77,15 @@ class Client : public saw::Task {
   saw::OperatingStateValue last_state = saw::OperatingStateValue::disabled;
 };
 
+// These tests command a force once and watch the dynamics: the command watchdog (tested on its
+// own below) is set out of their way unless a test sets it.
+SimDeviceConfig patient(SimDeviceConfig c) {
+  if (c.command_timeout == 0) c.command_timeout = 60'000'000'000;
+  return c;
+}
+
 struct Rig {
-  explicit Rig(SimDeviceConfig c) : device("dev", saw::TaskConfig::periodic(1ms, 0), std::move(c)) {
+  explicit Rig(SimDeviceConfig c) : device("dev", saw::TaskConfig::periodic(1ms, 0), patient(std::move(c))) {
     m.add(device);
     m.add(client);
     m.connect("client", "arm", "dev", "arm");
@@ -110,6 +123,47 @@ TEST(SimHapticDevice, ForceMovesTheTipAlongItAndDampingStopsIt) {
     EXPECT_LT(std::hypot(v.linear[0], v.linear[1], v.linear[2]), 1e-3)
         << "damping brings it to rest (model " << static_cast<int>(model) << ")";
   }
+}
+
+// sensor_msgs/JointState pairs positions with joints by name: measured_js names every joint.
+TEST(SimHapticDevice, MeasuredJsNamesTheModelsJoints) {
+  for (auto [model, names] : {std::pair{ArmModel::omni, std::array{"yaw", "shoulder_pitch", "elbow_pitch"}},
+                              std::pair{ArmModel::falcon, std::array{"x", "y", "z"}}}) {
+    SimDeviceConfig c;
+    c.model = model;
+    Rig rig(c);
+    saw::JointState js;
+    ASSERT_EQ(rig.client.measured_js(js), saw::Status::ok);
+    ASSERT_EQ(js.size, 3u);
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(js.name_of(i), names[i]);
+    EXPECT_TRUE(saw::check_value(js)) << "a value another process accepts";
+  }
+}
+
+// The arm interface is the one crtk_arm.hpp declares: every member the device serves has the
+// declared kind and type, so a client written against the declaration connects.
+TEST(SimHapticDevice, ProvidesTheDeclaredCrtkArm) {
+  SimHapticDevice d("dev", saw::TaskConfig::periodic(1ms, 0), SimDeviceConfig{});
+  const saw::ProvidedInterface* arm = d.provided(saw::crtk::arm::interface_name);
+  ASSERT_NE(arm, nullptr);
+  int served = 0;
+  for (const auto& m : saw::crtk::arm::members) {
+    const bool event = saw::is_event(m.signature.kind);
+    const saw::Signature* found = nullptr;
+    if (event) {
+      if (const auto* e = arm->find_event(m.name)) found = &e->signature();
+    } else if (const auto* c = arm->find_command(m.name)) {
+      found = &c->signature;
+    }
+    if (m.name == saw::crtk::arm::servo_cp.name) {
+      EXPECT_EQ(found, nullptr) << "the sim device does not serve servo_cp";
+      continue;
+    }
+    ASSERT_NE(found, nullptr) << m.name;
+    EXPECT_EQ(*found, m.signature) << m.name;
+    ++served;
+  }
+  EXPECT_EQ(served, static_cast<int>(saw::crtk::arm::members.size()) - 1);
 }
 
 TEST(SimHapticDevice, JointLimitsHold) {
@@ -217,6 +271,53 @@ TEST(SimHapticDevice, HandFollowsALineAndACsv) {
   EXPECT_NEAR(b.position().z() - o.z(), 0.02, 0.003);
   EXPECT_TRUE(b.client.clutch) << "the CSV's clutch column pressed the button";
   EXPECT_THROW(saw::drivers::HandScript::load_csv(path + ".missing"), std::runtime_error);
+}
+
+// A device never keeps pushing: without a fresh servo_cf for command_timeout, zero force, and
+// the state says so; the next command applies again.
+TEST(SimHapticDevice, CommandWatchdogDropsTheForceWhenCommandsStop) {
+  SimDeviceConfig c;
+  c.model = ArmModel::falcon;
+  c.command_timeout = 3'000'000;  // 3 periods
+  Rig rig(c);
+  const auto& st = rig.device.state_table();
+  const auto& col = rig.device.columns();
+  const auto applied = [&] {
+    saw::Vec3 f{};
+    EXPECT_EQ(st.read_latest(col.servo_force, f), saw::Status::ok);
+    return f;
+  };
+  const auto timed_out = [&] {
+    bool t = false;
+    EXPECT_EQ(st.read_latest(col.command_timeout, t), saw::Status::ok);
+    return t;
+  };
+  for (int round = 1; round <= 2; ++round) {
+    for (int i = 0; i < 10; ++i) {  // a commander sending every period
+      ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{1, 0, 0}, {}}), saw::Status::ok);
+      rig.steps(1);
+      ASSERT_EQ(applied(), (saw::Vec3{1, 0, 0}));
+      ASSERT_FALSE(timed_out());
+    }
+    rig.steps(3);  // the commander stops: 3 ms is the timeout, not beyond it
+    EXPECT_EQ(applied(), (saw::Vec3{1, 0, 0})) << "round " << round;
+    EXPECT_FALSE(timed_out());
+    rig.steps(1);
+    EXPECT_EQ(applied(), (saw::Vec3{0, 0, 0})) << "round " << round;
+    EXPECT_TRUE(timed_out());
+    EXPECT_EQ(rig.device.watchdog_trips(), static_cast<std::uint64_t>(round));
+    rig.steps(50);
+    EXPECT_EQ(applied(), (saw::Vec3{0, 0, 0})) << "it holds at zero";
+    EXPECT_EQ(rig.device.watchdog_trips(), static_cast<std::uint64_t>(round)) << "one trip per stop";
+  }
+}
+
+TEST(SimHapticDevice, CommandTimeoutDefaultsToThreePeriodsAndIsAtLeastOne) {
+  SimHapticDevice d("d", saw::TaskConfig::periodic(2ms, 0), SimDeviceConfig{});
+  EXPECT_EQ(d.command_timeout(), 6'000'000);
+  SimDeviceConfig c;
+  c.command_timeout = 1'000'000;
+  EXPECT_THROW(SimHapticDevice("e", saw::TaskConfig::periodic(2ms, 0), c), std::invalid_argument);
 }
 
 }  // namespace

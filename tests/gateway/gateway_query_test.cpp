@@ -10,6 +10,7 @@
 
 #include "saw/gateway/participant.hpp"
 #include "saw/gateway/query_client.hpp"
+#include "saw/testing/wait_for.hpp"
 #include "saw_msgs/msg/QueryReplyPubSubTypes.h"
 #include "served_device.hpp"
 
@@ -31,7 +32,9 @@ TEST(GatewayQuery, AQualifiedReadCrossesDdsAndTheBridgeAndABadQualifierIsRefused
     EXPECT_EQ(client.call(&short_arg, sizeof short_arg, &r, sizeof r, 5'000'000'000), saw::Status::invalid);
   }
   saw::gateway::delete_participant(p);
-  EXPECT_EQ(s.served->stats().queries, 4u);
+  // At least the four asked; the client asks again when a reply was lost to discovery (its reply
+  // writer had not yet matched our reader), so the server may have answered one twice.
+  EXPECT_GE(s.served->stats().queries, 4u);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include "saw/bridge/proxy.hpp"
+#include "saw/testing/wait_for.hpp"
 #include "served_device.hpp"
 
 namespace {

@@ -4,15 +4,15 @@
 
 #include <unistd.h>
 
-#include <atomic>
 #include <chrono>
+#include <memory>
 #include <string>
-#include <thread>
 
 #include "saw/bridge/exporter.hpp"
 #include "saw/gateway/gateway.hpp"
 #include "saw/gateway/participant.hpp"
 #include "saw/manager.hpp"
+#include "saw/testing/unique_name.hpp"
 
 namespace saw::testing {
 
@@ -42,7 +42,7 @@ class CountingDevice : public Task {
 
 struct ServedDevice {
   explicit ServedDevice(const std::string& prefix, int domain_base)
-      : name(prefix + std::to_string(getpid())),
+      : name(unique_name(prefix)),
         domain(domain_base + getpid() % 60),
         device(name),
         exporter(device, "arm") {
@@ -71,16 +71,6 @@ inline eprosima::fastdds::dds::DomainParticipant* test_participant(int domain, c
   pc.domain = domain;
   pc.name = name;
   return gateway::make_participant(pc);
-}
-
-template <class F>
-bool wait_for(F done, std::chrono::milliseconds limit = std::chrono::seconds(10)) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  return true;
 }
 
 }  // namespace saw::testing

@@ -52,6 +52,9 @@ exports:
         check(first is not None and first.header.frame_id == name, "state arrives, stamped with the component")
         later = wait_for(cp, lambda s: abs(s.pose.position.x - first.pose.position.x) > 1e-4, 5) if first else None
         check(later is not None, "the state changes (the simulated hand moves the arm)")
+        js = wait_for(c.reader(topic + "measured_js"), lambda s: True, 5)
+        check(js is not None and js.name == ["yaw", "shoulder_pitch", "elbow_pitch"] and len(js.position) == 3,
+              f"measured_js names each joint, as ROS tools need: {js.name if js else None}")
 
         states = c.reader(topic + "operating_state")
         errors = c.error_reader(name)

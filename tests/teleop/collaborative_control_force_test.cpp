@@ -6,69 +6,16 @@
 
 #include <cmath>
 
-#include "fake_device.hpp"
-#include "saw/teleop/delay_task.hpp"
+#include "saw/testing/teleop_rig.hpp"
+#include "teleop_support.hpp"
 
 namespace {
 
-using namespace std::chrono_literals;
-using saw::teleop::CollaborativeControlForce;
 using saw::teleop::TeleopConfig;
-using saw::testing::FakeDevice;
-
-double norm(const saw::Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
-double dist(const saw::Vec3& a, const saw::Vec3& b) { return norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]}); }
-
-// Lets the test call the teleop's provided "teleop" interface.
-class Operator : public saw::Component {
- public:
-  Operator() : Component("operator") {
-    auto& r = require("teleop");
-    r.add_function("state_command", state_command);
-    r.add_function("set_scale", set_scale);
-    r.add_function("set_gains", set_gains);
-    r.add_function("set_prediction", set_prediction);
-    r.add_function("operating_state", operating_state);
-  }
-  saw::FunctionWrite<saw::StateCommand> state_command;
-  saw::FunctionWrite<double> set_scale;
-  saw::FunctionWrite<saw::teleop::Gains> set_gains;
-  saw::FunctionWrite<saw::teleop::Prediction> set_prediction;
-  saw::FunctionRead<saw::OperatingState> operating_state;
-};
-
-struct Rig {
-  explicit Rig(TeleopConfig config) : teleop("teleop", saw::TaskConfig::periodic(1ms, 0), config) {
-    manager.add(master);
-    manager.add(slave);
-    manager.add(teleop);
-    manager.add(op);
-    manager.connect("teleop", "master", "master", "arm");
-    manager.connect("teleop", "slave", "slave", "arm");
-    manager.connect("operator", "teleop", "teleop", "teleop");
-    manager.start_stepped();
-  }
-  void step(int n = 1, bool publish_master = true) {
-    for (int i = 0; i < n; ++i) {
-      if (publish_master)
-        stepper({&master, &slave});
-      else
-        stepper({&slave});
-    }
-  }
-  FakeDevice master{"master"}, slave{"slave"};
-  CollaborativeControlForce teleop;
-  Operator op;
-  saw::Manager manager;
-  saw::testing::Stepper stepper{manager};
-};
-
-TeleopConfig basic() {
-  TeleopConfig c;
-  c.gains = {100, 100};
-  c.limits = {3, 3};
-  return c;
-}
+using saw::testing::basic;
+using saw::testing::dist;
+using saw::testing::norm;
+using saw::testing::Rig;
 
 TEST(CollaborativeControlForce, EnablingWithDevicesApartMakesNoForce) {
   Rig rig(basic());
@@ -193,7 +140,8 @@ TEST(CollaborativeControlForce, StaleMasterFaultsWithZeroForceUntilReEnabled) {
   EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
   rig.step(2, false);
   EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
-  EXPECT_EQ(rig.teleop.fault_reason(), saw::teleop::FaultReason::master_stale);
+  EXPECT_EQ(rig.teleop.fault().code, saw::teleop::FaultCode::input_stale);
+  EXPECT_EQ(rig.teleop.fault().source_name(), "master");
   EXPECT_EQ(norm(rig.slave.force), 0.0);
   EXPECT_EQ(norm(rig.master.force), 0.0);
   rig.step(5);  // fresh again: still faulted until someone enables
@@ -239,29 +187,17 @@ double delayed_error(bool predict) {
   c.limits = {100, 100};
   c.stale_timeout = 0.1;
   c.prediction = {predict, 0.020};
-  FakeDevice master("master"), slave("slave");
-  saw::teleop::DelayTask delay("master_delay", saw::TaskConfig::periodic(1ms, 0), 0.020);
-  CollaborativeControlForce teleop("teleop", saw::TaskConfig::periodic(1ms, 0), c);
-  saw::Manager m;
-  m.add(master);
-  m.add(slave);
-  m.add(delay);
-  m.add(teleop);
-  m.connect("master_delay", "source", "master", "arm");
-  m.connect("teleop", "master", "master_delay", "arm");
-  m.connect("teleop", "slave", "slave", "arm");
-  m.start_stepped();
-  saw::testing::Stepper step{m};
-  for (int i = 0; i < 50; ++i) step({&master, &slave});  // at rest while teleoperation engages
-  const double v = 0.05;                                 // then 5 cm/s along x
-  master.velocity = {v, 0, 0};
+  saw::testing::DelayedTeleopRig rig(c, 0.020);
+  rig.step(50);           // at rest while teleoperation engages
+  const double v = 0.05;  // then 5 cm/s along x
+  rig.master.velocity = {v, 0, 0};
   for (int i = 0; i < 300; ++i) {
-    master.position[0] += v * 0.001;
-    step({&master, &slave});
+    rig.master.position[0] += v * 0.001;
+    rig.step();
   }
   // Slave force = −k·e_s = k·(d_m − d_s): how far the slave's goal has moved, in metres.
-  const double goal_moved = slave.force[0] / 100.0;
-  return master.position[0] - goal_moved;  // the goal's lag behind the real master
+  const double goal_moved = rig.slave.force[0] / 100.0;
+  return rig.master.position[0] - goal_moved;  // the goal's lag behind the real master
 }
 
 TEST(CollaborativeControlForce, EulerPredictionCompensatesTheDelay) {
@@ -284,7 +220,8 @@ TEST(CollaborativeControlForce, WaitsForInputsAtStartUpThenFaultsIfTheyNeverCome
   EXPECT_EQ(norm(rig.slave.force), 0.0);
   rig.step(3, false);
   EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
-  EXPECT_EQ(rig.teleop.fault_reason(), saw::teleop::FaultReason::master_missing);
+  EXPECT_EQ(rig.teleop.fault().code, saw::teleop::FaultCode::input_missing);
+  EXPECT_EQ(rig.teleop.fault().source_name(), "master");
 }
 
 TEST(CollaborativeControlForce, AStartupTimeoutWaitsLongerForARemoteMasterThenFollowsIt) {
@@ -299,7 +236,8 @@ TEST(CollaborativeControlForce, AStartupTimeoutWaitsLongerForARemoteMasterThenFo
   EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
   rig.step(10, false);  // and once seen, its silence is a fault after stale_timeout, not startup_timeout
   EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
-  EXPECT_EQ(rig.teleop.fault_reason(), saw::teleop::FaultReason::master_stale);
+  EXPECT_EQ(rig.teleop.fault().code, saw::teleop::FaultCode::input_stale);
+  EXPECT_EQ(rig.teleop.fault().source_name(), "master");
 }
 
 TEST(CollaborativeControlForce, AStartupTimeoutEndsInAFaultIfTheMasterNeverComes) {

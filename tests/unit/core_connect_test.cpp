@@ -37,18 +37,18 @@ void expect_names(const std::string& msg, std::initializer_list<const char*> par
 
 TEST(Connect, TypeMismatchNamesEverything) {
   Asker<saw::FunctionWrite<float>> a("push");
-  expect_names(connect_error(a),
-               {"'asker'", "'r'", "'server'", "'p'", "'push'", "write command<float>", "write command<int>"});
+  expect_names(connect_error(a), {"'asker'", "'r'", "'server'", "'p'", "'push'", "write command<float32>",
+                                  "write command<int32>"});
 }
 
 TEST(Connect, KindMismatch) {
   Asker<saw::FunctionRead<int>> a("push");
-  expect_names(connect_error(a), {"'push'", "read command<int>", "write command<int>"});
+  expect_names(connect_error(a), {"'push'", "read command<int32>", "write command<int32>"});
 }
 
 TEST(Connect, QualifiedReadResultMismatch) {
   Asker<saw::FunctionQualifiedRead<double, float>> a("twice");
-  expect_names(connect_error(a), {"'twice'", "double -> float", "double -> double"});
+  expect_names(connect_error(a), {"'twice'", "float64 -> float32", "float64 -> float64"});
 }
 
 TEST(Connect, EventTypeMismatch) {
@@ -58,7 +58,7 @@ TEST(Connect, EventTypeMismatch) {
       require("r").add_event_handler_write<double>("value", [](const double&) {});
     }
   } e;
-  expect_names(connect_error(e), {"'value'", "write event<double>", "write event<int>"});
+  expect_names(connect_error(e), {"'value'", "write event<float64>", "write event<int32>"});
 }
 
 TEST(Connect, MissingRequiredCommandIsAnErrorMissingOptionalIsNot) {

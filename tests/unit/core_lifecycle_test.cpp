@@ -2,10 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <sstream>
-#include <thread>
 
 #include "core_fixtures.hpp"
 #include "saw/log.hpp"
+#include "saw/testing/wait_for.hpp"
 
 namespace {
 
@@ -48,10 +48,9 @@ TEST(Lifecycle, RealThreadsExchangeCommandsAndEvents) {
   m.add(client);
   m.connect("client", "r", "server", "p");
   m.start();
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
   Vec v;
-  while (std::chrono::steady_clock::now() < deadline && (client.position(v) != saw::Status::ok || v.x < 50))
-    std::this_thread::sleep_for(2ms);
+  // Bounded, not asserted: the assertions below decide.
+  (void)wait_for([&] { return client.position(v) == saw::Status::ok && v.x >= 50; }, 10s, 2ms);
   m.stop();
   EXPECT_GE(v.x, 50);
   EXPECT_GT(server.statistics().cycles, 0u);
@@ -164,10 +163,8 @@ TEST(Task, WakeUpsAreOnTheClockAlignedGridPlusTheOffset) {
   m.add(a);
   m.add(b);
   m.start();
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while ((a.statistics().cycles < 20 || b.statistics().cycles < 20) &&
-         std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  // Bounded, not asserted: the assertions below decide.
+  (void)wait_for([&] { return a.statistics().cycles >= 20 && b.statistics().cycles >= 20; });
   m.stop();
   ASSERT_GE(a.statistics().cycles, 20u);
   ASSERT_GE(b.statistics().cycles, 20u);

@@ -1,5 +1,5 @@
 // saw-bench-shm: round trips between two processes over shared memory — the floors for the
-// bridge (issue 4): a bare futex ping-pong, a spinning atomic ping-pong, and the bridge's own
+// bridge: a bare futex ping-pong, a spinning atomic ping-pong, and the bridge's own
 // command ring + event ring (spinning, and sleeping on a futex), measured in one run.
 #include <linux/futex.h>
 #include <sys/mman.h>
@@ -67,16 +67,17 @@ int main(int argc, char** argv) {
 
   // The bridge segment: one slot; commands carry a sequence number, events echo it back.
   saw::bridge::LayoutParams params;
-  params.component = "bench";
   params.mirror_bytes = 8;
   params.slot_count = 1;
   params.ring_capacity = 64;
   params.command_payload = params.event_payload = 16;
-  const auto layout = saw::bridge::Layout::of(params);
+  saw::bridge::Layout layout;
+  (void)saw::bridge::Layout::compute(params, layout);
   auto seg =
       saw::bridge::ShmSegment::create("/saw.bench." + std::to_string(getpid()), layout.total_size, nullptr);
-  saw::bridge::initialize(seg.data(), params, layout, getpid());
-  (void)saw::bridge::claim_slot(seg.data(), getpid());
+  const saw::bridge::SegmentView view(seg.data(), layout);
+  saw::bridge::initialize(view, "bench", "p", 0, getpid());
+  (void)saw::bridge::claim_slot(view, 1, getpid(), saw::monotonic_now());
 
   for (int r = 0; r < reps; ++r) {
     auto futex = saw::bench::futex_ping_pong(n, cpu_b);
@@ -103,12 +104,11 @@ int main(int argc, char** argv) {
     // an event. Spinning first, then sleeping on the futex words beside the rings.
     for (bool sleep : {false, true}) {
       new (pp) PingPong{};
-      void* mem = seg.data();
       auto rings = two_processes(
           n, cpu_a, cpu_b,
           [&](int count) {
-            auto in = saw::bridge::command_ring(mem, 0);
-            auto out = saw::bridge::event_ring(mem, 0);
+            auto in = saw::bridge::command_ring(view, 0);
+            auto out = saw::bridge::event_ring(view, 0);
             for (int i = 0; i < count; ++i) {
               // Eventcount: read the futex word before looking at the ring, so a command that
               // lands in between changes the word and the wait returns at once.
@@ -133,8 +133,8 @@ int main(int argc, char** argv) {
             }
           },
           [&](int count, std::vector<std::int64_t>& samples) {
-            auto out = saw::bridge::command_ring(mem, 0);
-            auto in = saw::bridge::event_ring(mem, 0);
+            auto out = saw::bridge::command_ring(view, 0);
+            auto in = saw::bridge::event_ring(view, 0);
             for (int i = 0; i < count; ++i) {
               const TimeNs t0 = saw::monotonic_now();
               std::byte* c;

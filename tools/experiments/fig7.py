@@ -163,7 +163,7 @@ def main():
     added = lag20 - base
     lines += [
         "",
-        "Goals (issue 3):",
+        "Goals:",
         f"- without delay the slave tracks the master within 1 mm RMS: worst {no_delay * 1e3:.3f} mm — "
         f"{'met' if no_delay <= 1e-3 else 'NOT met'};",
         f"- at 20 ms delay on the 0.5 Hz sinusoid, prediction cuts the lag to ≤ 20 % of the delay (4 ms). "

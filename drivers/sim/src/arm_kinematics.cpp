@@ -41,6 +41,11 @@ ArmKinematics::ArmKinematics(ArmModel model) : model_(model), kdl_(std::make_uni
 
 ArmKinematics::~ArmKinematics() = default;
 
+std::array<std::string_view, 3> ArmKinematics::joint_names() const noexcept {
+  if (model_ == ArmModel::omni) return {"yaw", "shoulder_pitch", "elbow_pitch"};
+  return {"x", "y", "z"};
+}
+
 Eigen::Vector3d ArmKinematics::fk(const Eigen::Vector3d& q) noexcept {
   for (unsigned i = 0; i < 3; ++i) kdl_->q(i) = q[i];
   kdl_->fk->JntToCart(kdl_->q, kdl_->frame);

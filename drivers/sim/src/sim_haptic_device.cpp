@@ -4,12 +4,13 @@
 #include <stdexcept>
 
 #include "saw/eigen.hpp"
+#include "saw/log.hpp"
 
 namespace saw::drivers {
 namespace {
 
 // Fills the model's defaults where the configuration left zeros.
-SimDeviceConfig with_defaults(SimDeviceConfig c) {
+SimDeviceConfig with_defaults(SimDeviceConfig c, const TaskConfig& task) {
   const bool omni = c.model == ArmModel::omni;
   if (c.inertia.isZero())
     c.inertia = omni ? Eigen::Vector3d(2e-4, 2e-4, 1e-4) : Eigen::Vector3d(0.1, 0.1, 0.1);
@@ -21,6 +22,9 @@ SimDeviceConfig with_defaults(SimDeviceConfig c) {
   }
   if (c.max_force <= 0) c.max_force = omni ? 3.3 : 9.0;
   if (c.substeps < 1) c.substeps = 1;
+  if (c.command_timeout == 0) c.command_timeout = 3 * task.period.count();
+  if (c.command_timeout < task.period.count())
+    throw std::invalid_argument("command_timeout must be at least one period");
   // The straight Omni arm is singular: by default start with the elbow bent.
   if (omni && c.initial_joints.isZero()) c.initial_joints = Eigen::Vector3d(0, 0, 1.2);
   if ((c.inertia.array() <= 0).any()) throw std::invalid_argument("inertia must be positive");
@@ -31,34 +35,43 @@ SimDeviceConfig with_defaults(SimDeviceConfig c) {
 }  // namespace
 
 SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config)
-    : Task(std::move(name), task), config_(with_defaults(std::move(config))), kinematics_(config_.model) {
+    : Task(std::move(name), task),
+      config_(with_defaults(std::move(config), task)),
+      kinematics_(config_.model) {
   if (!task.is_periodic())
     throw std::invalid_argument("SimHapticDevice '" + this->name() + "' must be periodic");
   q_ = config_.initial_joints.cwiseMax(config_.joint_min).cwiseMin(config_.joint_max);
   hand_origin_ = kinematics_.fk(q_);
   measured_js_.size = 3;
+  const auto names = kinematics_.joint_names();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (!measured_js_.set_name(i, names[i])) throw std::logic_error("joint name too long");
   operating_state_.state =
       config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
   publish();
 
   auto& st = state_table();
-  columns_.measured_cp = st.add_column("measured_cp", &measured_cp_);
-  columns_.measured_cv = st.add_column("measured_cv", &measured_cv_);
-  columns_.measured_js = st.add_column("measured_js", &measured_js_);
   columns_.hand_force = st.add_column("hand_force", &hand_force_);
   columns_.servo_force = st.add_column("servo_force", &servo_force_);
-  auto& arm = provide("arm");
-  arm.add_command_read("measured_cp", columns_.measured_cp);
-  arm.add_command_read("measured_cv", columns_.measured_cv);
-  arm.add_command_read("measured_js", columns_.measured_js);
-  arm.add_command_read("operating_state", st.add_column("operating_state", &operating_state_));
-  arm.add_command_write<Wrench>("servo_cf", [this](const Wrench& w) { servo_cf(w); });
+  columns_.command_timeout = st.add_column("command_timeout", &command_timeout_);
+  columns_.watchdog_trips = st.add_column("watchdog_trips", &watchdog_trips_);
+  st.add_column("summary", &summary_, ColumnUse::summary);
+  namespace arm_if = crtk::arm;
+  auto& arm = provide(std::string(arm_if::interface_name));
+  columns_.measured_cp = crtk::provide(arm, arm_if::measured_cp, st, &measured_cp_);
+  columns_.measured_cv = crtk::provide(arm, arm_if::measured_cv, st, &measured_cv_);
+  columns_.measured_js = crtk::provide(arm, arm_if::measured_js, st, &measured_js_);
+  crtk::provide(arm, arm_if::operating_state, st, &operating_state_);
+  arm.add_command_read("servo_force", columns_.servo_force);
+  arm.add_command_read("command_timeout", columns_.command_timeout);
+  arm.add_command_read("watchdog_trips", columns_.watchdog_trips);
+  crtk::provide(arm, arm_if::servo_cf, [this](const Wrench& w) { servo_cf(w); });
   // Declared for callers outside the host (the gateway checks it); servo_cf() checks the norm.
-  arm.limit("servo_cf", -config_.max_force, config_.max_force);
-  arm.add_command_write<StateCommand>("state_command", [this](const StateCommand& c) { state_command(c); });
-  state_event_ = &arm.add_event_write<OperatingState>("operating_state");
-  clutch_event_ = &arm.add_event_write<ButtonEvent>("clutch");
-  operator_event_ = &arm.add_event_write<ButtonEvent>("operator_present");
+  arm.limit(arm_if::servo_cf.name, -config_.max_force, config_.max_force);
+  crtk::provide(arm, arm_if::state_command, [this](const StateCommand& c) { state_command(c); });
+  state_event_ = &crtk::provide(arm, arm_if::operating_state_event);
+  clutch_event_ = &crtk::provide(arm, arm_if::clutch);
+  operator_event_ = &crtk::provide(arm, arm_if::operator_present);
   auto& sim = provide("sim");
   sim.add_command_write<ButtonCommand>("set_button",
                                        [this](const ButtonCommand& b) { button(b.button, b.pressed); });
@@ -67,6 +80,9 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
 }
 
 void SimHapticDevice::servo_cf(const Wrench& w) noexcept {
+  last_command_ = now();  // a refused command is fresh too: it zeroes the force itself
+  commanded_ = true;
+  command_timeout_ = false;
   const Eigen::Vector3d f(w.force[0], w.force[1], w.force[2]);
   if (!f.allFinite() || f.norm() > config_.max_force) {
     // Never let a bad command reach the motors, nor keep pushing with the last good one.
@@ -75,6 +91,18 @@ void SimHapticDevice::servo_cf(const Wrench& w) noexcept {
     return;
   }
   force_ = f;
+}
+
+void SimHapticDevice::watch_commands() noexcept {
+  // Commands are handled before run(), stamped with this cycle's time: a commander that
+  // sends every period is never older than one period here.
+  if (!commanded_ || now() - last_command_ <= config_.command_timeout) return;
+  force_.setZero();
+  commanded_ = false;
+  command_timeout_ = true;
+  ++watchdog_trips_;
+  saw::log(LogLevel::warning, name().c_str(), "no servo_cf for {} ns: force dropped to zero",
+           now() - last_command_);
 }
 
 void SimHapticDevice::set_state(OperatingStateValue s) noexcept {
@@ -146,6 +174,7 @@ void SimHapticDevice::publish() noexcept {
     measured_js_.velocity[i] = qd_[k];
   }
   rejected_column_ = rejected_;
+  summary_ = {rejected_, watchdog_trips_, config_.command_timeout};
 }
 
 void SimHapticDevice::run() {
@@ -156,6 +185,7 @@ void SimHapticDevice::run() {
     hand_clutch_ = h.clutch;
     button(0, h.clutch);
   }
+  watch_commands();
   const double dt = static_cast<double>(config().period.count()) * 1e-9 / config_.substeps;
   integrate(dt, hand_origin_ + h.position);
   publish();

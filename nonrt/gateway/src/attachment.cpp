@@ -1,5 +1,7 @@
 #include "attachment.hpp"
 
+#include <fastcdr/exceptions/Exception.h>
+
 #include <chrono>
 #include <cstring>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
@@ -190,7 +192,13 @@ void Attachment::serve_queries() {
   alignas(16) std::byte arg[256], result[256];
   while (!stop_.load(std::memory_order_acquire)) {
     for (auto& q : queries_) {
-      while (q.requests->take_next_sample(&request, &info) == ReturnCode_t::RETCODE_OK) {
+      for (;;) {
+        try {  // a request Fast CDR cannot read throws from take_next_sample: dropped, not fatal
+          if (q.requests->take_next_sample(&request, &info) != ReturnCode_t::RETCODE_OK) break;
+        } catch (const eprosima::fastcdr::exception::Exception&) {
+          rejected_.fetch_add(1, std::memory_order_relaxed);
+          continue;
+        }
         if (!info.valid_data) continue;
         reply.client(request.client());
         reply.number(request.number());

@@ -59,7 +59,8 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
     imports_ = std::make_unique<Imports>();
     for (const auto& i : config_.imports) {
       imports_->arms.push_back(std::make_unique<ImportedArm>(ctx, i));
-      imports_->exporters.push_back(std::make_unique<bridge::Exporter>(*imports_->arms.back(), "arm"));
+      imports_->exporters.push_back(
+          std::make_unique<bridge::Exporter>(*imports_->arms.back(), std::string(crtk::arm::interface_name)));
       imports_->manager.add(*imports_->arms.back());
       const auto& e = imports_->arms.back()->endpoints();
       endpoints_.insert(endpoints_.end(), e.begin(), e.end());

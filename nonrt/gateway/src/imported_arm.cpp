@@ -1,38 +1,53 @@
 #include "imported_arm.hpp"
 
 namespace saw::gateway {
+namespace {
+
+// The mapping of a CRTK member's value type (type_map.cpp has one for each).
+template <class M>
+const Mapping& mapping_of(M) {
+  return *find_mapping(type_info_of<typename M::value_type>().name);
+}
+
+}  // namespace
+
+template <class M>
+fdds::DataReader* ImportedArm::reader(M member, const std::string& topic, Flow f) {
+  return reader(std::string(member.name), topic, mapping_of(member), f);
+}
 
 ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
     : Task(config.component, TaskConfig::periodic(std::chrono::milliseconds(1), 0)), dds_(dds) {
+  namespace arm = crtk::arm;
   const std::string prefix =
       "rt/" + (config.ros_namespace.empty() ? "" : config.ros_namespace + "/") + config.arm + "/";
-  cp_ = reader("measured_cp", prefix + "measured_cp", *find_mapping(type_info_of<Pose>().name), Flow::state);
-  cv_ = reader("measured_cv", prefix + "measured_cv", *find_mapping(type_info_of<Twist>().name), Flow::state);
-  js_ = reader("measured_js", prefix + "measured_js", *find_mapping(type_info_of<JointState>().name),
-               Flow::state);
-  state_ = reader("operating_state", prefix + "operating_state",
-                  *find_mapping(type_info_of<OperatingState>().name), Flow::event);
-  const Mapping& joy = *find_mapping(type_info_of<ButtonEvent>().name);
-  if (!config.clutch_topic.empty()) clutch_ = reader("clutch", config.clutch_topic, joy, Flow::event);
+  // The topics are the CRTK names under the arm's namespace, as the dVRK publishes them.
+  const auto topic = [&](auto m) { return reader(m, prefix + std::string(m.name), Flow::state); };
+  cp_ = topic(arm::measured_cp);
+  cv_ = topic(arm::measured_cv);
+  js_ = topic(arm::measured_js);
+  state_ =
+      reader(arm::operating_state_event, prefix + std::string(arm::operating_state_event.name), Flow::event);
+  if (!config.clutch_topic.empty()) clutch_ = reader(arm::clutch, config.clutch_topic, Flow::event);
   if (!config.operator_present_topic.empty())
-    operator_ = reader("operator_present", config.operator_present_topic, joy, Flow::event);
+    operator_ = reader(arm::operator_present, config.operator_present_topic, Flow::event);
 
   auto& st = state_table();
-  auto& arm = provide("arm");
-  arm.add_command_read("measured_cp", st.add_column("measured_cp", &measured_cp_));
-  arm.add_command_read("measured_cv", st.add_column("measured_cv", &measured_cv_));
-  arm.add_command_read("measured_js", st.add_column("measured_js", &measured_js_));
-  arm.add_command_read("operating_state", st.add_column("operating_state", &operating_state_));
-  state_event_ = &arm.add_event_write<OperatingState>("operating_state");
-  clutch_event_ = &arm.add_event_write<ButtonEvent>("clutch");
-  operator_event_ = &arm.add_event_write<ButtonEvent>("operator_present");
+  auto& p = provide(std::string(arm::interface_name));
+  crtk::provide(p, arm::measured_cp, st, &measured_cp_);
+  crtk::provide(p, arm::measured_cv, st, &measured_cv_);
+  crtk::provide(p, arm::measured_js, st, &measured_js_);
+  crtk::provide(p, arm::operating_state, st, &operating_state_);
+  state_event_ = &crtk::provide(p, arm::operating_state_event);
+  clutch_event_ = &crtk::provide(p, arm::clutch);
+  operator_event_ = &crtk::provide(p, arm::operator_present);
 }
 
 fdds::DataReader* ImportedArm::reader(const std::string& name, const std::string& topic, const Mapping& m,
                                       Flow f) {
   EndpointInfo e;
   e.component = this->name();
-  e.interface_name = "arm";
+  e.interface_name = crtk::arm::interface_name;
   e.name = name;
   e.kind = "import";
   e.saw_type = m.saw_type();
@@ -50,7 +65,7 @@ fdds::DataReader* ImportedArm::reader(const std::string& name, const std::string
 template <class T>
 bool ImportedArm::take_newest(fdds::DataReader* r, T& out) {
   if (r == nullptr) return false;
-  const Mapping& m = *find_mapping(type_info_of<T>().name);
+  const Mapping& m = *find_mapping(type_info_of<T>().name);  // every CRTK value type has one
   bool got = false;
   std::string why;
   T v{};
@@ -81,7 +96,7 @@ void ImportedArm::run() {
   // Buttons are events: every press and release, in order.
   for (auto [r, e] : {std::pair{clutch_, clutch_event_}, std::pair{operator_, operator_event_}}) {
     if (r == nullptr) continue;
-    const Mapping& m = *find_mapping(type_info_of<ButtonEvent>().name);
+    const Mapping& m = mapping_of(crtk::arm::clutch);
     std::string why;
     ButtonEvent b;
     for (auto t = m.take(*r, &b, why); t != Mapping::Take::none; t = m.take(*r, &b, why))

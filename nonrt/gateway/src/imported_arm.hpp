@@ -5,14 +5,15 @@
 #include <vector>
 
 #include "dds_context.hpp"
-#include "saw/crtk.hpp"
+#include "saw/crtk_arm.hpp"
 #include "saw/gateway/gateway.hpp"
 #include "saw/task.hpp"
 
 namespace saw::gateway {
 
-// Provided "arm", read-only (as the paper's research API was): measured_cp, measured_cv,
-// measured_js, operating_state (reads); operating_state, clutch, operator_present (events).
+// Provided "arm" (crtk_arm.hpp), read-only (as the paper's research API was): measured_cp,
+// measured_cv, measured_js, operating_state (reads); operating_state, clutch, operator_present
+// (events).
 // A 1 ms task of normal priority takes the newest samples; its state row is stamped with the
 // arrival of the newest measured_cp, so a client sees the stream age when it stops. Samples that
 // are not valid values (NaN, bad quaternion) are counted and dropped.
@@ -27,6 +28,8 @@ class ImportedArm : public Task {
 
  private:
   fdds::DataReader* reader(const std::string& name, const std::string& topic, const Mapping& m, Flow f);
+  template <class M>
+  fdds::DataReader* reader(M member, const std::string& topic, Flow f);
   template <class T>
   bool take_newest(fdds::DataReader* r, T& out);
 

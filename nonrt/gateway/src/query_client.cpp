@@ -1,5 +1,6 @@
 #include "saw/gateway/query_client.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -97,6 +98,8 @@ Status QueryClient::call(const void* arg, std::size_t arg_size, void* result, st
   std::memcpy(i.request.data().data(), arg, arg_size);
   if (!i.writer->write(&i.request)) return Status::disconnected;
   const TimeNs deadline = monotonic_now() + timeout;
+  constexpr TimeNs resend_every = 1'000'000'000;
+  TimeNs resend_at = monotonic_now() + resend_every;
   fdds::SampleInfo info;
   for (;;) {
     while (i.reader->take_next_sample(&i.reply, &info) == ReturnCode_t::RETCODE_OK) {
@@ -107,8 +110,17 @@ Status QueryClient::call(const void* arg, std::size_t arg_size, void* result, st
       std::memcpy(result, i.reply.data().data(), result_size);
       return Status::ok;
     }
-    const TimeNs left = deadline - monotonic_now();
-    if (left <= 0) return Status::timeout;
+    const TimeNs now = monotonic_now();
+    if (now >= deadline) return Status::timeout;
+    // Our reader may be matched before the gateway's reply writer has discovered it (matching
+    // is seen from each side in its own time), and a volatile writer drops a reply for a reader
+    // it does not know yet. A qualified read is const: asking again is harmless, and a reply to
+    // either request answers it.
+    if (now >= resend_at) {
+      if (!i.writer->write(&i.request)) return Status::disconnected;
+      resend_at = now + resend_every;
+    }
+    const TimeNs left = std::min(deadline, resend_at) - now;
     fdds::ConditionSeq active;
     i.waitset.wait(active, eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(left / 1'000'000'000),
                                                           static_cast<std::uint32_t>(left % 1'000'000'000)));

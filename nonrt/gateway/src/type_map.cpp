@@ -1,5 +1,7 @@
 #include "saw/gateway/type_map.hpp"
 
+#include <fastcdr/exceptions/Exception.h>
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +22,7 @@
 #include "geometry_msgs/msg/Vector3StampedPubSubTypes.h"
 #include "geometry_msgs/msg/WrenchStampedPubSubTypes.h"
 #include "saw/crtk.hpp"
+#include "saw/fault.hpp"
 #include "saw/type_info.hpp"
 #include "sensor_msgs/msg/JointStatePubSubTypes.h"
 #include "sensor_msgs/msg/JoyPubSubTypes.h"
@@ -33,6 +36,23 @@ namespace saw::gateway {
 namespace fdds = eprosima::fastdds::dds;
 
 namespace {
+
+// The next valid sample into `m`: false when there is none. A peer's sample that Fast CDR cannot
+// read (a bad encapsulation) throws from the generated deserializer inside take_next_sample: it
+// is refused here, with the reason, instead of ending the gateway's thread (fuzz: gateway_sample).
+template <class Msg>
+ReturnCode_t take_next(fdds::DataReader& r, Msg& m, std::string& why) {
+  fdds::SampleInfo info;
+  for (;;) {
+    try {
+      const ReturnCode_t rc = r.take_next_sample(&m, &info);
+      if (rc != ReturnCode_t::RETCODE_OK || info.valid_data) return rc;  // skip disposal notices
+    } catch (const eprosima::fastcdr::exception::Exception& e) {
+      why = std::string("malformed sample: ") + e.what();
+      return ReturnCode_t::RETCODE_ERROR;
+    }
+  }
+}
 
 bool finite(std::initializer_list<double> xs) {
   for (double x : xs)
@@ -120,11 +140,9 @@ class Typed final : public Mapping {
 
   Take take(fdds::DataReader& r, void* value, std::string& why) const override {
     Msg m;
-    fdds::SampleInfo info;
-    for (;;) {
-      if (r.take_next_sample(&m, &info) != ReturnCode_t::RETCODE_OK) return Take::none;
-      if (info.valid_data) break;  // skip disposal/unregistration notices
-    }
+    why.clear();
+    if (const ReturnCode_t rc = take_next(r, m, why); rc != ReturnCode_t::RETCODE_OK)
+      return why.empty() ? Take::none : Take::rejected;
     Rt v{};
     if (!Conv::from_msg(m, v, why)) return Take::rejected;
     *static_cast<Rt*>(value) = v;
@@ -283,6 +301,10 @@ struct JointStateConv {
 
   static void to_msg(const JointState& j, sensor_msgs::msg::JointState& m) {
     const auto n = std::min<std::size_t>(j.size, JointState::max_joints);
+    // ROS tools (robot_state_publisher, rviz) pair positions with joints by name.
+    m.name().clear();
+    if (j.named())
+      for (std::size_t i = 0; i < n; ++i) m.name().emplace_back(j.name_of(i));
     m.position().assign(j.position.begin(), j.position.begin() + static_cast<std::ptrdiff_t>(n));
     m.velocity().assign(j.velocity.begin(), j.velocity.begin() + static_cast<std::ptrdiff_t>(n));
     m.effort().assign(j.effort.begin(), j.effort.begin() + static_cast<std::ptrdiff_t>(n));
@@ -298,7 +320,18 @@ struct JointStateConv {
         why = "velocity/effort sizes differ from position's (" + std::to_string(n) + ")";
         return false;
       }
+    if (!m.name().empty() && m.name().size() != n) {
+      why = std::to_string(m.name().size()) + " names for " + std::to_string(n) + " joints";
+      return false;
+    }
     j.size = static_cast<std::uint32_t>(n);
+    j.name = {};
+    for (std::size_t i = 0; i < m.name().size(); ++i)
+      if (m.name()[i].empty() || !j.set_name(i, m.name()[i])) {
+        why = "joint " + std::to_string(i) + "'s name \"" + m.name()[i] + "\" is empty or longer than " +
+              std::to_string(JointState::max_name) + " characters";
+        return false;
+      }
     for (std::size_t i = 0; i < n; ++i) {
       j.position[i] = m.position()[i];
       j.velocity[i] = m.velocity().empty() ? 0.0 : m.velocity()[i];
@@ -311,7 +344,14 @@ struct JointStateConv {
     return true;
   }
   static std::string text(const JointState& j) {
-    std::string s = "position [";
+    std::string s;
+    if (j.named()) {
+      s = "name [";
+      for (std::uint32_t i = 0; i < std::min<std::uint32_t>(j.size, JointState::max_joints); ++i)
+        s += (i ? ", " : "") + std::string(j.name_of(i));
+      s += "] ";
+    }
+    s += "position [";
     for (std::uint32_t i = 0; i < std::min<std::uint32_t>(j.size, JointState::max_joints); ++i)
       s += (i ? ", " : "") + std::to_string(j.position[i]);
     return s + "]";
@@ -369,6 +409,22 @@ struct StateCommandConv {
     return false;
   }
   static std::string text(const StateCommand& c) { return std::string(to_string(c)); }
+};
+
+// Why a component (the teleoperation task, a driver) FAULTed, for people and GUIs: one line of text (its
+// to_string), "master input stale: 23.4 ms old (last read: disconnected), at t=4.512 s". Published only: the
+// text is not parsed back (a mirror skips the endpoint, as for any type it cannot decode).
+struct FaultInfoConv {
+  static void to_msg(const FaultInfo& f, crtk_msgs::msg::StringStamped& m) { m.string(to_string(f)); }
+  static bool from_msg(const crtk_msgs::msg::StringStamped&, FaultInfo&, std::string& why) {
+    why = "a fault is published as text only";
+    return false;
+  }
+  static bool parse(std::string_view, FaultInfo&, std::string& why) {
+    why = "a fault is published as text only";
+    return false;
+  }
+  static std::string text(const FaultInfo& f) { return to_string(f); }
 };
 
 // Buttons as the dVRK publishes them: sensor_msgs/Joy with buttons[0] = 1 pressed, 0 released.
@@ -451,13 +507,11 @@ class EmptyMapping final : public Mapping {
     std_msgs::msg::Empty m;
     return w.write(&m);
   }
-  Take take(fdds::DataReader& r, void*, std::string&) const override {
+  Take take(fdds::DataReader& r, void*, std::string& why) const override {
     std_msgs::msg::Empty m;
-    fdds::SampleInfo info;
-    for (;;) {
-      if (r.take_next_sample(&m, &info) != ReturnCode_t::RETCODE_OK) return Take::none;
-      if (info.valid_data) return Take::ok;
-    }
+    why.clear();
+    if (take_next(r, m, why) == ReturnCode_t::RETCODE_OK) return Take::ok;
+    return why.empty() ? Take::none : Take::rejected;
   }
   std::string to_text(const void*) const override { return "(void)"; }
   bool from_text(std::string_view text, void*, std::string& why) const override {
@@ -484,6 +538,9 @@ const std::vector<std::unique_ptr<Mapping>>& mappings() {
                                        crtk_msgs::msg::OperatingStatePubSubType, OperatingStateConv>>());
     v.push_back(std::make_unique<Typed<StateCommand, crtk_msgs::msg::StringStamped,
                                        crtk_msgs::msg::StringStampedPubSubType, StateCommandConv>>());
+    // After StateCommand: a lookup by DDS type (StringStamped) still finds the state command.
+    v.push_back(std::make_unique<Typed<FaultInfo, crtk_msgs::msg::StringStamped,
+                                       crtk_msgs::msg::StringStampedPubSubType, FaultInfoConv>>());
     v.push_back(std::make_unique<
                 Typed<ButtonEvent, sensor_msgs::msg::Joy, sensor_msgs::msg::JoyPubSubType, ButtonConv>>());
     v.push_back(std::make_unique<Typed<double, std_msgs::msg::Float64, std_msgs::msg::Float64PubSubType,

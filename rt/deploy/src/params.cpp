@@ -1,6 +1,7 @@
 #include "saw/deploy/params.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 namespace saw::deploy {
 
@@ -161,6 +162,10 @@ Params Params::child(const std::string& key) const {
 void Params::check_all_used() const {
   if (node_.IsMap())
     for (const auto& kv : node_) {
+      if (!kv.first.IsScalar()) {
+        const auto [line, column] = location(kv.first);
+        throw ConfigError(file_, line, column, path_, "a key must be a name, not a list or mapping");
+      }
       const auto key = kv.first.as<std::string>();
       if (!used_->count(key)) {
         const auto [line, column] = location(kv.first);
@@ -168,6 +173,17 @@ void Params::check_all_used() const {
       }
     }
   for (const auto& c : *children_) c.check_all_used();
+}
+
+double seconds_in_range(const Params& p, const std::string& key, std::chrono::nanoseconds fallback, double lo,
+                        double hi) {
+  const double s = static_cast<double>(p.get_or<std::chrono::nanoseconds>(key, fallback).count()) * 1e-9;
+  if (!(s >= lo && s <= hi)) {
+    char b[96];
+    std::snprintf(b, sizeof b, "%g s is out of range [%g, %g] s", s, lo, hi);
+    p.fail_at(key, b);
+  }
+  return s;
 }
 
 }  // namespace saw::deploy

@@ -20,6 +20,7 @@ Placement parse_placement(const YAML::Node& root, const Params& top, const std::
   const YAML::Node hosts = root["hosts"];
   if (!hosts.IsMap() || hosts.size() == 0) top.fail_at("hosts", "expected a mapping of host names");
   for (const auto& h : hosts) {
+    if (!h.first.IsScalar()) top.fail_at("hosts", "a host's name must be a name, not a list or mapping");
     const auto name = h.first.as<std::string>();
     Params entry(h.second.IsNull() ? YAML::Node(YAML::NodeType::Map) : h.second, top.file(), "hosts." + name);
     p.address[name] = entry.get_or<std::string>("address", "");

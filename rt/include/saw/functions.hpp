@@ -15,6 +15,7 @@ struct FunctionBinding {
   Invoker direct{};                  // void/write to a server without a thread: run now
   const Command* forward = nullptr;  // void/write to a proxy: hand on now, with its status
   const Command* command = nullptr;  // read, qualified read
+  bool check_values = false;         // the server is in another process: results are checked
 };
 
 // Call these from the client component's own thread: each connection's mailbox has one producer.
@@ -49,6 +50,13 @@ class FunctionBase {
     if (!bound_) return Status::disconnected;
     return binding_.command->read(arg, out);
   }
+  // A value that came from another process and is not a valid T (a NaN, a bool that is not
+  // 0 or 1, an enumerator out of range) is refused, never handed to the caller as a T.
+  template <class T>
+  Status checked(Status st, const T& out) const noexcept {
+    if (st == Status::ok && binding_.check_values && !check_value(out)) return Status::invalid;
+    return st;
+  }
 
   Signature signature_;
   FunctionBinding binding_{};
@@ -74,11 +82,11 @@ class FunctionRead : public FunctionBase {
  public:
   FunctionRead() : FunctionBase({CommandKind::read, type_info_of<T>()}) {}
   // The server's newest committed value.
-  [[nodiscard]] Status operator()(T& out) const noexcept { return call_read(nullptr, &out); }
+  [[nodiscard]] Status operator()(T& out) const noexcept { return checked(call_read(nullptr, &out), out); }
   // With the row's tick and time (state-backed commands and proxies; a proxy gives tick 0).
   [[nodiscard]] Status operator()(T& out, RowStamp& stamp) const noexcept {
     if (!bound_) return Status::disconnected;
-    if (binding_.command->read_stamped) return binding_.command->read_stamped(&out, stamp);
+    if (binding_.command->read_stamped) return checked(binding_.command->read_stamped(&out, stamp), out);
     if (binding_.command->table == nullptr) return Status::no_data;
     return binding_.command->table->read_latest_erased(binding_.command->column, &out, &stamp);
   }
@@ -96,7 +104,7 @@ class FunctionQualifiedRead : public FunctionBase {
   FunctionQualifiedRead()
       : FunctionBase({CommandKind::qualified_read, type_info_of<Q>(), type_info_of<R>()}) {}
   [[nodiscard]] Status operator()(const Q& qualifier, R& out) const noexcept {
-    return call_read(&qualifier, &out);
+    return checked(call_read(&qualifier, &out), out);
   }
 };
 

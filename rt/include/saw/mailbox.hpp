@@ -21,6 +21,8 @@ class Mailbox {
   // Over a ring placed elsewhere (shared memory); see SpscRing's view constructor.
   Mailbox(std::string name, SpscRingControl* control, std::byte* storage, std::size_t capacity,
           std::size_t slot_size);
+  Mailbox(std::string name, std::atomic<std::uint64_t>* head, std::atomic<std::uint64_t>* tail,
+          std::byte* storage, std::size_t capacity, std::size_t slot_size);
   static constexpr std::size_t header_bytes() { return header_size; }
 
   const std::string& name() const noexcept { return name_; }

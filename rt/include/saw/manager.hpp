@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -82,6 +83,8 @@ class Manager {
   std::vector<std::unique_ptr<Component>> owned_;
   std::vector<std::unique_ptr<Mailbox>> mailboxes_;
   std::vector<std::unique_ptr<RemoteResolver>> resolvers_;
+  // Remote server → the one local client that uses its command and event rings.
+  std::map<std::string, std::string, std::less<>> remote_users_;
   std::atomic<bool> running_{false};
   std::atomic<TimeNs> first_wakeup_{0};
   ManagerState state_ = ManagerState::idle;

@@ -19,13 +19,6 @@ class Component;
 
 // One provided command. void/write commands are executed by `execute` in the server's
 // thread; read and qualified-read commands are run by `read` in the caller's thread.
-// Bounds a component declares for every number in a write command's argument (Pose: its
-// position). Checked where values enter from outside the host's processes — the DDS gateway —
-// before they reach the bridge; the component still validates what it receives.
-struct Limits {
-  double min = 0, max = 0;
-};
-
 struct Command {
   std::string name;
   Signature signature;

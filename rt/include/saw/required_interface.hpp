@@ -1,6 +1,7 @@
 // RequiredInterface: the named set of functions and event handlers a component needs.
 #pragma once
 
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
@@ -55,7 +56,13 @@ class RequiredInterface {
     add_handler({std::move(name),
                  {CommandKind::write_event, type_info_of<T>()},
                  need,
-                 [f = std::forward<F>(f)](const void* a) { f(*static_cast<const T*>(a)); }});
+                 [f = std::forward<F>(f)](const void* a) {
+                   // Copied, then checked: the bytes may sit in another process's memory. An
+                   // event that is not a valid T (from a broken peer) is not delivered.
+                   T v;
+                   std::memcpy(static_cast<void*>(&v), a, sizeof v);
+                   if (check_value(v)) f(v);
+                 }});
   }
 
   // Slots in the mailbox that carries this interface's events from its server.

@@ -28,6 +28,10 @@ struct StateColumn {
   std::uint32_t index = 0;
 };
 
+// What a column is for besides its history: a `summary` column is also reported when a run
+// ends (saw-rt prints its latest value with the formatter its package registered).
+enum class ColumnUse : std::uint8_t { history, summary };
+
 // Every row holds all columns of one cycle plus its tick and time. Each row carries its own
 // sequence number (a seqlock): the writer makes it odd, stores, makes it even with release;
 // a reader copies the row between two loads of that number and retries if it changed. All
@@ -43,12 +47,13 @@ class StateTable {
 
   // Setup (before finalize): each advance() copies *source into the new row.
   template <Plain T>
-  StateColumn<T> add_column(std::string name, const T* source) {
-    return {this, add_column_erased(std::move(name), type_info_of<T>(), source)};
+  StateColumn<T> add_column(std::string name, const T* source, ColumnUse use = ColumnUse::history) {
+    return {this, add_column_erased(std::move(name), type_info_of<T>(), source, use)};
   }
   // For components built from a description (a gateway's mirror of a remote component): a
   // column of a type known at run time; `source` holds type.size bytes.
-  std::uint32_t add_column_erased(std::string name, TypeInfo type, const void* source);
+  std::uint32_t add_column_erased(std::string name, TypeInfo type, const void* source,
+                                  ColumnUse use = ColumnUse::history);
   // Allocates the rows; no column may be added after this.
   void finalize();
   bool finalized() const noexcept { return rows_ != nullptr; }
@@ -93,6 +98,7 @@ class StateTable {
   std::size_t column_count() const noexcept { return columns_.size(); }
   const std::string& column_name(std::uint32_t c) const { return columns_[c].name; }
   TypeInfo column_type(std::uint32_t c) const { return columns_[c].type; }
+  ColumnUse column_use(std::uint32_t c) const { return columns_[c].use; }
   // Column index by name, or -1.
   int find_column(std::string_view name) const noexcept;
 
@@ -103,6 +109,7 @@ class StateTable {
     const void* source;
     std::size_t word_offset;
     std::size_t words;
+    ColumnUse use;
   };
   // Row word layout: [seq, tick, time, column words...].
   static constexpr std::size_t seq_word = 0, tick_word = 1, time_word = 2, header_words = 3;

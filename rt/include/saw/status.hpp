@@ -1,6 +1,7 @@
 // Status: the result of every call that crosses a component boundary at run time.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string_view>
 
@@ -16,6 +17,7 @@ enum class Status : std::uint8_t {
   timeout,       // a non-RT caller waited longer than allowed
   invalid,       // the argument was rejected (NaN, out of range, wrong size)
 };
+constexpr std::size_t enum_count(Status) { return 8; }  // a status read from another process is checked
 
 constexpr std::string_view to_string(Status s) {
   switch (s) {

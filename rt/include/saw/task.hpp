@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <thread>
 
@@ -27,10 +28,13 @@ struct TaskConfig {
   }
   static TaskConfig continuous() { return {}; }
   bool is_periodic() const noexcept { return period.count() > 0; }
+  // Its cycles are an RT path: periodic, or continuous and asking for SCHED_FIFO.
+  bool is_rt() const noexcept { return is_periodic() || priority > 0; }
 };
 
 // Period and compute-time statistics; a column ("period_statistics") of the task's state table.
 struct TaskStatistics {
+  static constexpr std::string_view type_name = "saw::TaskStatistics";
   static constexpr std::uint32_t layout_version = 1;
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;        // cycles that ended after their next wake-up
@@ -41,6 +45,9 @@ struct TaskStatistics {
   double mean_compute = 0;
   TimeNs last_wakeup = 0;  // scheduled time of the last wake-up
 };
+// Read by other processes byte for byte: a layout change must bump layout_version (and this).
+static_assert(sizeof(TaskStatistics) == 80 && offsetof(TaskStatistics, period) == 24 &&
+              offsetof(TaskStatistics, mean_compute) == 64 && offsetof(TaskStatistics, last_wakeup) == 72);
 
 class Task : public Component {
  public:

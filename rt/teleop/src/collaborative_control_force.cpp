@@ -1,14 +1,20 @@
 #include "saw/teleop/collaborative_control_force.hpp"
 
+#include <algorithm>
 #include <cmath>
 
+#include "saw/crtk_arm.hpp"
 #include "saw/eigen.hpp"
+#include "saw/log.hpp"
+#include "saw/teleop/delay_task.hpp"
 
 namespace saw::teleop {
 namespace {
 
 bool finite(double x) { return std::isfinite(x); }
 double seconds(const TaskConfig& t) { return static_cast<double>(t.period.count()) * 1e-9; }
+// A delay a DelayTask reports beyond this is garbage (DelayTask refuses more than 10 s).
+constexpr TimeNs max_delay = 10'000'000'000;
 
 }  // namespace
 
@@ -26,33 +32,61 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
   columns_.tracking_error = st.add_column("tracking_error", &tracking_error_);
   columns_.ratcheting = st.add_column("ratcheting", &ratcheting_);
   columns_.clutched = st.add_column("clutched", &clutched_);
+  columns_.fault = st.add_column("fault", &fault_);
+  columns_.rejected_inputs = st.add_column("rejected_inputs", &rejected_inputs_);
+  columns_.offset_errors = st.add_column("offset_errors", &offset_errors_);
+  columns_.summary = st.add_column("summary", &summary_, ColumnUse::summary);
 
   auto& p = provide("teleop");
-  p.add_command_read("operating_state", columns_.operating_state);
+  crtk::provide(p, crtk::operating_state, columns_.operating_state);
   p.add_command_read("master_force", columns_.master_force);
   p.add_command_read("slave_force", columns_.slave_force);
   p.add_command_read("tracking_error", columns_.tracking_error);
-  p.add_command_write<StateCommand>("state_command",
-                                    [this](const StateCommand& c) { handle_state_command(c); });
-  p.add_command_write<double>("set_scale", [this](const double& s) {
+  p.add_command_read("fault", columns_.fault);
+  p.add_command_read("rejected_inputs", columns_.rejected_inputs);
+  p.add_command_read("offset_errors", columns_.offset_errors);
+  crtk::provide(p, crtk::state_command, [this](const StateCommand& c) { handle_state_command(c); });
+  add_settings(p);
+  state_event_ = &crtk::provide(p, crtk::operating_state_event);
+  fault_event_ = &p.add_event_write<FaultInfo>("fault");
+
+  master_.side = FaultSide::master;
+  slave_.side = FaultSide::slave;
+  require_side(master_, "master");
+  require_side(slave_, "slave");
+  crtk::require(
+      *required("master"), crtk::arm::clutch, [this](const ButtonEvent& b) { clutched_ = b.pressed; },
+      Need::optional);
+  state_.state = config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
+  previous_ = {config_.scale, config_.prediction};
+}
+
+void CollaborativeControlForce::add_settings(ProvidedInterface& p) {
+  // Scale and prediction change what the offset is expressed in: the next enabled cycle
+  // re-expresses it (once, however many changes were queued) so the error does not jump.
+  const auto settings_change = [this] {
+    if (!reexpress_pending_) previous_ = {config_.scale, config_.prediction};
+    reexpress_pending_ = true;
+  };
+  p.add_command_write<double>("set_scale", [this, settings_change](const double& s) {
     Scale next = config_.scale;
     next.scale = s;
     if (!next.valid()) return void(++rejected_);
-    if (!rescale_pending_) previous_scale_ = config_.scale;
+    settings_change();
     config_.scale = next;
-    rescale_pending_ = true;  // re-express the offset so the error (and force) do not jump
   });
   p.add_command_write<Gains>("set_gains", [this](const Gains& g) {
-    if (!finite(g.master) || !finite(g.slave) || g.master < 0 || g.slave < 0) return void(++rejected_);
+    if (!g.valid()) return void(++rejected_);
     config_.gains = g;
   });
   p.add_command_write<ForceLimits>("set_force_limits", [this](const ForceLimits& l) {
-    if (!finite(l.master) || !finite(l.slave) || l.master < 0 || l.slave < 0) return void(++rejected_);
+    if (!l.valid()) return void(++rejected_);
     config_.limits = l;
   });
-  p.add_command_write<Prediction>("set_prediction", [this](const Prediction& pr) {
-    const auto bad = [](double h) { return !finite(h) || h < 0 || h > 1.0; };
+  p.add_command_write<Prediction>("set_prediction", [this, settings_change](const Prediction& pr) {
+    const auto bad = [](double h) { return !(h >= 0 && h <= max_horizon); };
     if (bad(pr.master_horizon) || bad(pr.slave_horizon)) return void(++rejected_);
+    settings_change();
     config_.prediction = pr;
   });
   p.add_command_write<Vec3>("set_slave_offset", [this](const Vec3& o) {
@@ -61,20 +95,17 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
     config_.align = true;
     slave_offset_.set_target(to_eigen(o));
   });
-  state_event_ = &p.add_event_write<OperatingState>("operating_state");
+}
 
-  for (auto [iface, cp, cv, cf] : {std::tuple{"master", &master_cp_, &master_cv_, &master_cf_},
-                                   std::tuple{"slave", &slave_cp_, &slave_cv_, &slave_cf_}}) {
-    auto& r = require(iface);
-    r.add_function("measured_cp", *cp);
-    r.add_function("measured_cv", *cv);
-    // A master may be read-only (a da Vinci master through the dVRK's research API): then the
-    // operator feels no force, and the law still drives the slave.
-    r.add_function("servo_cf", *cf, std::string_view(iface) == "master" ? Need::optional : Need::required);
-  }
-  required("master")->add_event_handler_write<ButtonEvent>(
-      "clutch", [this](const ButtonEvent& b) { clutched_ = b.pressed; }, Need::optional);
-  state_.state = config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
+void CollaborativeControlForce::require_side(Side& s, const char* iface) {
+  auto& r = require(iface);
+  crtk::require(r, crtk::arm::measured_cp, s.cp);
+  crtk::require(r, crtk::arm::measured_cv, s.cv);
+  // A master may be read-only (a da Vinci master through the dVRK's research API): then the
+  // operator feels no force, and the law still drives the slave.
+  crtk::require(r, crtk::arm::servo_cf, s.cf, s.side == FaultSide::master ? Need::optional : Need::required);
+  crtk::require(r, delayed_arm::source_time, s.source_time, Need::optional);
+  crtk::require(r, delayed_arm::delay, s.delay, Need::optional);
 }
 
 void CollaborativeControlForce::set_operating_state(OperatingStateValue s) noexcept {
@@ -83,10 +114,28 @@ void CollaborativeControlForce::set_operating_state(OperatingStateValue s) noexc
   (void)(*state_event_)(state_);
 }
 
+void CollaborativeControlForce::raise_fault(FaultInfo why) noexcept {
+  if (state_.state == OperatingStateValue::fault) return;
+  why.time = now();
+  why.since_start_ns = now() - start_time_;
+  fault_ = why;
+  // Once per transition: the log line, the event (the gateway publishes it), then the state.
+  saw::log(LogLevel::error, name().c_str(), "FAULT: {} {}: {} ns old, last read {}",
+           to_string(side_of(why)).data(), to_string(why.code).data(), why.age_ns,
+           saw::to_string(why.last_read).data());
+  (void)(*fault_event_)(fault_);
+  set_operating_state(OperatingStateValue::fault);
+}
+
 void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
   switch (c) {
     case StateCommand::enable:
-      fault_ = FaultReason::none;
+      // Already enabled: nothing to do (re-snapping would drop the force in one step).
+      if (state_.state == OperatingStateValue::enabled) break;
+      if (fault_.code != FaultCode::none) {
+        fault_ = {};
+        (void)(*fault_event_)(fault_);
+      }
       snap_pending_ = true;
       set_operating_state(OperatingStateValue::enabled);
       break;
@@ -107,37 +156,63 @@ void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
   }
 }
 
-bool CollaborativeControlForce::read_inputs(Input& master, Input& slave) noexcept {
-  const auto stale_ns = static_cast<TimeNs>(config_.stale_timeout * 1e9);
-  for (auto [in, last, cp, cv, missing, stale] :
-       {std::tuple{&master, &last_master_, &master_cp_, &master_cv_, FaultReason::master_missing,
-                   FaultReason::master_stale},
-        std::tuple{&slave, &last_slave_, &slave_cp_, &slave_cv_, FaultReason::slave_missing,
-                   FaultReason::slave_stale}}) {
-    Pose pose;
-    Twist twist;
-    RowStamp stamp;
-    if ((*cp)(pose, stamp) == Status::ok && (*cv)(twist) == Status::ok) {
-      last->input = {to_eigen(pose.position), to_eigen(twist.linear)};
-      last->time = stamp.time;
-      last->valid = true;
-    } else if (!last->valid) {
-      fault_ = missing;
-      return false;
+Status CollaborativeControlForce::read_time(Side& s, TimeNs row_time, TimeNs& time) noexcept {
+  time = row_time;
+  if (!s.source_time.is_bound() || !s.delay.is_bound()) return Status::ok;
+  // Behind a DelayTask the row is the delay task's, stamped with its own cycle: the age that
+  // matters is the source row's, less the delay it was meant to have.
+  TimeNs source = 0, delay = 0;
+  if (const Status st = s.source_time(source); st != Status::ok) return st;
+  if (const Status st = s.delay(delay); st != Status::ok) return st;
+  if (delay < 0 || delay > max_delay) return Status::invalid;
+  time = std::min(source + delay, row_time);  // never fresher than the row that carries it
+  return Status::ok;
+}
+
+bool CollaborativeControlForce::read_side(Side& s, Input& out, FaultInfo& why) noexcept {
+  Pose pose;
+  Twist twist;
+  RowStamp stamp;
+  TimeNs time = 0;
+  Status st = s.cp(pose, stamp);
+  if (st == Status::ok) st = s.cv(twist);
+  if (st == Status::ok) st = read_time(s, stamp.time, time);
+  // A row from the future (more than a period ahead) would never go stale: refused.
+  if (st == Status::ok && time > now() + config().period.count()) st = Status::invalid;
+  if (st == Status::ok) {
+    const Input in{to_eigen(pose.position), to_eigen(twist.linear)};
+    s.not_finite = !in.position.allFinite() || !in.velocity.allFinite();
+    if (s.not_finite) {
+      ++rejected_inputs_;
+      st = Status::invalid;
+    } else {
+      s.last = in;
+      s.time = time;
+      s.valid = true;
     }
-    // A read that fails once (a writer pre-empted mid-row, a full retry budget) keeps the last
-    // value; only an input older than stale_timeout is a fault.
-    if (now() - last->time > stale_ns) {
-      fault_ = stale;
-      return false;
-    }
-    *in = last->input;
+  } else if (st == Status::invalid) {
+    ++rejected_inputs_;
   }
+  s.status = st;
+  // A read that fails (a writer pre-empted mid-row, a NaN, a peer gone) keeps the last good
+  // value; only an input older than stale_timeout is a fault.
+  const auto stale_ns = static_cast<TimeNs>(config_.stale_timeout * 1e9);
+  const FaultCode failed = s.not_finite ? FaultCode::input_not_finite : FaultCode::input_stale;
+  if (!s.valid) {
+    why = fault_on(s.side, s.not_finite ? FaultCode::input_not_finite : FaultCode::input_missing, st);
+    return false;
+  }
+  if (const TimeNs age = now() - s.time; age > stale_ns) {
+    why = fault_on(s.side, failed, st, age);
+    return false;
+  }
+  out = s.last;
   return true;
 }
 
-Eigen::Vector3d CollaborativeControlForce::predict(const Input& in, double horizon) const noexcept {
-  if (!config_.prediction.enabled || horizon <= 0) return in.position;
+Eigen::Vector3d CollaborativeControlForce::predict(const Input& in, double horizon,
+                                                   const Prediction& pr) const noexcept {
+  if (!pr.enabled || horizon <= 0) return in.position;
   // Eq. 7, x(t) = x(t−1) + δt·ẋ(t−1), stepped over the horizon with the last known velocity.
   const double dt = seconds(config());
   const auto steps = static_cast<int>(std::lround(horizon / dt));
@@ -148,92 +223,154 @@ Eigen::Vector3d CollaborativeControlForce::predict(const Input& in, double horiz
 
 void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master,
                                             const Eigen::Vector3d& f_slave) noexcept {
+  Eigen::Vector3d fm = f_master, fs = f_slave;
+  if (!fm.allFinite() || !fs.allFinite()) {  // the last check before a device
+    raise_fault(
+        fault_on(fm.allFinite() ? FaultSide::slave : FaultSide::master, FaultCode::output_not_finite));
+    fm.setZero();
+    fs.setZero();
+  }
   Wrench w;
-  w.force = to_vec3(f_master);
-  if (master_cf_.is_bound() && master_cf_(w) != Status::ok) ++refused_sends_;
-  w.force = to_vec3(f_slave);
-  if (slave_cf_(w) != Status::ok) ++refused_sends_;
-  master_force_ = to_vec3(f_master);
-  slave_force_ = to_vec3(f_slave);
+  w.force = to_vec3(fm);
+  if (master_.cf.is_bound() && master_.cf(w) != Status::ok) ++refused_sends_;
+  w.force = to_vec3(fs);
+  if (slave_.cf(w) != Status::ok) ++refused_sends_;
+  master_force_ = to_vec3(fm);
+  slave_force_ = to_vec3(fs);
 }
 
 void CollaborativeControlForce::snap_offsets(const Input& master, const Input& slave) noexcept {
-  slave_offset_.reset(
-      cancelling_slave_offset(predict(master, config_.prediction.master_horizon), master_offset_,
-                              predict(slave, config_.prediction.slave_horizon), config_.scale));
+  const Prediction& pr = config_.prediction;
+  slave_offset_.reset(cancelling_slave_offset(predict(master, pr.master_horizon, pr), master_offset_,
+                                              predict(slave, pr.slave_horizon, pr), config_.scale));
 }
 
-void CollaborativeControlForce::run() {
-  Input master, slave;
-  const bool inputs_ok = read_inputs(master, slave);
-  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  if (start_time_ < 0) start_time_ = now();
-  if (!inputs_ok) {
-    // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
-    // At start-up, inputs may simply not be published yet: wait up to startup_timeout for them.
-    const double grace = config_.startup_timeout > 0 ? config_.startup_timeout : config_.stale_timeout;
-    const bool starting = !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(grace * 1e9);
-    if (state_.state == OperatingStateValue::enabled && !starting)
-      set_operating_state(OperatingStateValue::fault);
-    send_forces(zero, zero);
-    return;
-  }
-  inputs_seen_ = true;
-  if (state_.state != OperatingStateValue::enabled || clutched_) {
-    // Forces off; keep the offset cancelling so that enabling or releasing the clutch cannot jump.
-    snap_offsets(master, slave);
-    snap_pending_ = rescale_pending_ = false;
-    ratcheting_ = false;
-    send_forces(zero, zero);
-    return;
-  }
-  const Eigen::Vector3d p_m = predict(master, config_.prediction.master_horizon);
-  const Eigen::Vector3d p_s = predict(slave, config_.prediction.slave_horizon);
-  if (snap_pending_) {
-    snap_offsets(master, slave);
-    if (config_.align) slave_offset_.set_target(to_eigen(config_.slave_offset));
-    snap_pending_ = false;
-  }
-  if (rescale_pending_) {
-    // e_s = d_s − S⁻¹·d_m must not jump: shift o_s by (S'⁻¹ − S⁻¹)·d_m, target included.
-    const Eigen::Vector3d d_m = p_m + master_offset_;
-    const Eigen::Vector3d shift =
-        (config_.scale.master_to_slave() - previous_scale_.master_to_slave()).cwiseProduct(d_m);
-    const Eigen::Vector3d target = slave_offset_.target() + shift;
-    const bool was_moving = slave_offset_.moving();
-    slave_offset_.reset(slave_offset_.offset() + shift);
-    if (was_moving) slave_offset_.set_target(target);
-    rescale_pending_ = false;
-  }
-  const Eigen::Vector3d& o_s = slave_offset_.update();
-  const LawOutput law =
-      compute_law(p_m, master_offset_, p_s, o_s, config_.scale, config_.gains, config_.limits);
-  // Ratchet: at a force limit, slip the offset target so the error returns to the limit; the
-  // offset follows the jerk-limited trajectory, the saturated force holds meanwhile.
+void CollaborativeControlForce::reexpress_offset(const Input& master, const Input& slave) noexcept {
+  // e_s = d_s − S⁻¹·d_m must not jump: shift o_s (target included) by the difference between
+  // e_s under the settings before the change and after it, for the same inputs and offset.
+  const Eigen::Vector3d o_s = slave_offset_.offset();
+  const auto error = [&](const LawSettings& s) -> Eigen::Vector3d {
+    const Eigen::Vector3d d_m = predict(master, s.prediction.master_horizon, s.prediction) + master_offset_;
+    const Eigen::Vector3d d_s = predict(slave, s.prediction.slave_horizon, s.prediction) + o_s;
+    return d_s - s.scale.master_to_slave().cwiseProduct(d_m);
+  };
+  const Eigen::Vector3d shift = error(previous_) - error({config_.scale, config_.prediction});
+  const Eigen::Vector3d target = slave_offset_.target() + shift;
+  const bool was_moving = slave_offset_.moving();
+  slave_offset_.reset(o_s + shift);
+  if (was_moving) slave_offset_.set_target(target);
+}
+
+void CollaborativeControlForce::step_offset() noexcept {
+  (void)slave_offset_.update();
+  if (slave_offset_.errors() == offset_errors_) return;
+  offset_errors_ = slave_offset_.errors();
+  // Counted in the state table; logged at the 1st, 2nd, 4th, 8th... so a stuck input cannot flood.
+  if ((offset_errors_ & (offset_errors_ - 1)) == 0)
+    saw::log(LogLevel::warning, name().c_str(),
+             "offset trajectory refused (Ruckig result {}), {} times so far", slave_offset_.last_error(),
+             offset_errors_);
+}
+
+void CollaborativeControlForce::ratchet(const Eigen::Vector3d& p_m, const Eigen::Vector3d& p_s) noexcept {
+  // At a force limit, slip the offset target so the error returns to the limit; the offset
+  // follows the jerk-limited trajectory, the saturated force holds meanwhile.
   ratcheting_ = false;
-  if (config_.ratchet) {
-    const LawOutput at_target = compute_law(p_m, master_offset_, p_s, slave_offset_.target(), config_.scale,
-                                            config_.gains, config_.limits);
-    if (at_target.master_saturated || at_target.slave_saturated) {
-      slave_offset_.set_target(slave_offset_.target() +
-                               ratchet_shift(at_target, config_.scale, config_.gains, config_.limits));
-      ratcheting_ = true;
-    }
-    ratcheting_ = ratcheting_ || slave_offset_.moving();
+  if (!config_.ratchet) return;
+  const LawOutput at_target = compute_law(p_m, master_offset_, p_s, slave_offset_.target(), config_.scale,
+                                          config_.gains, config_.limits);
+  if (at_target.finite && (at_target.master_saturated || at_target.slave_saturated)) {
+    slave_offset_.set_target(slave_offset_.target() +
+                             ratchet_shift(at_target, config_.scale, config_.gains, config_.limits));
+    ratcheting_ = true;
   }
+  ratcheting_ = ratcheting_ || slave_offset_.moving();
+}
+
+void CollaborativeControlForce::account(const LawOutput& law) noexcept {
   master_error_ = to_vec3(law.master_error);
   slave_error_ = to_vec3(law.slave_error);
-  slave_offset_value_ = to_vec3(o_s);
+  slave_offset_value_ = to_vec3(slave_offset_.offset());
   tracking_error_ = law.slave_error.norm();
   tracking_sum_sq_ += tracking_error_ * tracking_error_;
   tracking_max_ = std::max(tracking_max_, tracking_error_);
   ++enabled_cycles_;
   // End-to-end: how old the master sample is when the force computed from it is sent (its row
   // time, from this process or another, to this cycle's time).
-  master_age_ = now() - last_master_.time;
+  master_age_ = now() - master_.time;
   master_age_sum_ += static_cast<double>(master_age_);
   master_age_max_ = std::max(master_age_max_, master_age_);
   if (2 * master_age_ >= config().period.count()) ++master_age_late_;
+}
+
+void CollaborativeControlForce::on_input_failure(const FaultInfo& why) noexcept {
+  // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
+  // At start-up, inputs may simply not be published yet: wait up to startup_timeout for them.
+  const double grace = config_.startup_timeout > 0 ? config_.startup_timeout : config_.stale_timeout;
+  const bool starting = !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(grace * 1e9);
+  if (state_.state == OperatingStateValue::enabled && !starting) raise_fault(why);
+  send_forces(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+}
+
+void CollaborativeControlForce::run() {
+  cycle_body();
+  refresh_summary();
+}
+
+void CollaborativeControlForce::refresh_summary() noexcept {
+  summary_.state = state_.state;
+  summary_.fault = fault_;
+  summary_.tracking_rms = tracking_rms();
+  summary_.tracking_max = tracking_max_;
+  summary_.enabled_cycles = enabled_cycles_;
+  summary_.rejected_commands = rejected_;
+  summary_.refused_sends = refused_sends_;
+  summary_.rejected_inputs = rejected_inputs_;
+  summary_.offset_errors = slave_offset_.errors();
+  summary_.master_age_mean = master_age_mean();
+  summary_.master_age_max = master_age_max_;
+  summary_.master_age_late = master_age_late_;
+}
+
+void CollaborativeControlForce::cycle_body() noexcept {
+  if (start_time_ < 0) start_time_ = now();
+  Input master, slave;
+  FaultInfo why{};
+  if (!read_side(master_, master, why) || !read_side(slave_, slave, why)) return on_input_failure(why);
+  inputs_seen_ = true;
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  if (state_.state != OperatingStateValue::enabled || clutched_) {
+    // Forces off; keep the offset cancelling so that enabling or releasing the clutch cannot jump.
+    snap_offsets(master, slave);
+    snap_pending_ = reexpress_pending_ = false;
+    ratcheting_ = false;
+    send_forces(zero, zero);
+    return;
+  }
+  const Prediction& pr = config_.prediction;
+  const Eigen::Vector3d p_m = predict(master, pr.master_horizon, pr);
+  const Eigen::Vector3d p_s = predict(slave, pr.slave_horizon, pr);
+  if (snap_pending_) {
+    // A snap expresses the offset in the current settings already: a pending re-expression
+    // on top of it would apply the change twice.
+    snap_offsets(master, slave);
+    if (config_.align) slave_offset_.set_target(to_eigen(config_.slave_offset));
+    snap_pending_ = reexpress_pending_ = false;
+  } else if (reexpress_pending_) {
+    reexpress_offset(master, slave);
+    reexpress_pending_ = false;
+  }
+  step_offset();
+  const LawOutput law = compute_law(p_m, master_offset_, p_s, slave_offset_.offset(), config_.scale,
+                                    config_.gains, config_.limits);
+  if (!law.finite) {
+    const bool master_bad = !law.master_error.allFinite() || !std::isfinite(law.master_error.norm());
+    raise_fault(fault_on(master_bad ? FaultSide::master : FaultSide::slave, FaultCode::output_not_finite));
+    send_forces(zero, zero);
+    return;
+  }
+  ratchet(p_m, p_s);
+  account(law);
   send_forces(law.master_force, law.slave_force);
 }
 

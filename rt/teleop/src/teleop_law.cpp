@@ -12,12 +12,20 @@ Eigen::Vector3d Scale::master_to_slave() const {
 Eigen::Vector3d Scale::slave_to_master() const { return master_to_slave().cwiseInverse(); }
 
 bool Scale::valid() const {
-  if (!std::isfinite(scale) || scale <= 0) return false;
+  if (!(scale >= min_scale && scale <= max_scale)) return false;  // NaN fails too
   return std::all_of(mirror.begin(), mirror.end(), [](double m) { return m == 1.0 || m == -1.0; });
 }
 
+bool Gains::valid() const { return master >= 0 && master <= max_gain && slave >= 0 && slave <= max_gain; }
+
+bool ForceLimits::valid() const {
+  return master >= 0 && master <= max_force_limit && slave >= 0 && slave <= max_force_limit;
+}
+
 Eigen::Vector3d saturate(const Eigen::Vector3d& f, double limit) {
+  if (!f.allFinite() || !std::isfinite(limit) || limit <= 0) return Eigen::Vector3d::Zero();
   const double n = f.norm();
+  if (!std::isfinite(n)) return Eigen::Vector3d::Zero();  // finite components, overflowing norm
   return n > limit ? Eigen::Vector3d(f * (limit / n)) : f;
 }
 
@@ -35,6 +43,8 @@ LawOutput compute_law(const Eigen::Vector3d& p_master, const Eigen::Vector3d& o_
   out.slave_force = saturate(f_s, lim.slave);    // (6)
   out.master_saturated = f_m.norm() > lim.master;
   out.slave_saturated = f_s.norm() > lim.slave;
+  out.finite = out.master_error.allFinite() && out.slave_error.allFinite() && f_m.allFinite() &&
+               f_s.allFinite() && std::isfinite(f_m.norm()) && std::isfinite(f_s.norm());
   return out;
 }
 

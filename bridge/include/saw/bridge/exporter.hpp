@@ -18,17 +18,26 @@ namespace saw::bridge {
 // the heartbeat, copies the read commands' newest values into the state mirror, and runs the
 // void/write commands that client processes left in their slots' rings. Events emitted by the
 // task are copied into every claimed slot's event ring as they happen. A non-RT service thread
-// answers qualified reads (const and thread-safe by contract) and reclaims dead clients' slots.
+// answers qualified reads (const and thread-safe by contract) and frees the slots of clients
+// whose heartbeat stopped.
+//
+// Nothing a client writes is trusted: the exporter keeps every offset, size and index of its
+// own in private memory, copies each record out of the segment before looking at it, and runs a
+// command only if its index names a command and its argument passes its type's check (finite
+// numbers, valid enumerators and bools) and the limits the component declared. Refusals are
+// counted.
 struct ExportOptions {
-  std::uint32_t slots = 8;           // client processes at once
-  std::uint32_t ring_capacity = 64;  // per slot and direction
-  TimeNs service_spin = 0;           // the query thread stays awake this long after a query
+  std::uint32_t slots = 8;              // client processes at once
+  std::uint32_t ring_capacity = 64;     // per slot and direction
+  TimeNs service_spin = 0;              // the query thread stays awake this long after a query
+  TimeNs client_timeout = 500'000'000;  // a client slot whose heartbeat is older is freed
 };
 
 class Exporter : public Component::CycleHook {
  public:
-  // Before the manager starts. Throws BridgeError if the name is held by a live process, or a
-  // type has no layout version.
+  // Before the manager starts. Throws BridgeError if the name is held by a live process, a
+  // type is not registered for other processes (type_info.hpp), or a name (of the component,
+  // the interface, a command or a type) is longer than its manifest field: never truncated.
   Exporter(Component& component, const std::string& provided, ExportOptions options = {});
   Exporter(Component& component, const std::string& provided, std::uint32_t slots)
       : Exporter(component, provided, ExportOptions{slots}) {}
@@ -36,8 +45,18 @@ class Exporter : public Component::CycleHook {
 
   void after_cycle(Component& c, TimeNs time) noexcept override;
   const std::string& segment_name() const noexcept { return segment_.name(); }
-  std::uint64_t commands_run() const noexcept { return commands_run_; }
-  std::uint64_t events_refused() const noexcept { return events_refused_; }
+
+  // Counters, readable from any thread.
+  std::uint64_t commands_run() const noexcept { return load(commands_run_); }
+  // Records decoded from a client's ring and not run: no such command, or an argument that
+  // failed its type's check or the declared limits.
+  std::uint64_t commands_refused() const noexcept { return load(commands_refused_); }
+  std::uint64_t events_refused() const noexcept { return load(events_refused_); }
+  // Qualified-read requests refused (no such query, or an invalid argument).
+  std::uint64_t queries_refused() const noexcept { return load(queries_refused_); }
+  // A client's ring index that no producer or consumer could have published.
+  std::uint64_t ring_errors() const noexcept;
+  std::uint64_t slots_reclaimed() const noexcept { return load(slots_reclaimed_); }
 
  private:
   struct Read {
@@ -45,27 +64,38 @@ class Exporter : public Component::CycleHook {
     std::uint32_t offset, size;
   };
   struct Slot {
-    std::uint32_t generation = 0;
-    std::unique_ptr<SpscRing> commands, events;
+    std::unique_ptr<SpscRing> commands, events;  // consumer and producer views, own indices private
   };
+  using Counter = std::atomic<std::uint64_t>;
+  static std::uint64_t load(const Counter& c) noexcept { return c.load(std::memory_order_relaxed); }
+  static void bump(Counter& c) noexcept {  // one writer per counter
+    c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  }
+  void describe(const ProvidedInterface& p);
   void emit(std::uint32_t index, const void* arg, std::size_t size) noexcept;
-  // The view of slot i if a client holds it (resynced to a new owner), else nullptr.
-  Slot* claimed(std::uint32_t i) noexcept;
+  void run_commands(Slot& slot) noexcept;
+  void answer_queries();
   void serve();
 
   TimeNs service_spin_;
+  TimeNs client_timeout_;
   ShmSegment segment_;
+  SegmentView view_;  // the layout this process computed; never re-read from the segment
+  std::uint64_t mirror_seq_ = 0;
   std::vector<Command*> commands_;  // by wire index; events take the indices after commands
   std::vector<Read> reads_;
-  std::vector<std::byte> staging_;
+  std::vector<std::byte> staging_;  // the mirror's next contents
+  std::vector<std::byte> record_;   // one command record, copied out of the segment
   std::vector<Slot> slots_;
+  std::vector<std::uint32_t> last_reply_;  // per slot, the service thread's
   struct EventTap {
     Exporter* exporter;
     std::uint32_t index;
     std::uint32_t size;
   };
   std::vector<std::unique_ptr<EventTap>> taps_;
-  std::uint64_t commands_run_ = 0, events_refused_ = 0;
+  Counter commands_run_{0}, commands_refused_{0}, events_refused_{0}, queries_refused_{0},
+      slots_reclaimed_{0};
   std::atomic<bool> stop_{false};
   std::thread service_;
 };

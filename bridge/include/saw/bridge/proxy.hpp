@@ -4,6 +4,7 @@
 #include <atomic>
 #include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -15,26 +16,33 @@
 namespace saw::bridge {
 
 struct ProxyOptions {
-  TimeNs stale_after = 100'000'000;  // a heartbeat older than this: the server is gone
-  TimeNs spin = 0;                   // qualified reads and update waits spin this long before sleeping
-  TimeNs reconnect_poll = 10'000'000;
+  TimeNs stale_after = 100'000'000;    // a heartbeat older than this: the server is gone
+  TimeNs spin = 0;                     // qualified reads and update waits spin this long before sleeping
+  TimeNs reconnect_poll = 10'000'000;  // also how often this client's slot heartbeat is refreshed
 };
 
 // A passive component with the exported interface, rebuilt from the segment's manifest:
 // void/write commands go into this process's slot (an error, counted by the caller, when the
 // ring is full or the server's heartbeat is older than `stale_after`); read commands copy from
 // the state mirror; events arrive in the slot's event ring, drained by the client's thread.
-// Its functions must be called from one thread (the slot's rings have one producer each).
+// Its commands and events must be used from one thread (the slot's rings have one producer and
+// one consumer); reads from any.
 //
-// Reconnection: a non-RT monitor thread watches the server. When it is gone and a new server
-// with the same name and interface is ready, the monitor maps it, claims a slot and offers the
-// new link; the calling thread and the event-draining thread each switch to it at their next
-// call (a pointer exchange: RT-safe). The old mapping is released once both have switched.
+// The server's region is mapped read-only; the layout is the one this process validated when
+// it attached, never re-read. A monitor thread (non-RT) refreshes the slot's heartbeat, and
+// watches the server: when it is gone, or has freed our slot (we stalled past its client
+// timeout), and a server with the same name and interface is ready, the monitor maps it, claims
+// a slot and offers the new link; the calling thread and the event-draining thread each switch
+// to it at their next call (a pointer exchange: RT-safe). The old mapping is released once both
+// have switched. Nothing escapes the monitor: a segment it cannot use leaves the proxy
+// disconnected, with the reason in last_error().
 class Proxy : public Component {
  public:
   static constexpr TimeNs default_stale_after = ProxyOptions{}.stale_after;
 
-  Proxy(ShmSegment segment, int slot_index, ProxyOptions options = {});
+  // `segment` validated into `layout`, slot `slot_index` claimed with `token`.
+  Proxy(ShmSegment segment, const Layout& layout, int slot_index, std::uint64_t token,
+        ProxyOptions options = {});
   ~Proxy() override;
 
   Mailbox* remote_events() noexcept override { return events_.get(); }
@@ -47,6 +55,8 @@ class Proxy : public Component {
   }
   // Times a new server was adopted (monitor's count).
   std::uint64_t reconnects() const noexcept { return reconnects_.load(std::memory_order_relaxed); }
+  // Why the monitor could not reconnect the last time it tried ("" if it never failed).
+  std::string last_error() const;
 
   // Non-RT consumers (gateways, GUIs): sleeps until the server publishes a state row newer than
   // `seen` (a counter this call updates), or `timeout` passes. True if there is a new row.
@@ -55,8 +65,12 @@ class Proxy : public Component {
  private:
   struct Link {
     ShmSegment segment;
+    SegmentView view;
     std::uint32_t slot;
+    std::uint64_t token;
     std::unique_ptr<SpscRing> commands, events;
+    ClientSlot& client() const noexcept { return view.client_slot(slot); }
+    ServerSlot& server() const noexcept { return view.server_slot(slot); }
   };
   Link& link() noexcept {
     if (offered_.load(std::memory_order_relaxed) != nullptr) adopt();
@@ -64,13 +78,19 @@ class Proxy : public Component {
   }
   void adopt() noexcept;
   bool alive(const Link& l) const noexcept;
-  std::unique_ptr<Link> make_link(ShmSegment s, std::uint32_t slot);
+  static std::unique_ptr<Link> make_link(ShmSegment s, const Layout& layout, std::uint32_t slot,
+                                         std::uint64_t token);
   std::unique_ptr<Link> try_reconnect();
   void monitor();
+  void monitor_once();
+  void set_error(const std::string& why) noexcept;
+  void build_interface(const Link& l);
+  Status query(std::uint32_t index, std::uint32_t arg_size, std::uint32_t result_size, const void* q,
+               void* r) noexcept;
 
   std::string path_;
   ProxyOptions options_;
-  std::uint64_t interface_hash_ = 0;
+  std::uint64_t interface_hash_ = 0, incarnation_ = 0;
   std::size_t mirror_bytes_ = 0;
   std::deque<std::string> type_names_;        // TypeInfo points into these
   std::vector<std::unique_ptr<Link>> links_;  // the monitor's; the newest is last
@@ -80,6 +100,8 @@ class Proxy : public Component {
   std::unique_ptr<Mailbox> events_;
   std::atomic<std::uint64_t> reconnects_{0}, commands_refused_{0};
   std::atomic<std::uint32_t> stop_{0};
+  mutable std::mutex error_mutex_;  // non-RT: the monitor writes, anyone reads
+  std::string error_;
   std::thread monitor_;
 };
 
@@ -93,5 +115,9 @@ class ShmResolver : public RemoteResolver {
  private:
   ProxyOptions options_;
 };
+
+// Maps "/name" read-only, validates it and makes its client region writable. Throws
+// BridgeError (absent) or returns the reason it is refused in `why`.
+ShmSegment attach_validated(const std::string& path, Layout& layout, std::string& why);
 
 }  // namespace saw::bridge

@@ -15,14 +15,16 @@ class BridgeError : public std::runtime_error {
 // Set-up only (never on an RT path): every call may block or allocate.
 class ShmSegment {
  public:
-  // Creates /name of `size` bytes, zero-filled. A segment left by a dead owner is replaced;
-  // one whose owner is alive is an error naming that pid (read from the first 4 bytes' owner
-  // field is the caller's business: `owner_alive` decides).
+  // Creates /name of `size` bytes, zero-filled. A segment already under that name is replaced
+  // only if `owner_alive` says its owner is gone; otherwise it is an error and the segment stays.
   static ShmSegment create(const std::string& name, std::size_t size,
                            bool (*owner_alive)(const void* mapping, std::size_t size));
-  // Maps an existing /name read-write; throws if absent.
-  static ShmSegment attach(const std::string& name);
+  // Maps an existing /name, read-only unless `writable`; throws if absent.
+  static ShmSegment attach(const std::string& name, bool writable = true);
+  // Makes [offset, offset + length) of a read-only mapping writable (page-aligned offset).
+  void make_writable(std::size_t offset, std::size_t length);
 
+  ShmSegment() = default;  // no mapping
   ShmSegment(ShmSegment&& other) noexcept;
   ShmSegment& operator=(ShmSegment&& other) noexcept;
   ~ShmSegment();

@@ -2,7 +2,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <memory>
+#include <string_view>
 
 namespace saw::drivers {
 
@@ -20,6 +22,8 @@ class ArmKinematics {
   ArmKinematics& operator=(const ArmKinematics&) = delete;
 
   ArmModel model() const noexcept { return model_; }
+  // The joints' names, base to tip (measured_js carries them).
+  std::array<std::string_view, 3> joint_names() const noexcept;
   Eigen::Vector3d fk(const Eigen::Vector3d& q) noexcept;
   // Linear part of the Jacobian: ẋ = J·q̇, τ = Jᵀ·f.
   Eigen::Matrix3d jacobian(const Eigen::Vector3d& q) noexcept;

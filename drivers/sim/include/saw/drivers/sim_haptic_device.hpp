@@ -2,9 +2,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
+#include <string_view>
 
-#include "saw/crtk.hpp"
+#include "saw/crtk_arm.hpp"
 #include "saw/drivers/arm_kinematics.hpp"
 #include "saw/drivers/hand_script.hpp"
 #include "saw/task.hpp"
@@ -23,20 +25,39 @@ struct SimDeviceConfig {
   bool start_enabled = true;
   HandScript hand;
   int substeps = 4;  // integration steps per cycle
+  // Command watchdog: with no fresh servo_cf for this long, the device applies zero force
+  // (a dead teleoperation process must not leave it pushing). 0: 3 periods.
+  TimeNs command_timeout = 0;
 };
 
 // Buttons on the "sim" interface's set_button.
 struct ButtonCommand {
+  static constexpr std::string_view type_name = "saw::drivers::ButtonCommand";
   static constexpr std::uint32_t layout_version = 1;
   std::uint8_t button = 0;  // 0 clutch, 1 operator_present
   bool pressed = false;
 };
+// Crosses processes byte for byte (set_button).
+static_assert(sizeof(ButtonCommand) == 2 && offsetof(ButtonCommand, pressed) == 1);
 
-// Provided "arm" (CRTK): measured_cp, measured_cv, measured_js, operating_state (reads);
-// servo_cf, state_command (writes); operating_state, clutch, operator_present (events).
+// What a run of the device comes to (its "summary" column, ColumnUse::summary).
+struct SimDeviceSummary {
+  static constexpr std::string_view type_name = "saw::drivers::SimDeviceSummary";
+  static constexpr std::uint32_t layout_version = 1;
+  std::uint64_t rejected_commands = 0;  // servo_cf not finite or over max_force
+  std::uint64_t watchdog_trips = 0;     // times commands stopped coming and the force went to zero
+  TimeNs command_timeout = 0;
+};
+
+// Provided "arm" (CRTK, crtk_arm.hpp): measured_cp, measured_cv, measured_js (with the model's
+// joint names), operating_state (reads); servo_cf, state_command (writes); operating_state,
+// clutch, operator_present (events).
 // Provided "sim": set_button (write), hand_force, rejected_commands (reads).
+// Also on "arm": servo_force (the force applied this cycle), command_timeout (true while the
+// watchdog holds the force at zero), watchdog_trips (reads).
 // A servo_cf that is not finite or exceeds max_force is rejected before it reaches the
-// dynamics (the device then applies zero force) and counted.
+// dynamics (the device then applies zero force) and counted. A servo_cf older than
+// command_timeout is dropped: zero force until the next one.
 class SimHapticDevice : public Task {
  public:
   SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config);
@@ -44,12 +65,17 @@ class SimHapticDevice : public Task {
   void run() override;
   const SimDeviceConfig& device_config() const noexcept { return config_; }
   std::uint64_t rejected_commands() const noexcept { return rejected_; }
+  // Times the command watchdog dropped a force (each time commands stopped coming).
+  std::uint64_t watchdog_trips() const noexcept { return watchdog_trips_; }
+  TimeNs command_timeout() const noexcept { return config_.command_timeout; }
 
   struct Columns {
     StateColumn<Pose> measured_cp;
     StateColumn<Twist> measured_cv;
     StateColumn<JointState> measured_js;
     StateColumn<Vec3> hand_force, servo_force;
+    StateColumn<bool> command_timeout;
+    StateColumn<std::uint64_t> watchdog_trips;
   };
   const Columns& columns() const noexcept { return columns_; }
 
@@ -60,6 +86,7 @@ class SimHapticDevice : public Task {
   void button(std::uint8_t id, bool pressed) noexcept;
   void integrate(double dt, const Eigen::Vector3d& hand_target) noexcept;
   void publish() noexcept;
+  void watch_commands() noexcept;
 
   SimDeviceConfig config_;
   ArmKinematics kinematics_;
@@ -69,7 +96,9 @@ class SimHapticDevice : public Task {
   TimeNs t0_ = -1;
   std::size_t hand_cursor_ = 0;
   bool hand_clutch_ = false;
-  std::uint64_t rejected_ = 0;
+  std::uint64_t rejected_ = 0, watchdog_trips_ = 0;
+  TimeNs last_command_ = 0;
+  bool commanded_ = false;  // a servo_cf was received and has not timed out yet
 
   // State-table sources.
   Pose measured_cp_{};
@@ -78,6 +107,8 @@ class SimHapticDevice : public Task {
   OperatingState operating_state_{};
   Vec3 hand_force_{}, servo_force_{};
   std::uint64_t rejected_column_ = 0;
+  SimDeviceSummary summary_{};
+  bool command_timeout_ = false;
   Columns columns_;
 
   EventWrite<OperatingState>* state_event_ = nullptr;

@@ -1,44 +1,45 @@
-// Deployment: a YAML file's components, tasks and connections, validated before anything starts.
+// Deployment: a DeploymentSpec built — components placed, exported, connected — and run.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "saw/deploy/placement.hpp"
+#include "saw/deploy/deployment_spec.hpp"
 #include "saw/deploy/recorder.hpp"
 #include "saw/deploy/registry.hpp"
 #include "saw/manager.hpp"
 
 namespace saw::deploy {
 
-enum class Clock : std::uint8_t { real, stepped };
-
-struct RecordSpec {
-  std::string file;
-  std::vector<std::string> columns;  // component.column
-  int decimation = 1;
-};
+// Starts the deployment's DDS gateway process (the host's business: the RT process never runs
+// DDS); the handle stops it when released. Throws std::runtime_error saying why not.
+using GatewayLauncher = std::function<std::shared_ptr<void>(const GatewaySpec& spec)>;
 
 class Deployment {
  public:
-  const std::string& name() const noexcept { return name_; }
-  Clock clock() const noexcept { return clock_; }
-  void set_clock(Clock c) noexcept { clock_ = c; }
+  Deployment(Deployment&&) noexcept = default;
+  Deployment& operator=(Deployment&&) noexcept = default;
+  ~Deployment();
+
+  const std::string& name() const noexcept { return spec_.name; }
+  const DeploymentSpec& spec() const noexcept { return spec_; }
+  Clock clock() const noexcept { return spec_.clock; }
+  void set_clock(Clock c) noexcept { spec_.clock = c; }
   Manager& manager() noexcept { return *manager_; }
   const std::vector<Component*>& components() const noexcept { return manager_->components(); }
   template <class T>
   T* find(const std::string& name) const {
     return dynamic_cast<T*>(manager_->find(name));
   }
-  const std::optional<RecordSpec>& record() const noexcept { return record_; }
-  const std::optional<GatewaySpec>& gateway() const noexcept { return gateway_; }
+  const std::optional<GatewaySpec>& gateway() const noexcept { return spec_.gateway; }
   // Overrides the file's record file (or records the file's columns somewhere else).
   void set_record_file(std::string path);
 
-  // Starts the recorder (if any) and the manager, real or stepped per clock().
+  // Starts the recorder (if any) and the manager, real or stepped per clock(), then the gateway.
   void start();
   // Stepped: advances simulated time by `seconds` as fast as possible; real: sleeps.
   void run_for(double seconds);
@@ -46,30 +47,31 @@ class Deployment {
   const Recorder* recorder() const noexcept { return recorder_.get(); }
 
  private:
-  friend Deployment parse_deployment(const std::string&, const std::string&, const ComponentRegistry&,
-                                     const std::string&);
-  Deployment() : manager_(std::make_unique<Manager>()) {}
+  friend Deployment build_deployment(DeploymentSpec, const ComponentRegistry&, GatewayLauncher);
+  explicit Deployment(DeploymentSpec spec);
+  void make_components(const ComponentRegistry& registry);
+  void check_before_export(const ComponentRegistry& registry) const;
+  void export_interfaces(const ComponentRegistry& registry);
+  void connect_all();
 
-  std::string name_, file_;
-  Clock clock_ = Clock::real;
+  DeploymentSpec spec_;
   std::unique_ptr<Manager> manager_;
-  std::optional<RecordSpec> record_;
   std::unique_ptr<Recorder> recorder_;
   std::vector<std::shared_ptr<void>> exports_;  // keeps exported interfaces exported
-  std::vector<std::string> exported_names_;
-  std::map<std::string, std::string> exported_interface_;  // component → its exported interface
-  std::optional<GatewaySpec> gateway_;
   GatewayLauncher launch_gateway_;
   std::shared_ptr<void> gateway_process_;  // while running
-  int record_line_ = 0, record_column_ = 0;
 };
 
-// Throws ConfigError (file:line:column: key '…': what) for anything wrong, having started nothing
-// (a file placed on hosts whose servers are on other machines starts its gateway first, to
-// mirror them; it is stopped again on error). `host`: the part of a file with `hosts:` to run.
-Deployment parse_deployment(const std::string& yaml_text, const std::string& file,
-                            const ComponentRegistry& registry, const std::string& host = "");
-Deployment load_deployment(const std::string& path, const ComponentRegistry& registry,
-                           const std::string& host = "");
+// Builds what `spec` describes: makes each component with its type's make(), checks exports and
+// record columns, exports, starts the gateway first if connections need it (mirrors, imports),
+// connects. Throws ConfigError at the offending entry, having left nothing running.
+Deployment build_deployment(DeploymentSpec spec, const ComponentRegistry& registry,
+                            GatewayLauncher launch_gateway = {});
+
+// parse_deployment + build_deployment.
+Deployment make_deployment(const std::string& yaml_text, const std::string& file, ComponentRegistry& registry,
+                           const std::string& host = "", GatewayLauncher launch_gateway = {});
+Deployment load_deployment(const std::string& path, ComponentRegistry& registry, const std::string& host = "",
+                           GatewayLauncher launch_gateway = {});
 
 }  // namespace saw::deploy

@@ -68,6 +68,10 @@ class Params {
   std::shared_ptr<std::vector<Params>> children_;
 };
 
+// A duration parameter in seconds within [lo, hi] s (fallback when absent).
+double seconds_in_range(const Params& p, const std::string& key, std::chrono::nanoseconds fallback, double lo,
+                        double hi);
+
 // 1-based line and column of a node (0 if it has no mark).
 std::pair<int, int> location(const YAML::Node& n);
 

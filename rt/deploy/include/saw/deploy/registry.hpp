@@ -1,11 +1,13 @@
 // ComponentRegistry: the component types a deployment file may name, and how to build each.
 #pragma once
 
+#include <any>
 #include <functional>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "saw/component.hpp"
@@ -15,60 +17,94 @@
 
 namespace saw::deploy {
 
-// What a factory gets: the component's name, its task block (absent → the type's default),
-// its parameters, and the directory of the deployment file (for relative paths).
-struct FactoryContext {
+// What a type's parser gets besides its `params:`: the component's name, its `task:` block
+// (absent → the type's default) and the deployment file's directory (for relative paths).
+struct ComponentContext {
   std::string name;
   std::optional<TaskConfig> task;
-  Params& params;
   std::string directory;
 };
 
-using Factory = std::function<std::unique_ptr<Component>(FactoryContext&)>;
+// The component's task block, or a 1 kHz SCHED_FIFO 80 task when absent; a type that must be
+// periodic says so (at the task block) otherwise.
+TaskConfig periodic_task(const ComponentContext& ctx, const Params& params, const std::string& type);
 
 // Exports a component's provided interface to other processes; the handle keeps it exported.
 using Exporter = std::function<std::shared_ptr<void>(Component& component, const std::string& provided)>;
 
-// The deployment's DDS gateway (a `gateway:` section): what to map and where.
-struct GatewaySpec {
-  std::vector<std::string> attach;  // exported components to map (default: every export)
-  int domain = 0;
-  std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
-  int decimation = 1;
-  std::vector<std::string> mirrors;  // components of other machines to present here (started before connect)
-  // Foreign CRTK arms (a dVRK's masters) to present here as components, read-only: component
-  // name → arm name; topics rt/[ros_namespace/]<arm>/... (started before connect).
-  std::vector<std::pair<std::string, std::string>> imports;
-  std::string ros_namespace;
-};
-// Starts the gateway process for a running deployment; the handle stops it when released.
-using GatewayLauncher = std::function<std::shared_ptr<void>(const GatewaySpec& spec)>;
+// One line of a run's summary for a `ColumnUse::summary` column's latest value; empty: nothing
+// worth saying.
+using SummaryFormat = std::function<std::string(const void* value)>;
 
-// What a deployment can build: component types, plus (from the composition root, so that this
-// library depends on neither) how to reach components elsewhere and how to export one.
+// What a deployment can build. Each package registers its own types (its
+// `register_components(ComponentRegistry&)`; a plug-in's from `saw_plugin_register`), and the
+// bridge how to reach components in other processes and how to export one.
 class ComponentRegistry {
  public:
-  void add(std::string type, Factory factory, std::string description);
+  // A type in two steps, so that a whole file is checked before anything is built:
+  //   parse(const ComponentContext&, Params&) -> Config   reads `task:`/`params:`; errors name
+  //                                                         file:line through Params
+  //   make(const std::string& name, const Config&) -> std::unique_ptr<Component>
+  // Config is a copyable value (it is kept in a DeploymentSpec).
+  template <class Parse, class Make>
+  void add(std::string type, std::string description, Parse parse, Make make) {
+    using Config = std::decay_t<std::invoke_result_t<Parse&, const ComponentContext&, Params&>>;
+    add_type(std::move(type),
+             Type{std::move(description),
+                  [parse](const ComponentContext& c, Params& p) { return std::any(parse(c, p)); },
+                  [make](const std::string& name, const std::any& config) -> std::unique_ptr<Component> {
+                    return make(name, std::any_cast<const Config&>(config));
+                  },
+                  {}});
+  }
+
+  struct Type {
+    std::string description;
+    std::function<std::any(const ComponentContext&, Params&)> parse;
+    std::function<std::unique_ptr<Component>(const std::string&, const std::any&)> make;
+    std::string origin;  // the plug-in that registered it; empty: built in
+  };
+  const Type* find(const std::string& type) const;
+  const std::map<std::string, Type>& types() const noexcept { return types_; }
+  // "a, b, c": for error messages.
+  std::string type_list() const;
+
+  // How a summary column of type T is reported (see ColumnUse::summary).
+  template <Plain T, class F>
+  void add_summary_format(F format) {
+    summary_formats_[std::string(type_info_of<T>().name)] = [format](const void* v) {
+      return format(*static_cast<const T*>(v));
+    };
+  }
+  const SummaryFormat* summary_format(TypeInfo type) const;
+
   void add_resolver(std::function<std::unique_ptr<RemoteResolver>()> make) {
     resolvers_.push_back(std::move(make));
   }
-  void set_exporter(Exporter e) { exporter_ = std::move(e); }
-  void set_gateway_launcher(GatewayLauncher l) { gateway_launcher_ = std::move(l); }
-  const GatewayLauncher& gateway_launcher() const noexcept { return gateway_launcher_; }
   const std::vector<std::function<std::unique_ptr<RemoteResolver>()>>& resolvers() const noexcept {
     return resolvers_;
   }
+  void set_exporter(Exporter e) { exporter_ = std::move(e); }
   const Exporter& exporter() const noexcept { return exporter_; }
-  const Factory* find(const std::string& type) const;
-  // "a, b, c": for error messages.
-  std::string type_list() const;
-  const std::map<std::string, std::pair<Factory, std::string>>& types() const noexcept { return types_; }
+
+  // Loads a plug-in (dlopen) and runs its registration; throws std::runtime_error saying why
+  // not (missing file, not a plug-in, another ABI version — naming both). A plug-in stays
+  // loaded for the process's life: its code may run until the very end (destructors).
+  void load_plugin(const std::string& path);
+  // Off for programs that must not run code named by their input (the fuzzer).
+  void allow_plugins(bool allow) noexcept { plugins_allowed_ = allow; }
+  const std::vector<std::string>& plugins() const noexcept { return plugins_; }
 
  private:
-  std::map<std::string, std::pair<Factory, std::string>> types_;
+  void add_type(std::string type, Type t);
+
+  std::map<std::string, Type> types_;
+  std::map<std::string, SummaryFormat> summary_formats_;
   std::vector<std::function<std::unique_ptr<RemoteResolver>()>> resolvers_;
   Exporter exporter_;
-  GatewayLauncher gateway_launcher_;
+  bool plugins_allowed_ = true;
+  std::vector<std::string> plugins_;  // paths loaded
+  std::string loading_;               // the plug-in registering now, for Type::origin
 };
 
 }  // namespace saw::deploy

@@ -2,7 +2,8 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <ruckig/ruckig.hpp>
+#include <cstdint>
+#include <memory>
 
 namespace saw::teleop {
 
@@ -17,6 +18,7 @@ struct OffsetLimits {
 class OffsetTrajectory {
  public:
   OffsetTrajectory(double cycle_seconds, OffsetLimits limits);
+  ~OffsetTrajectory();
 
   // Jumps to `offset` at rest (when a jump cannot show: forces are off or the error is zero).
   void reset(const Eigen::Vector3d& offset) noexcept;
@@ -27,14 +29,21 @@ class OffsetTrajectory {
   const Eigen::Vector3d& offset() const noexcept { return offset_; }
   bool moving() const noexcept { return moving_; }
   void set_limits(OffsetLimits limits) noexcept;
+  // Cycles on which Ruckig refused the input (the offset then stays where it is, at rest), and
+  // the last refusal's code (ruckig::Result, negative).
+  std::uint64_t errors() const noexcept { return errors_; }
+  int last_error() const noexcept { return last_error_; }
 
  private:
-  ruckig::Ruckig<3> otg_;
-  ruckig::InputParameter<3> input_;
-  ruckig::OutputParameter<3> output_;
+  // Ruckig's generator and its parameters, allocated once here: Ruckig stays out of the
+  // installed headers (it is built from its sdist into this library, not installed).
+  struct Generator;
+  std::unique_ptr<Generator> g_;
   Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
   bool moving_ = false;
+  std::uint64_t errors_ = 0;
+  int last_error_ = 0;
 };
 
 }  // namespace saw::teleop

@@ -1,11 +1,16 @@
-"""python -m sawdds list | echo TOPIC [N] | state-command TOPIC CMD"""
+"""usage: sawdds list | echo TOPIC [N] | state-command TOPIC CMD   (or python -m sawdds ...)"""
 import sys
 
 from . import msgs
 from .client import Client
 
 
-def main(argv):
+def main(argv=None):
+    # The console script calls main() bare: its arguments are in sys.argv.
+    argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] in ("-h", "--help"):
+        print(__doc__)
+        return 0
     if not argv or argv[0] not in ("list", "echo", "state-command"):
         print(__doc__)
         return 2
@@ -23,4 +28,5 @@ def main(argv):
     return 0
 
 
-sys.exit(main(sys.argv[1:]))
+if __name__ == "__main__":
+    sys.exit(main())

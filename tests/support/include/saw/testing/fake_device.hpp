@@ -1,8 +1,12 @@
 // FakeDevice: a passive CRTK device whose state the test sets and publishes explicitly.
 #pragma once
 
+#include <string>
+#include <utility>
+
 #include "saw/component.hpp"
 #include "saw/crtk.hpp"
+#include "saw/crtk_arm.hpp"
 #include "saw/manager.hpp"
 
 namespace saw::testing {
@@ -10,14 +14,15 @@ namespace saw::testing {
 class FakeDevice : public Component {
  public:
   explicit FakeDevice(std::string name) : Component(std::move(name)) {
-    auto& p = provide("arm");
-    p.add_command_read("measured_cp", state_table().add_column("measured_cp", &pose_));
-    p.add_command_read("measured_cv", state_table().add_column("measured_cv", &twist_));
-    p.add_command_write<Wrench>("servo_cf", [this](const Wrench& w) {
+    namespace arm = crtk::arm;
+    auto& p = provide(std::string(arm::interface_name));
+    crtk::provide(p, arm::measured_cp, state_table(), &pose_);
+    crtk::provide(p, arm::measured_cv, state_table(), &twist_);
+    crtk::provide(p, arm::servo_cf, [this](const Wrench& w) {
       force = w.force;
       ++commands;
     });
-    clutch_ = &p.add_event_write<ButtonEvent>("clutch");
+    clutch_ = &crtk::provide(p, arm::clutch);
   }
   // Publishes the current position and velocity as a row stamped t (what a device cycle does).
   void publish(TimeNs t) {
@@ -34,17 +39,6 @@ class FakeDevice : public Component {
   Pose pose_;
   Twist twist_;
   EventWrite<ButtonEvent>* clutch_;
-};
-
-// Steps a stepped manager by one 1 ms period, publishing the devices first unless frozen.
-struct Stepper {
-  Manager& manager;
-  TimeNs next = 0;
-  void operator()(std::initializer_list<FakeDevice*> publish) {
-    for (auto* d : publish) d->publish(next);
-    manager.step_until(next);
-    next += 1'000'000;
-  }
 };
 
 }  // namespace saw::testing

@@ -1,0 +1,41 @@
+# saw_library(target COMPONENT name SOURCES ...): one of sawrt's shared libraries.
+#   - in the tree: saw::<alias> (ALIAS, default: COMPONENT) and sawrt::<COMPONENT>;
+#   - installed: lib/libsawrt_<COMPONENT>.so.<version>, exported as sawrt::<COMPONENT> in its own
+#     export set (sawrt-<COMPONENT>-targets.cmake), so find_package(sawrt COMPONENTS x) loads
+#     only x and what x needs;
+#   - include/ of the calling directory is its public include path (build tree and installed).
+# Shared, not static: a plug-in and saw-rt must share one copy of the core.
+function(saw_library target)
+  cmake_parse_arguments(L "" "COMPONENT;ALIAS" "SOURCES" ${ARGN})
+  if(NOT L_ALIAS)
+    set(L_ALIAS ${L_COMPONENT})
+  endif()
+  add_library(${target} SHARED ${L_SOURCES})
+  add_library(saw::${L_ALIAS} ALIAS ${target})
+  add_library(sawrt::${L_COMPONENT} ALIAS ${target})
+  set_target_properties(${target} PROPERTIES
+    OUTPUT_NAME sawrt_${L_COMPONENT}
+    EXPORT_NAME ${L_COMPONENT}
+    VERSION ${PROJECT_VERSION}
+    SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR}
+    LIBRARY_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/lib)
+  if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/include)
+    target_include_directories(${target} PUBLIC
+      $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+      $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+    install(DIRECTORY include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT dev)
+  endif()
+  install(TARGETS ${target} EXPORT sawrt-${L_COMPONENT}-targets
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime NAMELINK_COMPONENT dev)
+  install(EXPORT sawrt-${L_COMPONENT}-targets NAMESPACE sawrt::
+    DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sawrt COMPONENT dev)
+  saw_warnings(${target})
+  set_property(GLOBAL APPEND PROPERTY SAW_INSTALLED_COMPONENTS ${L_COMPONENT})
+endfunction()
+
+# saw_program(target): an installed executable, built into bin/ of the build tree.
+function(saw_program target)
+  set_target_properties(${target} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/bin)
+  install(TARGETS ${target} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
+  saw_warnings(${target})
+endfunction()

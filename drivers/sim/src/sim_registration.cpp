@@ -1,0 +1,92 @@
+// The sim package's types for deployments: each parameter read, range-checked and located.
+#include "saw/drivers/sim_registration.hpp"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/eigen.hpp"
+
+namespace saw::drivers::sim {
+namespace {
+
+using namespace std::chrono_literals;
+using deploy::ComponentContext;
+using deploy::Params;
+
+HandScript parse_hand(Params h, const std::string& directory) {
+  using Kind = HandScript::Kind;
+  HandScript s;
+  s.kind = h.get_enum<Kind>(
+      "type", {{"none", Kind::none}, {"line", Kind::line}, {"sinusoid", Kind::sinusoid}, {"csv", Kind::csv}},
+      Kind::none);
+  s.stiffness = h.get_in_range("stiffness", 0, 5000, s.stiffness);
+  s.damping = h.get_in_range("damping", 0, 500, s.damping);
+  s.from = to_eigen(h.get_or<Vec3>("from", {0, 0, 0}));
+  s.to = to_eigen(h.get_or<Vec3>("to", {0, 0, 0}));
+  s.duration = h.get_in_range("duration", 1e-3, 1e6, s.duration);
+  s.back_and_forth = h.get_or<bool>("back_and_forth", false);
+  s.amplitude = to_eigen(h.get_or<Vec3>("amplitude", {0, 0, 0}));
+  s.frequency = h.get_in_range("frequency", 0, 100, s.frequency);
+  s.phase = h.get_or<double>("phase", 0);
+  if (s.kind == Kind::csv) {
+    std::filesystem::path file = h.get<std::string>("file");
+    if (file.is_relative() && !directory.empty()) file = std::filesystem::path(directory) / file;
+    try {
+      s.samples = HandScript::load_csv(file.string());
+    } catch (const std::exception& e) {
+      h.fail_at("file", e.what());
+    }
+  }
+  return s;
+}
+
+struct SimDeviceSpec {
+  TaskConfig task;
+  SimDeviceConfig config;
+};
+
+SimDeviceSpec parse_sim_device(const ComponentContext& ctx, Params& p) {
+  SimDeviceConfig c;
+  c.model =
+      p.get_enum<ArmModel>("model", {{"omni", ArmModel::omni}, {"falcon", ArmModel::falcon}}, ArmModel::omni);
+  c.initial_joints = to_eigen(p.get_or<Vec3>("initial_joints", {0, 0, 0}));
+  c.max_force = p.get_in_range("max_force", 0, 100, 0);
+  c.start_enabled = p.get_or<bool>("start_enabled", true);
+  c.hand = parse_hand(p.child("hand"), ctx.directory);
+  const TaskConfig task = deploy::periodic_task(ctx, p, "sim_haptic_device");
+  c.command_timeout = p.get_or<std::chrono::nanoseconds>("command_timeout", 3 * task.period).count();
+  if (c.command_timeout < task.period.count() || c.command_timeout > std::chrono::nanoseconds(10s).count())
+    p.fail_at("command_timeout", "must be at least one period and at most 10 s");
+  return {task, c};
+}
+
+std::string summary_line(const SimDeviceSummary& s) {
+  std::string out;
+  char b[160];
+  if (s.rejected_commands != 0) {
+    std::snprintf(b, sizeof b, "%llu force commands rejected (non-finite or over the limit)",
+                  static_cast<unsigned long long>(s.rejected_commands));
+    out += b;
+  }
+  if (s.watchdog_trips != 0) {
+    std::snprintf(b, sizeof b,
+                  "%sforce dropped to zero %llu times: no servo_cf for %.1f ms (command_timeout)",
+                  out.empty() ? "" : "\n", static_cast<unsigned long long>(s.watchdog_trips),
+                  static_cast<double>(s.command_timeout) * 1e-6);
+    out += b;
+  }
+  return out;
+}
+
+}  // namespace
+
+void register_components(deploy::ComponentRegistry& registry) {
+  registry.add("sim_haptic_device", "simulated 3-DOF haptic device (Omni- or Falcon-like), KDL",
+               parse_sim_device, [](const std::string& name, const SimDeviceSpec& s) {
+                 return std::make_unique<SimHapticDevice>(name, s.task, s.config);
+               });
+  registry.add_summary_format<SimDeviceSummary>(summary_line);
+}
+
+}  // namespace saw::drivers::sim

@@ -1,0 +1,189 @@
+// Fuzz target: what a remote DDS peer controls in the gateway. Its serialized samples (CDR, as
+// received) are deserialized and converted to rt values by every mapping of type_map.cpp; its
+// qualified-read requests (saw_msgs/Query) are deserialized and its replies' client filter
+// evaluated; sawctl's text values are parsed. A conversion either rejects with a reason or yields
+// a valid rt value (finite numbers, unit quaternion, a known state, at most max_joints joints).
+//
+// Input: byte 0 chooses what (see LLVMFuzzerTestOneInput), the rest is the sample or text.
+// The conversions live in type_map.cpp's anonymous namespace: this file includes it.
+#include <fastdds/rtps/common/SerializedPayload.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "reply_filter.cpp"
+#include "saw_msgs/msg/QueryPubSubTypes.h"
+#include "type_map.cpp"
+
+namespace saw::gateway {
+namespace {
+
+using Payload = eprosima::fastrtps::rtps::SerializedPayload_t;
+
+[[noreturn]] void defect(const char* what) {
+  std::fprintf(stderr, "gateway conversion defect: %s\n", what);
+  std::abort();
+}
+
+// An exact-size copy of the peer's bytes, as Fast DDS hands a received sample to deserialize().
+Payload payload_of(const std::uint8_t* data, std::size_t size) {
+  Payload p(static_cast<std::uint32_t>(size));
+  if (size != 0) std::memcpy(p.data, data, size);
+  p.length = static_cast<std::uint32_t>(size);
+  return p;
+}
+
+bool finite3(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+// What the rt side may assume of every value a mapping accepts.
+void check(const Pose& p) {
+  const auto& q = p.orientation;
+  if (!finite3(p.position) ||
+      std::abs(std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) - 1) > 1e-3)
+    defect("pose not finite or not a unit quaternion");
+}
+void check(const Twist& t) {
+  if (!finite3(t.linear) || !finite3(t.angular)) defect("twist not finite");
+}
+void check(const Wrench& w) {
+  if (!finite3(w.force) || !finite3(w.torque)) defect("wrench not finite");
+}
+void check(const Vec3& v) {
+  if (!finite3(v)) defect("vector not finite");
+}
+void check(const JointState& j) {
+  if (j.size > JointState::max_joints) defect("too many joints");
+  if (!JointState::valid(j)) defect("joint names not bounded, terminated, one per joint or none");
+  for (std::uint32_t i = 0; i < j.size; ++i)
+    if (!std::isfinite(j.position[i]) || !std::isfinite(j.velocity[i]) || !std::isfinite(j.effort[i]))
+      defect("joint not finite");
+}
+void check(const OperatingState& s) {
+  if (static_cast<unsigned>(s.state) > static_cast<unsigned>(OperatingStateValue::fault))
+    defect("unknown operating state");
+}
+void check(const StateCommand& c) {
+  if (static_cast<unsigned>(c) > static_cast<unsigned>(StateCommand::home)) defect("unknown state command");
+}
+void check(const ButtonEvent&) {}
+void check(const FaultInfo&) {}
+void check(double d) {
+  if (!std::isfinite(d)) defect("double not finite");
+}
+void check(std::int64_t) {}
+void check(bool) {}
+
+// A sample of message Msg from a peer, as Typed<...>::take converts it.
+template <class Rt, class Msg, class PubSub, class Conv>
+void sample(const std::uint8_t* data, std::size_t size) {
+  PubSub type;
+  Payload p = payload_of(data, size);
+  Msg m;
+  try {
+    if (!type.deserialize(&p, &m)) return;
+  } catch (const eprosima::fastcdr::exception::Exception&) {
+    return;  // refused by take_next() in type_map.cpp (crash-bad-encapsulation)
+  }
+  Rt v{};
+  std::string why;
+  if (!Conv::from_msg(m, v, why)) {
+    if (why.empty()) defect("rejected without a reason");
+    return;
+  }
+  check(v);
+  (void)Conv::text(v);
+}
+
+template <class Rt, class Msg, class PubSub, class Conv>
+struct Entry {
+  static void run(const std::uint8_t* d, std::size_t n) { sample<Rt, Msg, PubSub, Conv>(d, n); }
+  // This list must be type_map.cpp's: the same rt type for the same DDS type.
+  static bool listed() {
+    const Mapping* m = find_mapping(type_info_of<Rt>().name);
+    return m != nullptr && m->dds_type() == PubSub().getName();
+  }
+};
+
+using namespace geometry_msgs::msg;
+template <class T, class M, class P>
+using Data = Entry<T, M, P, DataConv<T, M>>;
+using Samples = std::tuple<
+    Entry<Pose, PoseStamped, PoseStampedPubSubType, PoseConv>,
+    Entry<Twist, TwistStamped, TwistStampedPubSubType, TwistConv>,
+    Entry<Wrench, WrenchStamped, WrenchStampedPubSubType, WrenchConv>,
+    Entry<Vec3, Vector3Stamped, Vector3StampedPubSubType, Vec3Conv>,
+    Entry<JointState, sensor_msgs::msg::JointState, sensor_msgs::msg::JointStatePubSubType, JointStateConv>,
+    Entry<OperatingState, crtk_msgs::msg::OperatingState, crtk_msgs::msg::OperatingStatePubSubType,
+          OperatingStateConv>,
+    Entry<StateCommand, crtk_msgs::msg::StringStamped, crtk_msgs::msg::StringStampedPubSubType,
+          StateCommandConv>,
+    Entry<FaultInfo, crtk_msgs::msg::StringStamped, crtk_msgs::msg::StringStampedPubSubType, FaultInfoConv>,
+    Entry<ButtonEvent, sensor_msgs::msg::Joy, sensor_msgs::msg::JoyPubSubType, ButtonConv>,
+    Data<double, std_msgs::msg::Float64, std_msgs::msg::Float64PubSubType>,
+    Data<std::int64_t, std_msgs::msg::Int64, std_msgs::msg::Int64PubSubType>,
+    Data<bool, std_msgs::msg::Bool, std_msgs::msg::BoolPubSubType>>;
+constexpr std::size_t sample_kinds = std::tuple_size_v<Samples>;
+
+void run_sample(std::size_t kind, const std::uint8_t* d, std::size_t n) {
+  [&]<std::size_t... I>(std::index_sequence<I...>) {
+    ((kind == I ? std::tuple_element_t<I, Samples>::run(d, n) : void()), ...);
+  }
+  (std::make_index_sequence<sample_kinds>{});
+}
+
+const bool list_checked = [] {
+  const bool all = [&]<std::size_t... I>(std::index_sequence<I...>) {
+    return (std::tuple_element_t<I, Samples>::listed() && ...);
+  }
+  (std::make_index_sequence<sample_kinds>{});
+  if (!all || mappings().size() != sample_kinds)
+    defect("the fuzzer's list differs from type_map.cpp's mappings");
+  return true;
+}();
+
+// A qualified-read request as the gateway's query thread takes it.
+void query(const std::uint8_t* d, std::size_t n) {
+  saw_msgs::msg::QueryPubSubType type;
+  Payload p = payload_of(d, n);
+  saw_msgs::msg::Query q;
+  try {
+    if (type.deserialize(&p, &q)) (void)q.data().size();
+  } catch (const eprosima::fastcdr::exception::Exception&) {  // dropped by serve_queries()
+  }
+}
+
+// The reply filter on any payload (it reads the serialized `client` itself).
+void reply_filter(const std::uint8_t* d, std::size_t n) {
+  Payload p = payload_of(d, n);
+  const ClientFilter filter(42);
+  (void)filter.evaluate(p, {}, {});
+}
+
+// sawctl call: text parsed into a value and validated as a sample.
+void from_text(const std::uint8_t* d, std::size_t n) {
+  if (n == 0) return;
+  const Mapping& m = *mappings()[d[0] % sample_kinds];
+  alignas(16) std::byte value[sizeof(JointState)];
+  std::string why;
+  if (!m.from_text(std::string_view(reinterpret_cast<const char*>(d + 1), n - 1), value, why) && why.empty())
+    defect("text rejected without a reason");
+}
+
+}  // namespace
+}  // namespace saw::gateway
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace saw::gateway;
+  if (size == 0) return 0;
+  const std::size_t what = data[0], kinds = sample_kinds;
+  if (what < kinds)
+    run_sample(what, data + 1, size - 1);
+  else if (what == kinds)
+    query(data + 1, size - 1);
+  else if (what == kinds + 1)
+    reply_filter(data + 1, size - 1);
+  else if (what == kinds + 2)
+    from_text(data + 1, size - 1);
+  return 0;
+}
