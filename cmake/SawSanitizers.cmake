@@ -1,5 +1,5 @@
-# ASan builds: Fast DDS 2.9's own new-delete-type-mismatch (in ~RTPSWriter) is let through by
-# that destructor's name and nothing else; tests/sanitizers/fastdds_sized_delete.cpp says why.
+# ASan builds: Fast DDS 2.9's own new-delete-type-mismatch (in ~RTPSWriter and ~RTPSReader) is
+# let through by those destructors' names and nothing else; tests/sanitizers/fastdds_sized_delete.cpp says why.
 # The replacement operator delete must be in the executable (a library would come after ASan's
 # runtime), so every executable that links Fast DDS gets the object file on its link line.
 if(CMAKE_CXX_FLAGS MATCHES "sanitize=[a-z,-]*address")

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the fuzz targets (libFuzzer, the `fuzz` preset) for a bounded time each, from their corpus.
-#   tests/fuzz/run.sh                      every target, 60 s each (CI)
+#   tests/fuzz/run.sh                      every target, 60 s each
 #   tests/fuzz/run.sh --time 3600 [name…]  longer, or only the targets named (e.g. deploy_yaml)
 #   tests/fuzz/run.sh --runs N --seed S     N inputs each from seed S: the same run on any machine
 #                                           (CI: what passed before landing passes in CI)
