@@ -284,10 +284,11 @@ std::uint32_t reclaim_stale_slots(const SegmentView& v, std::int64_t now, std::i
 }
 
 bool segment_owner_alive(const void* mapping, std::size_t size) noexcept {
-  if (size < 24) return false;  // a creation that died before writing its header
+  if (size < sizeof(SegmentHeader)) return false;  // a creation that died before sizing it
   const auto* h = static_cast<const SegmentHeader*>(mapping);
-  if (h->magic == 0) return false;
-  if (h->magic != segment_magic) return true;  // not ours to remove
+  // A zero magic is a creation that died before writing its header, or a live owner's header
+  // that a peer scribbled over: the owner's pid and heartbeat below tell which.
+  if (h->magic != 0 && h->magic != segment_magic) return true;  // not ours to remove
   if (process_alive(h->owner_pid.load(std::memory_order_acquire))) return true;
   // Its pid is gone here, but the owner may live in another pid namespace: it does if its
   // heartbeat still moves (a killed owner's last beat stays as it was).

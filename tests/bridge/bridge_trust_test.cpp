@@ -261,6 +261,27 @@ TEST(BridgeTrust, AClientKilledAsleepLeavesNoWakeUpBehindAndItsSlotIsFreed) {
   EXPECT_EQ(v.client_slot(0).update_waiting.load(), 0u) << "the server would wake a futex every cycle";
 }
 
+// A segment is never unlinked while its owner lives, whatever was written over its header: a
+// peer that zeroed the magic word (as an owner that died during creation leaves it) once made the
+// next server of that name take a live server's segment over.
+TEST(BridgeTrust, ALiveServersSegmentIsNotTakenOverWhenItsHeaderIsScribbled) {
+  Served s("town");
+  ASSERT_EQ(as_hostile_client(s.name,
+                              [](const SegmentView& v, ShmSegment&) {
+                                v.header().magic = 0;
+                                return 0;
+                              }),
+            0);
+  Device second(s.name);
+  try {
+    Exporter e(second, "arm");
+    ADD_FAILURE() << "a live server's segment was taken over";
+  } catch (const BridgeError& e) {
+    EXPECT_NE(std::string(e.what()).find("in use by a live process"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(s.keeps_cycling());
+}
+
 // Two client tasks in one process sharing one remote server's ring would be two producers on an
 // SPSC ring. The second is refused at connect, with the reason; a reader may still connect.
 TEST(BridgeTrust, TwoClientsInOneProcessCannotShareARemoteServersRings) {
