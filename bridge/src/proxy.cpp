@@ -89,9 +89,9 @@ void Proxy::build_interface(const Link& l) {
   interface_hash_ = h.interface_hash;
   incarnation_ = h.incarnation;
   mirror_bytes_ = (std::size_t{layout.mirror_words} - 1) * 8;
-  events_ = std::make_unique<Mailbox>(name() + " events (shared memory)", &l.server().events_head,
-                                      &l.client().events_tail, l.view.event_storage(l.slot),
-                                      layout.ring_capacity, layout.event_slot_size);
+  events_ = std::make_unique<detail::Mailbox>(name() + " events (shared memory)", &l.server().events_head,
+                                              &l.client().events_tail, l.view.event_storage(l.slot),
+                                              layout.ring_capacity, layout.event_slot_size);
   auto& p = provide(std::string(h.interface));
   const auto type = [&](const char* name, std::uint32_t size, std::uint32_t version) {
     type_names_.emplace_back(name);
@@ -107,7 +107,7 @@ void Proxy::build_interface(const Link& l) {
       p.add_event_remote(e.name, sig);
       // Numbered by ordinal among events (as the exporter sends them); a no-op until connect binds a handler.
       events_->set_target(static_cast<std::uint32_t>(p.events().size() - 1),
-                          Invoker{[](void*, const void*) {}, nullptr});
+                          detail::Invoker{[](void*, const void*) {}, nullptr});
       continue;
     }
     Command c;
@@ -147,7 +147,7 @@ void Proxy::build_interface(const Link& l) {
           return Status::queue_full;
         }
         std::memcpy(rec, &i, sizeof i);
-        if (size != 0) std::memcpy(rec + Mailbox::header_bytes(), arg, size);
+        if (size != 0) std::memcpy(rec + detail::Mailbox::header_bytes(), arg, size);
         lk.commands->commit();
         return Status::ok;
       };

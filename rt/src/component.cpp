@@ -57,7 +57,7 @@ RequiredInterface* Component::required(std::string_view name) const noexcept {
 
 std::size_t Component::process_mailboxes() noexcept {
   std::size_t n = 0;
-  for (Mailbox* m : inbound_) n += m->drain();
+  for (detail::Mailbox* m : inbound_) n += m->drain();
   return n;
 }
 

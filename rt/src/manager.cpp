@@ -142,12 +142,12 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
       max_arg = std::max(max_arg, c->signature.arg.size);
     }
   }
-  Mailbox* commands = nullptr;
+  detail::Mailbox* commands = nullptr;
   if (any_queued && server.has_thread()) {
-    mailboxes_.push_back(
-        std::make_unique<Mailbox>(std::string(client_name) + "." + std::string(required_name) + " -> " +
-                                      std::string(server_name) + "." + std::string(provided_name),
-                                  prov->mailbox_capacity(), max_arg));
+    mailboxes_.push_back(std::make_unique<detail::Mailbox>(
+        std::string(client_name) + "." + std::string(required_name) + " -> " + std::string(server_name) +
+            "." + std::string(provided_name),
+        prov->mailbox_capacity(), max_arg));
     commands = mailboxes_.back().get();
     server.add_inbound(commands);
   }
@@ -177,8 +177,8 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
       any_events = true;
       max_arg = std::max(max_arg, h->signature.arg.size);
     }
-  Mailbox* events = nullptr;
-  if (Mailbox* remote = server.remote_events(); any_events && remote != nullptr) {
+  detail::Mailbox* events = nullptr;
+  if (detail::Mailbox* remote = server.remote_events(); any_events && remote != nullptr) {
     // The server is in another process: its events arrive in the proxy's ring, numbered as the
     // proxy's provided events; the client's thread drains that ring.
     if (!client.has_thread())
@@ -196,7 +196,7 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
     return;
   }
   if (any_events && client.has_thread()) {
-    mailboxes_.push_back(std::make_unique<Mailbox>(
+    mailboxes_.push_back(std::make_unique<detail::Mailbox>(
         std::string(server_name) + "." + std::string(provided_name) + " events -> " +
             std::string(client_name) + "." + std::string(required_name),
         req->event_capacity(), max_arg));

@@ -4,6 +4,7 @@
 #include <ctime>
 #include <stdexcept>
 
+#include "saw/detail/pacer.hpp"
 #include "saw/rt_context.hpp"
 #include "saw/rt_thread.hpp"
 
@@ -69,7 +70,7 @@ void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) 
   // The first multiple of the period at or after the common start, plus this task's offset.
   const TimeNs period = config_.period.count();
   const TimeNs first = (first_wakeup + period - 1) / period * period + config_.offset.count();
-  Pacer pacer(first, period);
+  detail::Pacer pacer(first, period);
   while (running.load(std::memory_order_acquire)) {
     const TimeNs scheduled = pacer.next_wakeup();
     const timespec ts = to_timespec(scheduled);

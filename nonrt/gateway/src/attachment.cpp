@@ -103,13 +103,14 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
     // Numbered by ordinal among the interface's events, as the proxy's mailbox numbers them.
     proxy_->remote_events()->set_target(
         static_cast<std::uint32_t>(events_.size()),
-        Invoker{[](void* self, const void* arg) {
-                  auto* o = static_cast<EventOut*>(self);
-                  if (o->writer == nullptr) return;
-                  o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()), o->self->name_);
-                  o->self->event_count_.fetch_add(1, std::memory_order_relaxed);
-                },
-                out.get()});
+        detail::Invoker{[](void* self, const void* arg) {
+                          auto* o = static_cast<EventOut*>(self);
+                          if (o->writer == nullptr) return;
+                          o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()),
+                                            o->self->name_);
+                          o->self->event_count_.fetch_add(1, std::memory_order_relaxed);
+                        },
+                        out.get()});
     events_.push_back(std::move(out));
     endpoints_.push_back(std::move(info));
   }

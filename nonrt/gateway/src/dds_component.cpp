@@ -21,7 +21,7 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
   std::size_t max_event = 8;
   for (const auto& e : remote)
     if (e.kind.ends_with("event")) max_event = std::max<std::size_t>(max_event, e.saw_size);
-  events_ = std::make_unique<Mailbox>(name + " events (DDS)", 64, max_event);
+  events_ = std::make_unique<detail::Mailbox>(name + " events (DDS)", 64, max_event);
   for (const auto& e : remote) {
     if (e.interface_name != p.name() || e.topic.empty()) continue;
     const TypeInfo t = type(e.saw_type, e.saw_size, e.saw_version);
@@ -93,7 +93,7 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
       p.add_event_remote(e.name,
                          {e.kind == "write_event" ? CommandKind::write_event : CommandKind::void_event, t});
       const auto ordinal = static_cast<std::uint32_t>(p.events().size() - 1);
-      events_->set_target(ordinal, Invoker{[](void*, const void*) {}, nullptr});
+      events_->set_target(ordinal, detail::Invoker{[](void*, const void*) {}, nullptr});
       event_ins_.push_back({m, r, ordinal});
     }
   }

@@ -56,7 +56,7 @@ class Component {
   virtual void run() {}
 
   // A proxy of a component in another process returns the mailbox its events arrive in.
-  virtual Mailbox* remote_events() noexcept { return nullptr; }
+  virtual detail::Mailbox* remote_events() noexcept { return nullptr; }
   // True for a proxy of a component in another process: a call may have to wait for it.
   virtual bool is_remote() const noexcept { return false; }
 
@@ -69,7 +69,7 @@ class Component {
   void add_cycle_hook(CycleHook* h) { hooks_.push_back(h); }
 
   // For tasks and the manager.
-  void add_inbound(Mailbox* m) {
+  void add_inbound(detail::Mailbox* m) {
     m->set_consumer_attached();
     inbound_.push_back(m);
   }
@@ -84,7 +84,7 @@ class Component {
   std::vector<std::unique_ptr<ProvidedInterface>> provided_;
   std::vector<std::unique_ptr<RequiredInterface>> required_;
   StateTable state_table_;
-  std::vector<Mailbox*> inbound_;
+  std::vector<detail::Mailbox*> inbound_;
   std::vector<CycleHook*> hooks_;
   TimeNs cycle_time_ = 0;
   TimeNs row_time_ = 0;

@@ -10,9 +10,9 @@ namespace saw {
 
 // What connect() fills in: where a call goes. Set before start, read-only while running.
 struct FunctionBinding {
-  Mailbox* mailbox = nullptr;  // queued void/write: the server's mailbox for this connection
+  detail::Mailbox* mailbox = nullptr;  // queued void/write: the server's mailbox for this connection
   std::uint32_t target = 0;
-  Invoker direct{};                  // void/write to a server without a thread: run now
+  detail::Invoker direct{};          // void/write to a server without a thread: run now
   const Command* forward = nullptr;  // void/write to a proxy: hand on now, with its status
   const Command* command = nullptr;  // read, qualified read
   bool check_values = false;         // the server is in another process: results are checked

@@ -81,7 +81,7 @@ class Manager {
   ManagerOptions options_;
   std::vector<Component*> components_;
   std::vector<std::unique_ptr<Component>> owned_;
-  std::vector<std::unique_ptr<Mailbox>> mailboxes_;
+  std::vector<std::unique_ptr<detail::Mailbox>> mailboxes_;
   std::vector<std::unique_ptr<RemoteResolver>> resolvers_;
   // Remote server → the one local client that uses its command and event rings.
   std::map<std::string, std::string, std::less<>> remote_users_;

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "saw/command_kind.hpp"
-#include "saw/invoker.hpp"
-#include "saw/mailbox.hpp"
+#include "saw/detail/invoker.hpp"
+#include "saw/detail/mailbox.hpp"
 #include "saw/state_table.hpp"
 
 namespace saw {
@@ -33,7 +33,7 @@ struct Command {
   std::uint32_t column = 0;
   std::optional<Limits> limits;  // write commands (see Limits)
 
-  Invoker invoker() {
+  detail::Invoker invoker() {
     return {[](void* self, const void* arg) { static_cast<Command*>(self)->execute(arg); }, this};
   }
 };
@@ -41,9 +41,9 @@ struct Command {
 // One observer of an event: a mailbox slot in the observer's thread, or a direct call when
 // the observer has no thread of its own.
 struct Observer {
-  Mailbox* mailbox = nullptr;
+  detail::Mailbox* mailbox = nullptr;
   std::uint32_t target = 0;
-  Invoker direct{};
+  detail::Invoker direct{};
 };
 
 // Events are emitted from the server's thread only (one producer per observer mailbox).

@@ -27,7 +27,7 @@ struct EventHandler {
   std::function<void(const void*)> handle;
   bool bound = false;
 
-  Invoker invoker() {
+  detail::Invoker invoker() {
     return {[](void* self, const void* arg) { static_cast<EventHandler*>(self)->handle(arg); }, this};
   }
 };

@@ -8,7 +8,6 @@
 
 #include "saw/component.hpp"
 #include "saw/latency_histogram.hpp"
-#include "saw/pacer.hpp"
 
 namespace saw {
 

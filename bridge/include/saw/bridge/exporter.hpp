@@ -64,7 +64,7 @@ class Exporter : public Component::CycleHook {
     std::uint32_t offset, size;
   };
   struct Slot {
-    std::unique_ptr<SpscRing> commands, events;  // consumer and producer views, own indices private
+    std::unique_ptr<detail::SpscRing> commands, events;  // consumer and producer views, own indices private
   };
   using Counter = std::atomic<std::uint64_t>;
   static std::uint64_t load(const Counter& c) noexcept { return c.load(std::memory_order_relaxed); }
