@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "saw/bridge/futex.hpp"
+#include "saw/detail/access.hpp"
 #include "saw/detail/mailbox.hpp"
 
 namespace saw::bridge {
@@ -99,7 +100,7 @@ Exporter::Exporter(Component& component, const std::string& provided, ExportOpti
   last_reply_.assign(layout.slot_count, 0);
   for (std::uint32_t i = 0; i < layout.slot_count; ++i)
     slots_.push_back(Slot{make_command_ring(view_, i), make_event_ring(view_, i)});
-  component.add_cycle_hook(this);
+  detail::Access::add_cycle_hook(component, this);
   service_ = std::thread([this] { serve(); });
   view_.header().heartbeat.store(monotonic_now(), std::memory_order_relaxed);
   view_.header().state.store(static_cast<std::uint32_t>(SegmentState::ready), std::memory_order_release);
@@ -148,13 +149,13 @@ void Exporter::describe(const ProvidedInterface& p) {
     const auto ordinal = static_cast<std::uint32_t>(taps_.size());
     taps_.push_back(std::make_unique<EventTap>(
         EventTap{this, ordinal, static_cast<std::uint32_t>(ev->signature().arg.size)}));
-    Observer o;
+    detail::Observer o;
     o.direct = {[](void* self, const void* arg) {
                   auto* t = static_cast<EventTap*>(self);
                   t->exporter->emit(t->index, arg, t->size);
                 },
                 taps_.back().get()};
-    ev->add_observer(o);
+    detail::Access::add_observer(*ev, o);
     ++index;
   }
   staging_.resize(offset + 8);

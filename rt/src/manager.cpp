@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <thread>
 
+#include "saw/detail/access.hpp"
+
 namespace saw {
 namespace {
 
@@ -14,6 +16,15 @@ std::string names_of(const List& list, Name name) {
   std::string out;
   for (const auto& x : list) out += (out.empty() ? "" : ", ") + quoted(name(x));
   return out.empty() ? "none" : out;
+}
+
+// What a mailbox slot or a direct call runs: a command's execute, a handler's handle.
+detail::Invoker execute_of(Command& c) {
+  return {[](void* self, const void* arg) { static_cast<Command*>(self)->execute(arg); }, &c};
+}
+
+detail::Invoker handler_of(EventHandler& h) {
+  return {[](void* self, const void* arg) { static_cast<EventHandler*>(self)->handle(arg); }, &h};
 }
 
 }  // namespace
@@ -128,7 +139,7 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
   const auto connected = [&] {
     if (server.is_remote() && uses_rings)
       remote_users_.emplace(std::string(server_name), std::string(client_name));
-    req->set_connected_to(std::string(server_name) + "." + std::string(provided_name));
+    detail::Access::set_connected_to(*req, std::string(server_name) + "." + std::string(provided_name));
   };
 
   // Commands: queued into a mailbox the server drains, unless the server has no thread.
@@ -149,24 +160,25 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
             "." + std::string(provided_name),
         prov->mailbox_capacity(), max_arg));
     commands = mailboxes_.back().get();
-    server.add_inbound(commands);
+    detail::Access::add_inbound(server, commands);
   }
   for (const auto& f : req->functions()) {
     Command* c = prov->find_command(f.name);
     if (c == nullptr) continue;
-    FunctionBinding b;
+    detail::FunctionBinding b;
     if (c->signature.kind == CommandKind::read || c->signature.kind == CommandKind::qualified_read) {
       b.command = c;
+      if (const auto& stamped = detail::Access::read_stamped(*c)) b.stamped = &stamped;
       b.check_values = server.is_remote();  // bytes from another process: checked as the client's type
     } else if (commands != nullptr) {
       b.mailbox = commands;
-      b.target = commands->add_target(c->invoker());
-    } else if (c->forward) {
-      b.forward = c;
+      b.target = commands->add_target(execute_of(*c));
+    } else if (const auto& forward = detail::Access::forward(*c)) {
+      b.forward = &forward;
     } else {
-      b.direct = c->invoker();
+      b.direct = execute_of(*c);
     }
-    f.function->bind(b);
+    detail::Access::bind(*f.function, b);
   }
 
   // Events: queued into a mailbox the client drains, unless the client has no thread.
@@ -178,7 +190,7 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
       max_arg = std::max(max_arg, h->signature.arg.size);
     }
   detail::Mailbox* events = nullptr;
-  if (detail::Mailbox* remote = server.remote_events(); any_events && remote != nullptr) {
+  if (detail::Mailbox* remote = detail::Access::remote_events(server); any_events && remote != nullptr) {
     // The server is in another process: its events arrive in the proxy's ring, numbered as the
     // proxy's provided events; the client's thread drains that ring.
     if (!client.has_thread())
@@ -187,11 +199,11 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
       const auto& evs = prov->events();
       for (std::size_t i = 0; i < evs.size(); ++i)
         if (evs[i]->name() == h->name) {
-          remote->set_target(static_cast<std::uint32_t>(i), h->invoker());
+          remote->set_target(static_cast<std::uint32_t>(i), handler_of(*h));
           h->bound = true;
         }
     }
-    client.add_inbound(remote);
+    detail::Access::add_inbound(client, remote);
     connected();
     return;
   }
@@ -201,19 +213,19 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
             std::string(client_name) + "." + std::string(required_name),
         req->event_capacity(), max_arg));
     events = mailboxes_.back().get();
-    client.add_inbound(events);
+    detail::Access::add_inbound(client, events);
   }
   for (const auto& h : req->handlers()) {
     EventBase* e = prov->find_event(h->name);
     if (e == nullptr) continue;
-    Observer o;
+    detail::Observer o;
     if (events != nullptr) {
       o.mailbox = events;
-      o.target = events->add_target(h->invoker());
+      o.target = events->add_target(handler_of(*h));
     } else {
-      o.direct = h->invoker();
+      o.direct = handler_of(*h);
     }
-    e->add_observer(o);
+    detail::Access::add_observer(*e, o);
     h->bound = true;
   }
   connected();
@@ -233,7 +245,7 @@ void Manager::prepare_components() {
   for (auto* c : components_) {
     c->state_table().finalize();
     c->startup();
-    c->set_lifecycle(Lifecycle::ready);
+    detail::Access::set_lifecycle(*c, Lifecycle::ready);
   }
 }
 
@@ -256,10 +268,10 @@ void Manager::start() {
   prepare_components();
   running_.store(true, std::memory_order_release);
   first_wakeup_.store(0, std::memory_order_relaxed);
-  for (auto* c : components_) c->set_lifecycle(Lifecycle::active);
-  for (auto* t : tasks) t->start_thread(first_wakeup_, running_);
+  for (auto* c : components_) detail::Access::set_lifecycle(*c, Lifecycle::active);
+  for (auto* t : tasks) detail::Access::start_thread(*t, first_wakeup_, running_);
   for (auto* t : tasks)
-    while (!t->thread_ready()) std::this_thread::yield();  // start-up only, not an RT path
+    while (!detail::Access::thread_ready(*t)) std::this_thread::yield();  // start-up only, not an RT path
   // Every periodic task shares one phase: the first wake-up is one period after all are set up.
   TimeNs lead = 1'000'000;
   for (auto* t : tasks)
@@ -284,7 +296,7 @@ void Manager::start_stepped(TimeNs t0) {
   sim_time_ = t0;
   stepped_.clear();
   for (auto* c : components_) {
-    c->set_lifecycle(Lifecycle::active);
+    detail::Access::set_lifecycle(*c, Lifecycle::active);
     if (auto* t = dynamic_cast<Task*>(c)) stepped_.push_back({t, t0});
   }
   // Shorter periods first; among equals, the order the tasks were added.
@@ -308,7 +320,7 @@ TimeNs Manager::step() {
   sim_time_ = next;
   for (auto& s : stepped_) {
     if (s.next != next) continue;
-    s.task->step(next);
+    detail::Access::step(*s.task, next);
     const TimeNs period =
         s.task->config().is_periodic() ? s.task->config().period.count() : continuous_period_;
     s.next += period;
@@ -330,10 +342,10 @@ void Manager::stop() {
   if (state_ != ManagerState::running && state_ != ManagerState::stepping) return;
   running_.store(false, std::memory_order_release);
   for (auto* c : components_)
-    if (auto* t = dynamic_cast<Task*>(c)) t->join();
+    if (auto* t = dynamic_cast<Task*>(c)) detail::Access::join(*t);
   for (auto* c : components_) {
     c->cleanup();
-    c->set_lifecycle(Lifecycle::finished);
+    detail::Access::set_lifecycle(*c, Lifecycle::finished);
   }
   dma_hold_.reset();
   log_drain_.reset();

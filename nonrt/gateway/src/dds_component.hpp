@@ -26,10 +26,11 @@ class DdsComponent : public Component {
                const std::vector<EndpointInfo>& remote, TimeNs query_timeout, TimeNs stale_after);
   ~DdsComponent() override;
 
-  detail::Mailbox* remote_events() noexcept override { return events_.get(); }
   bool is_remote() const noexcept override { return true; }
 
  private:
+  detail::Mailbox* remote_events() noexcept override { return events_.get(); }
+
   struct State {
     const Mapping* mapping;
     fdds::DataReader* reader;

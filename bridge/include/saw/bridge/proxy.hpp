@@ -45,7 +45,6 @@ class Proxy : public Component {
         ProxyOptions options = {});
   ~Proxy() override;
 
-  detail::Mailbox* remote_events() noexcept override { return events_.get(); }
   bool is_remote() const noexcept override { return true; }
   // From the calling thread.
   bool server_alive() noexcept { return alive(link()); }
@@ -63,6 +62,8 @@ class Proxy : public Component {
   bool wait_for_update(std::uint32_t& seen, TimeNs timeout) noexcept;
 
  private:
+  detail::Mailbox* remote_events() noexcept override { return events_.get(); }
+
   struct Link {
     ShmSegment segment;
     SegmentView view;
