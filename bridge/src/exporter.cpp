@@ -5,7 +5,8 @@
 #include <cstring>
 
 #include "saw/bridge/futex.hpp"
-#include "saw/mailbox.hpp"
+#include "saw/detail/access.hpp"
+#include "saw/detail/mailbox.hpp"
 
 namespace saw::bridge {
 namespace {
@@ -73,7 +74,7 @@ LayoutParams params_of(const Component& component, const ProvidedInterface& p, c
   }
   lp.mirror_bytes = mirror;
   lp.slot_count = o.slots;
-  lp.ring_capacity = static_cast<std::uint32_t>(SpscRing::round_capacity(o.ring_capacity));
+  lp.ring_capacity = static_cast<std::uint32_t>(detail::SpscRing::round_capacity(o.ring_capacity));
   lp.command_payload = command_payload;
   lp.event_payload = event_payload;
   return lp;
@@ -99,7 +100,7 @@ Exporter::Exporter(Component& component, const std::string& provided, ExportOpti
   last_reply_.assign(layout.slot_count, 0);
   for (std::uint32_t i = 0; i < layout.slot_count; ++i)
     slots_.push_back(Slot{make_command_ring(view_, i), make_event_ring(view_, i)});
-  component.add_cycle_hook(this);
+  detail::Access::add_cycle_hook(component, this);
   service_ = std::thread([this] { serve(); });
   view_.header().heartbeat.store(monotonic_now(), std::memory_order_relaxed);
   view_.header().state.store(static_cast<std::uint32_t>(SegmentState::ready), std::memory_order_release);
@@ -148,13 +149,13 @@ void Exporter::describe(const ProvidedInterface& p) {
     const auto ordinal = static_cast<std::uint32_t>(taps_.size());
     taps_.push_back(std::make_unique<EventTap>(
         EventTap{this, ordinal, static_cast<std::uint32_t>(ev->signature().arg.size)}));
-    Observer o;
+    detail::Observer o;
     o.direct = {[](void* self, const void* arg) {
                   auto* t = static_cast<EventTap*>(self);
                   t->exporter->emit(t->index, arg, t->size);
                 },
                 taps_.back().get()};
-    ev->add_observer(o);
+    detail::Access::add_observer(*ev, o);
     ++index;
   }
   staging_.resize(offset + 8);
@@ -230,20 +231,20 @@ void Exporter::serve() {
 void Exporter::emit(std::uint32_t index, const void* arg, std::size_t size) noexcept {
   for (std::uint32_t i = 0; i < slots_.size(); ++i) {
     if (view_.client_slot(i).owner.load(std::memory_order_acquire) == 0) continue;
-    SpscRing& ring = *slots_[i].events;
+    detail::SpscRing& ring = *slots_[i].events;
     std::byte* rec = ring.try_reserve();
     if (rec == nullptr) {
       bump(events_refused_);
       continue;
     }
     std::memcpy(rec, &index, sizeof index);
-    if (size != 0) std::memcpy(rec + Mailbox::header_bytes(), arg, size);
+    if (size != 0) std::memcpy(rec + detail::Mailbox::header_bytes(), arg, size);
     ring.commit();
   }
 }
 
 void Exporter::run_commands(Slot& slot) noexcept {
-  SpscRing& ring = *slot.commands;
+  detail::SpscRing& ring = *slot.commands;
   // At most one ring's worth per cycle, as local mailboxes.
   for (std::size_t n = 0; n < ring.capacity(); ++n) {
     const std::byte* rec = ring.front();
@@ -253,7 +254,7 @@ void Exporter::run_commands(Slot& slot) noexcept {
     std::uint32_t index = 0;
     std::memcpy(&index, record_.data(), sizeof index);
     Command* c = index < commands_.size() ? commands_[index] : nullptr;
-    const std::byte* arg = record_.data() + Mailbox::header_bytes();
+    const std::byte* arg = record_.data() + detail::Mailbox::header_bytes();
     const bool runs =
         c != nullptr && c->execute &&
         (c->signature.kind == CommandKind::void_command || c->signature.kind == CommandKind::write) &&

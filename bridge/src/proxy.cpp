@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "saw/bridge/futex.hpp"
+#include "saw/detail/access.hpp"
 
 namespace saw::bridge {
 namespace {
@@ -89,9 +90,9 @@ void Proxy::build_interface(const Link& l) {
   interface_hash_ = h.interface_hash;
   incarnation_ = h.incarnation;
   mirror_bytes_ = (std::size_t{layout.mirror_words} - 1) * 8;
-  events_ = std::make_unique<Mailbox>(name() + " events (shared memory)", &l.server().events_head,
-                                      &l.client().events_tail, l.view.event_storage(l.slot),
-                                      layout.ring_capacity, layout.event_slot_size);
+  events_ = std::make_unique<detail::Mailbox>(name() + " events (shared memory)", &l.server().events_head,
+                                              &l.client().events_tail, l.view.event_storage(l.slot),
+                                              layout.ring_capacity, layout.event_slot_size);
   auto& p = provide(std::string(h.interface));
   const auto type = [&](const char* name, std::uint32_t size, std::uint32_t version) {
     type_names_.emplace_back(name);
@@ -104,10 +105,10 @@ void Proxy::build_interface(const Link& l) {
     const Signature sig{kind, e.arg_size ? type(e.arg_type, e.arg_size, e.arg_version) : TypeInfo{},
                         e.result_size ? type(e.result_type, e.result_size, e.result_version) : TypeInfo{}};
     if (kind == CommandKind::void_event || kind == CommandKind::write_event) {
-      p.add_event_remote(e.name, sig);
+      detail::Access::add_event_remote(p, e.name, sig);
       // Numbered by ordinal among events (as the exporter sends them); a no-op until connect binds a handler.
       events_->set_target(static_cast<std::uint32_t>(p.events().size() - 1),
-                          Invoker{[](void*, const void*) {}, nullptr});
+                          detail::Invoker{[](void*, const void*) {}, nullptr});
       continue;
     }
     Command c;
@@ -116,7 +117,8 @@ void Proxy::build_interface(const Link& l) {
     if (e.has_limits != 0) c.limits = Limits{e.limit_min, e.limit_max};
     if (kind == CommandKind::read) {
       const std::uint32_t offset = e.mirror_offset, size = e.arg_size;
-      c.read_stamped = [this, offset, size](void* out, RowStamp& stamp) {
+      auto& stamped = detail::Access::read_stamped(c);
+      stamped = [this, offset, size](void* out, RowStamp& stamp) {
         Link& lk = link();
         if (!alive(lk)) return Status::disconnected;
         alignas(16) std::byte block[max_mirror_bytes + 8];
@@ -126,7 +128,7 @@ void Proxy::build_interface(const Link& l) {
         std::memcpy(out, block + offset, size);
         return Status::ok;
       };
-      c.read = [f = c.read_stamped](const void*, void* out) {
+      c.read = [f = stamped](const void*, void* out) {
         RowStamp ignored;
         return f(out, ignored);
       };
@@ -137,7 +139,7 @@ void Proxy::build_interface(const Link& l) {
       };
     } else {
       c.execute = [](const void*) {};  // never used: forward takes the call
-      c.forward = [this, i, size = e.arg_size](const void* arg) {
+      detail::Access::forward(c) = [this, i, size = e.arg_size](const void* arg) {
         Link& lk = link();
         if (!alive(lk)) return Status::disconnected;
         std::byte* rec = lk.commands->try_reserve();
@@ -147,12 +149,12 @@ void Proxy::build_interface(const Link& l) {
           return Status::queue_full;
         }
         std::memcpy(rec, &i, sizeof i);
-        if (size != 0) std::memcpy(rec + Mailbox::header_bytes(), arg, size);
+        if (size != 0) std::memcpy(rec + detail::Mailbox::header_bytes(), arg, size);
         lk.commands->commit();
         return Status::ok;
       };
     }
-    p.add_command(std::move(c));
+    detail::Access::add_command(p, std::move(c));
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "saw/detail/cycle_hook.hpp"
+
 namespace saw {
 
 std::string_view to_string(Lifecycle l) {
@@ -55,9 +57,14 @@ RequiredInterface* Component::required(std::string_view name) const noexcept {
   return nullptr;
 }
 
+void Component::add_inbound(detail::Mailbox* m) {
+  m->set_consumer_attached();
+  inbound_.push_back(m);
+}
+
 std::size_t Component::process_mailboxes() noexcept {
   std::size_t n = 0;
-  for (Mailbox* m : inbound_) n += m->drain();
+  for (detail::Mailbox* m : inbound_) n += m->drain();
   return n;
 }
 
@@ -67,7 +74,7 @@ void Component::cycle(TimeNs time) noexcept {
   process_mailboxes();
   run();
   state_table_.advance(row_time_);
-  for (CycleHook* h : hooks_) h->after_cycle(*this, row_time_);
+  for (detail::CycleHook* h : hooks_) h->after_cycle(*this, row_time_);
 }
 
 }  // namespace saw

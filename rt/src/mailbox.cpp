@@ -1,6 +1,6 @@
-#include "saw/mailbox.hpp"
+#include "saw/detail/mailbox.hpp"
 
-namespace saw {
+namespace saw::detail {
 
 Mailbox::Mailbox(std::string name, std::size_t capacity, std::size_t max_payload)
     : name_(std::move(name)), own_(capacity, header_size + max_payload) {}
@@ -47,4 +47,4 @@ std::size_t Mailbox::drain() noexcept {
   return n;
 }
 
-}  // namespace saw
+}  // namespace saw::detail

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <thread>
 
+#include "saw/detail/access.hpp"
+
 namespace saw {
 namespace {
 
@@ -14,6 +16,28 @@ std::string names_of(const List& list, Name name) {
   std::string out;
   for (const auto& x : list) out += (out.empty() ? "" : ", ") + quoted(name(x));
   return out.empty() ? "none" : out;
+}
+
+bool is_queued(CommandKind k) { return k == CommandKind::write || k == CommandKind::void_command; }
+
+// Whether the connection sends commands to the server or takes events from it: through a
+// component in another process, that uses its rings.
+bool uses_rings(const RequiredInterface& req, const ProvidedInterface& prov) {
+  for (const auto& f : req.functions())
+    if (const Command* c = prov.find_command(f.name); c != nullptr && is_queued(c->signature.kind))
+      return true;
+  for (const auto& h : req.handlers())
+    if (prov.find_event(h->name) != nullptr) return true;
+  return false;
+}
+
+// What a mailbox slot or a direct call runs: a command's execute, a handler's handle.
+detail::Invoker execute_of(Command& c) {
+  return {[](void* self, const void* arg) { static_cast<Command*>(self)->execute(arg); }, &c};
+}
+
+detail::Invoker handler_of(EventHandler& h) {
+  return {[](void* self, const void* arg) { static_cast<EventHandler*>(self)->handle(arg); }, &h};
 }
 
 }  // namespace
@@ -48,10 +72,19 @@ Component& Manager::get(std::string_view name) const {
                      names_of(components_, [](const Component* c) { return c->name(); }) + ")");
 }
 
-void Manager::connect(std::string_view client_name, std::string_view required_name,
-                      std::string_view server_name, std::string_view provided_name) {
-  const std::string what = "connect " + quoted(client_name) + "." + quoted(required_name) + " -> " +
-                           quoted(server_name) + "." + quoted(provided_name) + ": ";
+// The two components and interfaces one connect() joins, found by name.
+struct Manager::Ends {
+  std::string what;  // "connect 'client'.'required' -> 'server'.'provided': ", for messages
+  Component& client;
+  RequiredInterface& required;
+  Component& server;
+  ProvidedInterface& provided;
+};
+
+Manager::Ends Manager::find_ends(std::string_view client_name, std::string_view required_name,
+                                 std::string_view server_name, std::string_view provided_name) {
+  std::string what = "connect " + quoted(client_name) + "." + quoted(required_name) + " -> " +
+                     quoted(server_name) + "." + quoted(provided_name) + ": ";
   if (state_ != ManagerState::idle) throw ConnectError(what + "the manager has already started");
   Component& client = get(client_name);
   if (find(server_name) == nullptr)
@@ -73,8 +106,13 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
                        names_of(server.provided_interfaces(), [](const auto& p) { return p->name(); }) + ")");
   if (req->is_connected())
     throw ConnectError(what + "the required interface is already connected to " + req->connected_to());
+  return {std::move(what), client, *req, server, *prov};
+}
 
-  // Check everything first, so a failed connect changes nothing; report every problem at once.
+// Everything connect() could refuse, checked before anything is bound; every mismatch at once.
+void Manager::check_ends(const Ends& e) const {
+  const RequiredInterface& req = e.required;
+  const ProvidedInterface& prov = e.provided;
   std::string errors;
   const auto check = [&](const std::string& name, const Signature& want, Need need, const Signature* have) {
     if (have == nullptr) {
@@ -87,136 +125,151 @@ void Manager::connect(std::string_view client_name, std::string_view required_na
                 ", the server provides " + to_string(*have, layout);
     }
   };
-  for (const auto& f : req->functions()) {
-    const Command* c = prov->find_command(f.name);
+  for (const auto& f : req.functions()) {
+    const Command* c = prov.find_command(f.name);
     check(f.name, f.function->signature(), f.need, c ? &c->signature : nullptr);
   }
-  for (const auto& h : req->handlers()) {
-    const EventBase* e = prov->find_event(h->name);
-    check(h->name, h->signature, h->need, e ? &e->signature() : nullptr);
+  for (const auto& h : req.handlers()) {
+    const EventBase* ev = prov.find_event(h->name);
+    check(h->name, h->signature, h->need, ev ? &ev->signature() : nullptr);
   }
-  if (!errors.empty()) throw ConnectError(what + "interfaces do not match:" + errors);
+  if (!errors.empty()) throw ConnectError(e.what + "interfaces do not match:" + errors);
+
   // A qualified read of a component in another process waits for that process: never from an RT task.
-  if (const auto* task = dynamic_cast<const Task*>(&client);
-      server.is_remote() && task != nullptr && task->config().priority > 0)
-    for (const auto& f : req->functions())
-      if (f.function->signature().kind == CommandKind::qualified_read &&
-          prov->find_command(f.name) != nullptr)
+  if (const auto* task = dynamic_cast<const Task*>(&e.client);
+      e.server.is_remote() && task != nullptr && task->config().priority > 0)
+    for (const auto& f : req.functions())
+      if (f.function->signature().kind == CommandKind::qualified_read && prov.find_command(f.name) != nullptr)
         throw ConnectError(
-            what + "'" + f.name + "' is a qualified read of a component in another process: it would make " +
-            "the real-time task '" + client.name() + "' (SCHED_FIFO " +
+            e.what + "'" + f.name +
+            "' is a qualified read of a component in another process: it would make " +
+            "the real-time task '" + e.client.name() + "' (SCHED_FIFO " +
             std::to_string(task->config().priority) +
             ") wait for that process. Read state instead, or call it from a non-RT component.");
 
   // A component in another process has one command ring and one event ring in this process,
   // each with a single producer or consumer: one client component may command it or observe
   // its events (any number may read its state).
-  bool uses_rings = false;
-  for (const auto& f : req->functions())
-    if (const Command* c = prov->find_command(f.name);
-        c != nullptr &&
-        (c->signature.kind == CommandKind::write || c->signature.kind == CommandKind::void_command))
-      uses_rings = true;
-  for (const auto& h : req->handlers()) uses_rings = uses_rings || prov->find_event(h->name) != nullptr;
-  if (server.is_remote() && uses_rings)
-    if (auto it = remote_users_.find(server_name); it != remote_users_.end() && it->second != client_name)
-      throw ConnectError(what + "component " + quoted(server_name) +
+  if (e.server.is_remote() && uses_rings(req, prov))
+    if (auto it = remote_users_.find(e.server.name());
+        it != remote_users_.end() && it->second != e.client.name())
+      throw ConnectError(e.what + "component " + quoted(e.server.name()) +
                          " is in another process and its commands and events are used by " +
                          quoted(it->second) + " already: one client component per process may send " +
                          "its commands or receive its events (each ring has one producer and one "
                          "consumer); others may read its state");
-  const auto connected = [&] {
-    if (server.is_remote() && uses_rings)
-      remote_users_.emplace(std::string(server_name), std::string(client_name));
-    req->set_connected_to(std::string(server_name) + "." + std::string(provided_name));
-  };
 
-  // Commands: queued into a mailbox the server drains, unless the server has no thread.
+  // A server in another process delivers its events into one ring, drained by the client's own thread.
+  bool any_events = false;
+  for (const auto& h : req.handlers()) any_events = any_events || prov.find_event(h->name) != nullptr;
+  if (any_events && detail::Access::remote_events(e.server) != nullptr && !e.client.has_thread())
+    throw ConnectError(e.what + "a client without a thread cannot receive events from another process");
+}
+
+// Commands: queued into a mailbox the server drains, unless the server has no thread.
+void Manager::bind_commands(const Ends& e) {
   std::size_t max_arg = 0;
   bool any_queued = false;
-  for (const auto& f : req->functions()) {
-    const Command* c = prov->find_command(f.name);
-    if (c == nullptr) continue;
-    if (c->signature.kind == CommandKind::write || c->signature.kind == CommandKind::void_command) {
+  for (const auto& f : e.required.functions())
+    if (const Command* c = e.provided.find_command(f.name); c != nullptr && is_queued(c->signature.kind)) {
       any_queued = true;
       max_arg = std::max(max_arg, c->signature.arg.size);
     }
-  }
-  Mailbox* commands = nullptr;
-  if (any_queued && server.has_thread()) {
-    mailboxes_.push_back(
-        std::make_unique<Mailbox>(std::string(client_name) + "." + std::string(required_name) + " -> " +
-                                      std::string(server_name) + "." + std::string(provided_name),
-                                  prov->mailbox_capacity(), max_arg));
+  detail::Mailbox* commands = nullptr;
+  if (any_queued && e.server.has_thread()) {
+    mailboxes_.push_back(std::make_unique<detail::Mailbox>(
+        e.client.name() + "." + e.required.name() + " -> " + e.server.name() + "." + e.provided.name(),
+        e.provided.mailbox_capacity(), max_arg));
     commands = mailboxes_.back().get();
-    server.add_inbound(commands);
+    detail::Access::add_inbound(e.server, commands);
   }
-  for (const auto& f : req->functions()) {
-    Command* c = prov->find_command(f.name);
+  for (const auto& f : e.required.functions()) {
+    Command* c = e.provided.find_command(f.name);
     if (c == nullptr) continue;
-    FunctionBinding b;
-    if (c->signature.kind == CommandKind::read || c->signature.kind == CommandKind::qualified_read) {
+    detail::FunctionBinding b;
+    if (!is_queued(c->signature.kind)) {
       b.command = c;
-      b.check_values = server.is_remote();  // bytes from another process: checked as the client's type
+      if (const auto& stamped = detail::Access::read_stamped(*c)) b.stamped = &stamped;
+      b.check_values = e.server.is_remote();  // bytes from another process: checked as the client's type
     } else if (commands != nullptr) {
       b.mailbox = commands;
-      b.target = commands->add_target(c->invoker());
-    } else if (c->forward) {
-      b.forward = c;
+      b.target = commands->add_target(execute_of(*c));
+    } else if (const auto& forward = detail::Access::forward(*c)) {
+      b.forward = &forward;
     } else {
-      b.direct = c->invoker();
+      b.direct = execute_of(*c);
     }
-    f.function->bind(b);
+    detail::Access::bind(*f.function, b);
   }
+}
 
-  // Events: queued into a mailbox the client drains, unless the client has no thread.
-  max_arg = 0;
+// Events: queued into a mailbox the client drains, unless the client has no thread.
+void Manager::bind_events(const Ends& e) {
+  RequiredInterface& req = e.required;
+  ProvidedInterface& prov = e.provided;
+  std::size_t max_arg = 0;
   bool any_events = false;
-  for (const auto& h : req->handlers())
-    if (prov->find_event(h->name) != nullptr) {
+  for (const auto& h : req.handlers())
+    if (prov.find_event(h->name) != nullptr) {
       any_events = true;
       max_arg = std::max(max_arg, h->signature.arg.size);
     }
-  Mailbox* events = nullptr;
-  if (Mailbox* remote = server.remote_events(); any_events && remote != nullptr) {
+  if (!any_events) return;
+  if (detail::Mailbox* remote = detail::Access::remote_events(e.server)) {
     // The server is in another process: its events arrive in the proxy's ring, numbered as the
     // proxy's provided events; the client's thread drains that ring.
-    if (!client.has_thread())
-      throw ConnectError(what + "a client without a thread cannot receive events from another process");
-    for (const auto& h : req->handlers()) {
-      const auto& evs = prov->events();
+    const auto& evs = prov.events();
+    for (const auto& h : req.handlers())
       for (std::size_t i = 0; i < evs.size(); ++i)
         if (evs[i]->name() == h->name) {
-          remote->set_target(static_cast<std::uint32_t>(i), h->invoker());
+          remote->set_target(static_cast<std::uint32_t>(i), handler_of(*h));
           h->bound = true;
         }
-    }
-    client.add_inbound(remote);
-    connected();
+    detail::Access::add_inbound(e.client, remote);
     return;
   }
-  if (any_events && client.has_thread()) {
-    mailboxes_.push_back(std::make_unique<Mailbox>(
-        std::string(server_name) + "." + std::string(provided_name) + " events -> " +
-            std::string(client_name) + "." + std::string(required_name),
-        req->event_capacity(), max_arg));
+  detail::Mailbox* events = nullptr;
+  if (e.client.has_thread()) {
+    mailboxes_.push_back(std::make_unique<detail::Mailbox>(
+        e.server.name() + "." + prov.name() + " events -> " + e.client.name() + "." + req.name(),
+        req.event_capacity(), max_arg));
     events = mailboxes_.back().get();
-    client.add_inbound(events);
+    detail::Access::add_inbound(e.client, events);
   }
-  for (const auto& h : req->handlers()) {
-    EventBase* e = prov->find_event(h->name);
-    if (e == nullptr) continue;
-    Observer o;
+  for (const auto& h : req.handlers()) {
+    EventBase* ev = prov.find_event(h->name);
+    if (ev == nullptr) continue;
+    detail::Observer o;
     if (events != nullptr) {
       o.mailbox = events;
-      o.target = events->add_target(h->invoker());
+      o.target = events->add_target(handler_of(*h));
     } else {
-      o.direct = h->invoker();
+      o.direct = handler_of(*h);
     }
-    e->add_observer(o);
+    detail::Access::add_observer(*ev, o);
     h->bound = true;
   }
-  connected();
+}
+
+void Manager::connect(std::string_view client, std::string_view required, std::string_view server,
+                      std::string_view provided) {
+  const Ends e = find_ends(client, required, server, provided);
+  check_ends(e);
+  bind_commands(e);
+  bind_events(e);
+  if (e.server.is_remote() && uses_rings(e.required, e.provided))
+    remote_users_.emplace(e.server.name(), e.client.name());
+  detail::Access::set_connected_to(e.required, e.server.name() + "." + e.provided.name());
+}
+
+std::optional<ConnectError> Manager::check(std::string_view client, std::string_view required,
+                                           std::string_view server, std::string_view provided) {
+  try {
+    check_ends(find_ends(client, required, server, provided));
+  } catch (const ConnectError& e) {
+    return e;
+  }
+  return std::nullopt;
 }
 
 void Manager::check_ready_to_start() {
@@ -233,7 +286,7 @@ void Manager::prepare_components() {
   for (auto* c : components_) {
     c->state_table().finalize();
     c->startup();
-    c->set_lifecycle(Lifecycle::ready);
+    detail::Access::set_lifecycle(*c, Lifecycle::ready);
   }
 }
 
@@ -256,10 +309,10 @@ void Manager::start() {
   prepare_components();
   running_.store(true, std::memory_order_release);
   first_wakeup_.store(0, std::memory_order_relaxed);
-  for (auto* c : components_) c->set_lifecycle(Lifecycle::active);
-  for (auto* t : tasks) t->start_thread(first_wakeup_, running_);
+  for (auto* c : components_) detail::Access::set_lifecycle(*c, Lifecycle::active);
+  for (auto* t : tasks) detail::Access::start_thread(*t, first_wakeup_, running_);
   for (auto* t : tasks)
-    while (!t->thread_ready()) std::this_thread::yield();  // start-up only, not an RT path
+    while (!detail::Access::thread_ready(*t)) std::this_thread::yield();  // start-up only, not an RT path
   // Every periodic task shares one phase: the first wake-up is one period after all are set up.
   TimeNs lead = 1'000'000;
   for (auto* t : tasks)
@@ -284,7 +337,7 @@ void Manager::start_stepped(TimeNs t0) {
   sim_time_ = t0;
   stepped_.clear();
   for (auto* c : components_) {
-    c->set_lifecycle(Lifecycle::active);
+    detail::Access::set_lifecycle(*c, Lifecycle::active);
     if (auto* t = dynamic_cast<Task*>(c)) stepped_.push_back({t, t0});
   }
   // Shorter periods first; among equals, the order the tasks were added.
@@ -308,7 +361,7 @@ TimeNs Manager::step() {
   sim_time_ = next;
   for (auto& s : stepped_) {
     if (s.next != next) continue;
-    s.task->step(next);
+    detail::Access::step(*s.task, next);
     const TimeNs period =
         s.task->config().is_periodic() ? s.task->config().period.count() : continuous_period_;
     s.next += period;
@@ -330,10 +383,10 @@ void Manager::stop() {
   if (state_ != ManagerState::running && state_ != ManagerState::stepping) return;
   running_.store(false, std::memory_order_release);
   for (auto* c : components_)
-    if (auto* t = dynamic_cast<Task*>(c)) t->join();
+    if (auto* t = dynamic_cast<Task*>(c)) detail::Access::join(*t);
   for (auto* c : components_) {
     c->cleanup();
-    c->set_lifecycle(Lifecycle::finished);
+    detail::Access::set_lifecycle(*c, Lifecycle::finished);
   }
   dma_hold_.reset();
   log_drain_.reset();

@@ -1,10 +1,10 @@
-#include "saw/spsc_ring.hpp"
+#include "saw/detail/spsc_ring.hpp"
 
 #include <bit>
 #include <cstdint>
 #include <stdexcept>
 
-namespace saw {
+namespace saw::detail {
 
 std::size_t SpscRing::round_capacity(std::size_t capacity) {
   return std::bit_ceil(capacity < 2 ? std::size_t{2} : capacity);
@@ -43,4 +43,4 @@ SpscRing::~SpscRing() {
   delete owned_control_;
 }
 
-}  // namespace saw
+}  // namespace saw::detail

@@ -4,6 +4,8 @@
 #include <ctime>
 #include <stdexcept>
 
+#include "saw/detail/access.hpp"
+#include "saw/detail/pacer.hpp"
 #include "saw/rt_context.hpp"
 #include "saw/rt_thread.hpp"
 
@@ -69,7 +71,7 @@ void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) 
   // The first multiple of the period at or after the common start, plus this task's offset.
   const TimeNs period = config_.period.count();
   const TimeNs first = (first_wakeup + period - 1) / period * period + config_.offset.count();
-  Pacer pacer(first, period);
+  detail::Pacer pacer(first, period);
   while (running.load(std::memory_order_acquire)) {
     const TimeNs scheduled = pacer.next_wakeup();
     const timespec ts = to_timespec(scheduled);
@@ -81,7 +83,7 @@ void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) 
     histogram_.record(latency);
     stats_.last_wakeup_latency = latency;
     if (latency > stats_.max_wakeup_latency) stats_.max_wakeup_latency = latency;
-    cycle(woke);
+    detail::Access::cycle(*this, woke);
     const TimeNs end = monotonic_now();
     pacer.finish_cycle(end);
     account(scheduled, woke, end, pacer.overruns(), pacer.missed_periods());
@@ -93,7 +95,7 @@ void Task::continuous_loop(const std::atomic<bool>& running) noexcept {
   while (running.load(std::memory_order_acquire)) {
     const RtCycleScope observed(name().c_str());
     const TimeNs woke = monotonic_now();
-    cycle(woke);
+    detail::Access::cycle(*this, woke);
     account(woke, woke, monotonic_now(), 0, 0);
   }
 }
@@ -102,7 +104,7 @@ void Task::step(TimeNs t) noexcept {
   RtContextScope rt_scope(config_.is_rt());
   const RtCycleScope observed(name().c_str());
   stats_.last_wakeup_latency = 0;
-  cycle(t);
+  detail::Access::cycle(*this, t);
   account(t, t, t, 0, 0);
 }
 

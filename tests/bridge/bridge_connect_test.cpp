@@ -394,3 +394,42 @@ TEST(BridgeConnect, AFullCommandRingIsAnErrorReturnedAndCounted) {
 }
 
 }  // namespace
+
+namespace {
+
+// A client without a thread cannot drain a remote server's event ring: check() says so, and
+// connect() refuses before binding anything, not even the client's commands.
+TEST(BridgeConnect, AClientWithoutAThreadIsRefusedRemoteEventsBeforeAnythingIsBound) {
+  class Ticker : public saw::Task {
+   public:
+    explicit Ticker(std::string name) : Task(std::move(name), saw::TaskConfig::periodic(1ms, 0)) {
+      auto& p = provide("arm");
+      p.add_command_write<std::int64_t>("add", [](const std::int64_t&) {});
+      p.add_event_write<std::int64_t>("ticked");
+    }
+  };
+  class Passive : public saw::Component {
+   public:
+    Passive() : Component("passive") {
+      auto& r = require("arm");
+      r.add_function("add", add);
+      r.add_event_handler_write<std::int64_t>("ticked", [](const std::int64_t&) {});
+    }
+    saw::FunctionWrite<std::int64_t> add;
+  } passive;
+  const std::string name = unique_name("bpas");
+  Ticker ticker(name);
+  saw::bridge::Exporter exporter(ticker, "arm");
+  saw::Manager m;
+  m.add_resolver(std::make_unique<saw::bridge::ShmResolver>());
+  m.add(passive);
+  const auto error = m.check("passive", "arm", name, "arm");
+  ASSERT_TRUE(error.has_value());
+  EXPECT_NE(std::string(error->what()).find("without a thread"), std::string::npos) << error->what();
+  EXPECT_NE(m.find(name), nullptr) << "check() keeps the proxy it resolved, as connect() would";
+  EXPECT_THROW(m.connect("passive", "arm", name, "arm"), saw::ConnectError);
+  EXPECT_FALSE(passive.add.is_bound());
+  EXPECT_FALSE(passive.required("arm")->is_connected());
+}
+
+}  // namespace

@@ -13,7 +13,7 @@
 #include "saw/bridge/proxy.hpp"
 #include "saw/bridge/shm_segment.hpp"
 #include "saw/clock.hpp"
-#include "saw/spsc_ring.hpp"
+#include "saw/detail/spsc_ring.hpp"
 #include "saw/task.hpp"
 #include "saw/testing/child_process.hpp"
 

@@ -6,16 +6,16 @@
 #include <thread>
 #include <vector>
 
+#include "saw/detail/mailbox.hpp"
+#include "saw/detail/spsc_ring.hpp"
 #include "saw/log.hpp"
-#include "saw/mailbox.hpp"
-#include "saw/spsc_ring.hpp"
 
 namespace {
 
 constexpr std::uint64_t messages = 300'000;
 
 TEST(RingStress, SpscRingDeliversEverySlotInOrder) {
-  saw::SpscRing ring(8, 40);
+  saw::detail::SpscRing ring(8, 40);
   std::atomic<std::uint64_t> torn{0};
   std::thread consumer([&] {
     std::uint64_t expected = 0;
@@ -52,7 +52,7 @@ TEST(RingStress, SpscRingDeliversEverySlotInOrder) {
 TEST(RingStress, MailboxCountsEveryRefusedPushAndRunsEveryAcceptedOne) {
   std::uint64_t executed = 0, last = 0;
   bool ordered = true;
-  saw::Mailbox mailbox("stress", 16, sizeof(std::uint64_t));
+  saw::detail::Mailbox mailbox("stress", 16, sizeof(std::uint64_t));
   struct Target {
     std::uint64_t* executed;
     std::uint64_t* last;
@@ -129,9 +129,9 @@ namespace {
 // A ring in "shared memory" (here: this process's heap), with a producer's view of it.
 struct ExternalRing {
   static constexpr std::size_t capacity = 16, slot = 32;
-  saw::SpscRingControl control;
+  saw::detail::SpscRingControl control;
   alignas(64) std::byte storage[capacity * slot];
-  saw::SpscRing producer{&control, storage, capacity, slot};
+  saw::detail::SpscRing producer{&control, storage, capacity, slot};
 };
 
 // A reconnect: the mailbox's consumer switches from the dead server's ring to the new one's
@@ -141,10 +141,10 @@ TEST(RingStress, AMailboxSwitchesToAnOfferedRingWhileBothProducersRun) {
   constexpr std::uint64_t from_new = 100'000;
   auto old_ring = std::make_unique<ExternalRing>();
   auto new_ring = std::make_unique<ExternalRing>();
-  saw::SpscRing new_consumer(&new_ring->control, new_ring->storage, ExternalRing::capacity,
-                             ExternalRing::slot);
-  saw::Mailbox mailbox("remote events", &old_ring->control, old_ring->storage, ExternalRing::capacity,
-                       ExternalRing::slot);
+  saw::detail::SpscRing new_consumer(&new_ring->control, new_ring->storage, ExternalRing::capacity,
+                                     ExternalRing::slot);
+  saw::detail::Mailbox mailbox("remote events", &old_ring->control, old_ring->storage, ExternalRing::capacity,
+                               ExternalRing::slot);
   std::vector<std::uint64_t> old_seen, new_seen;
   old_seen.reserve(1 << 20);
   new_seen.reserve(from_new);
@@ -163,11 +163,11 @@ TEST(RingStress, AMailboxSwitchesToAnOfferedRingWhileBothProducersRun) {
                         v->push_back(x);
                       },
                       &new_seen});
-  const auto produce = [](saw::SpscRing& ring, std::uint32_t target, std::uint64_t value) {
+  const auto produce = [](saw::detail::SpscRing& ring, std::uint32_t target, std::uint64_t value) {
     std::byte* s = ring.try_reserve();
     if (s == nullptr) return false;
     std::memcpy(s, &target, sizeof target);
-    std::memcpy(s + saw::Mailbox::header_bytes(), &value, sizeof value);
+    std::memcpy(s + saw::detail::Mailbox::header_bytes(), &value, sizeof value);
     ring.commit();
     return true;
   };

@@ -122,6 +122,44 @@ TEST(Connect, AFailedConnectChangesNothing) {
   EXPECT_EQ(server.value->observer_count(), 0u);
 }
 
+TEST(Connect, CheckSaysWhatConnectWouldAndBindsNothing) {
+  TaskServer server("server", one_ms());
+  Client client;
+  Asker<saw::FunctionWrite<float>> wrong("push", saw::Need::optional);  // a wrong type, optional or not
+  saw::Manager m;
+  m.add(server);
+  m.add(client);
+  m.add(wrong);
+
+  EXPECT_FALSE(m.check("client", "r", "server", "p").has_value());
+  EXPECT_FALSE(client.push.is_bound());
+  EXPECT_FALSE(client.required("r")->is_connected());
+  EXPECT_EQ(server.value->observer_count(), 0u);
+
+  const auto mismatch = m.check("asker", "r", "server", "p");
+  ASSERT_TRUE(mismatch.has_value());
+  expect_names(mismatch->what(), {"'asker'", "'r'", "'server'", "'p'", "'push'", "write command<float32>",
+                                  "write command<int32>"});
+  const auto unknown = m.check("client", "x", "server", "p");
+  ASSERT_TRUE(unknown.has_value());
+  expect_names(unknown->what(), {"no required interface 'x'"});
+  ASSERT_TRUE(m.check("client", "r", "nobody", "p").has_value());
+
+  // The same answer as connect(): this one connects, and then it would be a second connect.
+  m.connect("client", "r", "server", "p");
+  const auto again = m.check("client", "r", "server", "p");
+  ASSERT_TRUE(again.has_value());
+  expect_names(again->what(), {"already connected to server.p"});
+
+  m.start_stepped();
+  ASSERT_EQ(client.push(7), saw::Status::ok);
+  m.step();
+  EXPECT_EQ(server.executed, std::vector<int>{7});
+  const auto late = m.check("asker", "r", "server", "task");
+  ASSERT_TRUE(late.has_value());
+  expect_names(late->what(), {"already started"});
+}
+
 TEST(Connect, StartRefusesAnUnconnectedRequiredInterface) {
   Client client;
   saw::Manager m;

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "core_fixtures.hpp"
+#include "saw/detail/pacer.hpp"
 #include "saw/log.hpp"
 #include "saw/testing/wait_for.hpp"
 
@@ -91,7 +92,7 @@ TEST(StateTable, HistoryTimeLookupsAndOverwrittenRows) {
 }
 
 TEST(Pacer, OverrunsSkipWholePeriodsAndKeepPhase) {
-  saw::Pacer p(1000, 100);
+  saw::detail::Pacer p(1000, 100);
   EXPECT_EQ(p.finish_cycle(1050), 0u);
   EXPECT_EQ(p.next_wakeup(), 1100);
   EXPECT_EQ(p.finish_cycle(1100 + 350), 3u);  // ended 3.5 periods late

@@ -11,6 +11,7 @@
 #include "crtk_msgs/msg/OperatingState.h"
 #include "crtk_msgs/msg/StringStamped.h"
 #include "saw/crtk.hpp"
+#include "saw/detail/access.hpp"
 #include "saw_msgs/msg/QueryPubSubTypes.h"
 #include "saw_msgs/msg/QueryReplyPubSubTypes.h"
 
@@ -101,19 +102,20 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
       if (m == find_mapping(type_info_of<OperatingState>().name)) fault_writer_ = out->writer;
     }
     // Numbered by ordinal among the interface's events, as the proxy's mailbox numbers them.
-    proxy_->remote_events()->set_target(
+    detail::Access::remote_events(*proxy_)->set_target(
         static_cast<std::uint32_t>(events_.size()),
-        Invoker{[](void* self, const void* arg) {
-                  auto* o = static_cast<EventOut*>(self);
-                  if (o->writer == nullptr) return;
-                  o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()), o->self->name_);
-                  o->self->event_count_.fetch_add(1, std::memory_order_relaxed);
-                },
-                out.get()});
+        detail::Invoker{[](void* self, const void* arg) {
+                          auto* o = static_cast<EventOut*>(self);
+                          if (o->writer == nullptr) return;
+                          o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()),
+                                            o->self->name_);
+                          o->self->event_count_.fetch_add(1, std::memory_order_relaxed);
+                        },
+                        out.get()});
     events_.push_back(std::move(out));
     endpoints_.push_back(std::move(info));
   }
-  proxy_->remote_events()->set_consumer_attached();
+  detail::Access::remote_events(*proxy_)->set_consumer_attached();
   for (const auto& c : p.commands()) {
     const Signature& sig = c->signature;
     EndpointInfo info = describe(name_, p.name(), c->name, sig);
@@ -281,12 +283,12 @@ void Attachment::run() {
       rows = 0;
       for (auto& s : states_) {
         RowStamp stamp;
-        if (s.command->read_stamped(s.value.data(), stamp) != Status::ok) continue;
+        if (detail::Access::read_stamped(*s.command)(s.value.data(), stamp) != Status::ok) continue;
         if (s.mapping->write(*s.writer, s.value.data(), wall_from_monotonic(stamp.time), name_))
           published_.fetch_add(1, std::memory_order_relaxed);
       }
     }
-    proxy_->remote_events()->drain();
+    detail::Access::remote_events(*proxy_)->drain();
     for (auto& c : commands_) {
       for (;;) {
         const auto t = c.mapping->take(*c.reader, c.value.data(), why);
@@ -295,7 +297,7 @@ void Attachment::run() {
           reject(c.command->name, why);
           continue;
         }
-        const Status st = c.command->forward(c.value.data());
+        const Status st = detail::Access::forward(*c.command)(c.value.data());
         if (st == Status::ok)
           commands_in_.fetch_add(1, std::memory_order_relaxed);
         else

@@ -3,6 +3,8 @@
 #include <cstring>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 
+#include "saw/detail/access.hpp"
+
 namespace saw::gateway {
 
 OwnedDds::~OwnedDds() { delete_participant(ctx.participant); }
@@ -21,7 +23,7 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
   std::size_t max_event = 8;
   for (const auto& e : remote)
     if (e.kind.ends_with("event")) max_event = std::max<std::size_t>(max_event, e.saw_size);
-  events_ = std::make_unique<Mailbox>(name + " events (DDS)", 64, max_event);
+  events_ = std::make_unique<detail::Mailbox>(name + " events (DDS)", 64, max_event);
   for (const auto& e : remote) {
     if (e.interface_name != p.name() || e.topic.empty()) continue;
     const TypeInfo t = type(e.saw_type, e.saw_size, e.saw_version);
@@ -32,7 +34,7 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
       c.signature = {CommandKind::qualified_read, t, type(e.result_type, e.result_size, e.result_version)};
       c.read = [q = queries_.back().get(), as = e.saw_size, rs = e.result_size, query_timeout](
                    const void* a, void* r) { return q->call(a, as, r, rs, query_timeout); };
-      p.add_command(std::move(c));
+      detail::Access::add_command(p, std::move(c));
       continue;
     }
     const Mapping* m = find_mapping_by_dds(e.dds_type);
@@ -47,7 +49,8 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
       // The newest sample, stamped with its arrival (this process's monotonic clock).
       // A gateway gone (no writer matched) or a server silent for `stale_after` (its RT process
       // died: the gateway publishes FAULT and stops the state): disconnected, as over the bridge.
-      c.read_stamped = [s = states_.back().get(), stale_after](void* out, RowStamp& stamp) {
+      auto& stamped = detail::Access::read_stamped(c);
+      stamped = [s = states_.back().get(), stale_after](void* out, RowStamp& stamp) {
         std::string why;
         for (auto k = s->mapping->take(*s->reader, s->value.get(), why); k != Mapping::Take::none;
              k = s->mapping->take(*s->reader, s->value.get(), why))
@@ -65,11 +68,11 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
         stamp.tick = 0;
         return Status::ok;
       };
-      c.read = [f = c.read_stamped](const void*, void* out) {
+      c.read = [f = stamped](const void*, void* out) {
         RowStamp ignored;
         return f(out, ignored);
       };
-      p.add_command(std::move(c));
+      detail::Access::add_command(p, std::move(c));
     } else if (e.kind == "write" || e.kind == "void") {
       auto* w =
           ctx.publisher->create_datawriter(ctx.topic(e.topic, *m), DdsContext::writer_qos(Flow::command));
@@ -78,7 +81,7 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
       c.name = e.name;
       c.signature = {e.kind == "write" ? CommandKind::write : CommandKind::void_command, t};
       c.execute = [](const void*) {};  // never used: forward takes the call
-      c.forward = [o = outs_.back().get()](const void* arg) {
+      detail::Access::forward(c) = [o = outs_.back().get()](const void* arg) {
         fdds::PublicationMatchedStatus matched;  // no gateway reads it: it would go nowhere
         o->writer->get_publication_matched_status(matched);
         if (matched.current_count == 0) return Status::disconnected;
@@ -86,14 +89,14 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
                    ? Status::ok
                    : Status::disconnected;
       };
-      p.add_command(std::move(c));
+      detail::Access::add_command(p, std::move(c));
     } else if (e.kind.ends_with("event")) {
       auto* r =
           ctx.subscriber->create_datareader(ctx.topic(e.topic, *m), DdsContext::reader_qos(Flow::event));
-      p.add_event_remote(e.name,
-                         {e.kind == "write_event" ? CommandKind::write_event : CommandKind::void_event, t});
+      detail::Access::add_event_remote(
+          p, e.name, {e.kind == "write_event" ? CommandKind::write_event : CommandKind::void_event, t});
       const auto ordinal = static_cast<std::uint32_t>(p.events().size() - 1);
-      events_->set_target(ordinal, Invoker{[](void*, const void*) {}, nullptr});
+      events_->set_target(ordinal, detail::Invoker{[](void*, const void*) {}, nullptr});
       event_ins_.push_back({m, r, ordinal});
     }
   }

@@ -26,10 +26,11 @@ class DdsComponent : public Component {
                const std::vector<EndpointInfo>& remote, TimeNs query_timeout, TimeNs stale_after);
   ~DdsComponent() override;
 
-  Mailbox* remote_events() noexcept override { return events_.get(); }
   bool is_remote() const noexcept override { return true; }
 
  private:
+  detail::Mailbox* remote_events() noexcept override { return events_.get(); }
+
   struct State {
     const Mapping* mapping;
     fdds::DataReader* reader;
@@ -56,7 +57,7 @@ class DdsComponent : public Component {
   std::vector<std::unique_ptr<Out>> outs_;
   std::vector<std::unique_ptr<QueryClient>> queries_;
   std::vector<EventIn> event_ins_;
-  std::unique_ptr<Mailbox> events_;
+  std::unique_ptr<detail::Mailbox> events_;
   fdds::GuardCondition stop_;
   std::thread thread_;
 };

@@ -3,6 +3,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <thread>
 
+#include "saw/detail/access.hpp"
 #include "saw_msgs/msg/ManifestPubSubTypes.h"
 
 namespace saw::gateway {
@@ -44,7 +45,7 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
         std::lock_guard lock(q->lock);
         return q->client.call(arg, q->arg_size, out, q->result_size, q->timeout);
       };
-      p.add_command(std::move(c));
+      detail::Access::add_command(p, std::move(c));
       continue;
     }
     const Mapping* m = find_mapping_by_dds(e.dds_type);
@@ -64,12 +65,12 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
       c.read = [table = &state_table(), column](const void*, void* out) {
         return table->read_latest_erased(column, out, nullptr);
       };
-      p.add_command(std::move(c));
+      detail::Access::add_command(p, std::move(c));
     } else if (e.kind == "write_event" || e.kind == "void_event") {
       auto* r =
           dds_.subscriber->create_datareader(dds_.topic(e.topic, *m), DdsContext::reader_qos(Flow::event));
-      EventBase& ev = p.add_event_remote(
-          e.name, {e.kind == "write_event" ? CommandKind::write_event : CommandKind::void_event, t});
+      EventBase& ev = detail::Access::add_event_remote(
+          p, e.name, {e.kind == "write_event" ? CommandKind::write_event : CommandKind::void_event, t});
       events_.push_back({m, r, std::make_unique<std::byte[]>(std::max<std::size_t>(m->size(), 1)), &ev});
       watch(r);
     } else if (e.kind == "write" || e.kind == "void") {
@@ -82,7 +83,7 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
       c.execute = [o = outs_.back().get()](const void* arg) {
         o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()), o->frame);
       };
-      p.add_command(std::move(c));
+      detail::Access::add_command(p, std::move(c));
     }
   }
 }
@@ -104,7 +105,7 @@ void Mirror::run() {
   for (auto& e : events_)
     for (auto t = e.mapping->take(*e.reader, e.value.get(), why); t != Mapping::Take::none;
          t = e.mapping->take(*e.reader, e.value.get(), why))
-      if (t == Mapping::Take::ok) (void)e.event->emit_described(e.value.get());
+      if (t == Mapping::Take::ok) (void)detail::Access::emit_described(*e.event, e.value.get());
   stamp_row(arrival_);
 }
 

@@ -12,6 +12,11 @@
 
 namespace saw {
 
+namespace detail {
+struct Access;
+struct CycleHook;
+}  // namespace detail
+
 enum class Lifecycle : std::uint8_t { constructed, ready, active, finished };
 std::string_view to_string(Lifecycle l);
 
@@ -55,37 +60,31 @@ class Component {
   // One cycle of work, called by the component's task after its mailboxes are drained.
   virtual void run() {}
 
-  // A proxy of a component in another process returns the mailbox its events arrive in.
-  virtual Mailbox* remote_events() noexcept { return nullptr; }
   // True for a proxy of a component in another process: a call may have to wait for it.
   virtual bool is_remote() const noexcept { return false; }
 
-  // Called at the end of every cycle, after the state-table row (the bridge's exporter uses
-  // it to publish state and take remote commands). Setup only; each must be RT-safe.
-  struct CycleHook {
-    virtual ~CycleHook() = default;
-    virtual void after_cycle(Component& c, TimeNs time) noexcept = 0;
-  };
-  void add_cycle_hook(CycleHook* h) { hooks_.push_back(h); }
-
-  // For tasks and the manager.
-  void add_inbound(Mailbox* m) {
-    m->set_consumer_attached();
-    inbound_.push_back(m);
-  }
-  std::size_t process_mailboxes() noexcept;
+ private:
+  // The framework's own (tasks, the manager, proxies, the bridge), through detail::Access: a
+  // component's author never calls these.
+  friend struct detail::Access;
+  // A proxy of a component in another process returns the mailbox its events arrive in.
+  virtual detail::Mailbox* remote_events() noexcept { return nullptr; }
+  // Setup: a mailbox this component drains at the start of every cycle.
+  void add_inbound(detail::Mailbox* m);
+  // Setup: code run at the end of every cycle, after the state-table row.
+  void add_cycle_hook(detail::CycleHook* h) { hooks_.push_back(h); }
   void set_lifecycle(Lifecycle l) noexcept { lifecycle_.store(l, std::memory_order_release); }
   // One full cycle: mailboxes, run(), then the state-table row stamped `time`.
   void cycle(TimeNs time) noexcept;
+  std::size_t process_mailboxes() noexcept;
 
- private:
   std::string name_;
   std::atomic<Lifecycle> lifecycle_{Lifecycle::constructed};
   std::vector<std::unique_ptr<ProvidedInterface>> provided_;
   std::vector<std::unique_ptr<RequiredInterface>> required_;
   StateTable state_table_;
-  std::vector<Mailbox*> inbound_;
-  std::vector<CycleHook*> hooks_;
+  std::vector<detail::Mailbox*> inbound_;
+  std::vector<detail::CycleHook*> hooks_;
   TimeNs cycle_time_ = 0;
   TimeNs row_time_ = 0;
 };

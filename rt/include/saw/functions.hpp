@@ -8,17 +8,8 @@
 
 namespace saw {
 
-// What connect() fills in: where a call goes. Set before start, read-only while running.
-struct FunctionBinding {
-  Mailbox* mailbox = nullptr;  // queued void/write: the server's mailbox for this connection
-  std::uint32_t target = 0;
-  Invoker direct{};                  // void/write to a server without a thread: run now
-  const Command* forward = nullptr;  // void/write to a proxy: hand on now, with its status
-  const Command* command = nullptr;  // read, qualified read
-  bool check_values = false;         // the server is in another process: results are checked
-};
-
 // Call these from the client component's own thread: each connection's mailbox has one producer.
+// Manager::connect() binds them; until then every call returns Status::disconnected.
 class FunctionBase {
  public:
   explicit FunctionBase(Signature s) : signature_(s) {}
@@ -28,21 +19,11 @@ class FunctionBase {
   const Signature& signature() const noexcept { return signature_; }
   bool is_bound() const noexcept { return bound_; }
 
-  // For connect/disconnect only.
-  void bind(const FunctionBinding& b) noexcept {
-    binding_ = b;
-    bound_ = true;
-  }
-  void unbind() noexcept {
-    binding_ = {};
-    bound_ = false;
-  }
-
  protected:
   Status queue(const void* arg, std::size_t size) const noexcept {
     if (!bound_) return Status::disconnected;
     if (binding_.mailbox != nullptr) return binding_.mailbox->push(binding_.target, arg, size);
-    if (binding_.forward != nullptr) return binding_.forward->forward(arg);
+    if (binding_.forward != nullptr) return (*binding_.forward)(arg);
     binding_.direct(arg);
     return Status::ok;
   }
@@ -59,8 +40,19 @@ class FunctionBase {
   }
 
   Signature signature_;
-  FunctionBinding binding_{};
+  detail::FunctionBinding binding_{};
   bool bound_ = false;
+
+ private:
+  friend struct detail::Access;
+  void bind(const detail::FunctionBinding& b) noexcept {
+    binding_ = b;
+    bound_ = true;
+  }
+  void unbind() noexcept {
+    binding_ = {};
+    bound_ = false;
+  }
 };
 
 class FunctionVoid : public FunctionBase {
@@ -86,7 +78,7 @@ class FunctionRead : public FunctionBase {
   // With the row's tick and time (state-backed commands and proxies; a proxy gives tick 0).
   [[nodiscard]] Status operator()(T& out, RowStamp& stamp) const noexcept {
     if (!bound_) return Status::disconnected;
-    if (binding_.command->read_stamped) return checked(binding_.command->read_stamped(&out, stamp), out);
+    if (binding_.stamped != nullptr) return checked((*binding_.stamped)(&out, stamp), out);
     if (binding_.command->table == nullptr) return Status::no_data;
     return binding_.command->table->read_latest_erased(binding_.command->column, &out, &stamp);
   }

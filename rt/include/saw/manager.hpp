@@ -16,7 +16,8 @@
 
 namespace saw {
 
-// Thrown by connect() and start(): the message names components, interfaces, commands, types.
+// Thrown by connect() and start() (and returned by check()): the message names components,
+// interfaces, commands, types.
 class ConnectError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -52,9 +53,15 @@ class Manager {
   void add_resolver(std::unique_ptr<RemoteResolver> r) { resolvers_.push_back(std::move(r)); }
 
   // Binds client.required to server.provided by name and type. Throws ConnectError naming
-  // both components, both interfaces, the command and both types on any mismatch.
+  // both components, both interfaces, the command and both types on any mismatch; a connect
+  // that throws has bound nothing.
   void connect(std::string_view client, std::string_view required, std::string_view server,
                std::string_view provided);
+  // Whether connect() with the same arguments would succeed now: nullopt if so, else the
+  // ConnectError it would throw. Binds nothing. A server that only a resolver knows is resolved
+  // and added, as connect() would add it: its interface is what is checked.
+  std::optional<ConnectError> check(std::string_view client, std::string_view required,
+                                    std::string_view server, std::string_view provided);
 
   // Real threads: every periodic task on its own SCHED_FIFO thread.
   void start();
@@ -74,6 +81,15 @@ class Manager {
   const std::vector<Component*>& components() const noexcept { return components_; }
 
  private:
+  // connect() in steps: find both ends by name, check everything (throws, changes nothing),
+  // then bind the client's functions to the server's commands and the server's events to the
+  // client's handlers.
+  struct Ends;
+  Ends find_ends(std::string_view client, std::string_view required, std::string_view server,
+                 std::string_view provided);
+  void check_ends(const Ends& e) const;
+  void bind_commands(const Ends& e);
+  void bind_events(const Ends& e);
   Component& get(std::string_view name) const;
   void check_ready_to_start();
   void prepare_components();
@@ -81,7 +97,7 @@ class Manager {
   ManagerOptions options_;
   std::vector<Component*> components_;
   std::vector<std::unique_ptr<Component>> owned_;
-  std::vector<std::unique_ptr<Mailbox>> mailboxes_;
+  std::vector<std::unique_ptr<detail::Mailbox>> mailboxes_;
   std::vector<std::unique_ptr<RemoteResolver>> resolvers_;
   // Remote server → the one local client that uses its command and event rings.
   std::map<std::string, std::string, std::less<>> remote_users_;

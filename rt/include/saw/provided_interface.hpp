@@ -9,13 +9,16 @@
 #include <vector>
 
 #include "saw/command_kind.hpp"
-#include "saw/invoker.hpp"
-#include "saw/mailbox.hpp"
+#include "saw/detail/binding.hpp"
+#include "saw/detail/mailbox.hpp"
 #include "saw/state_table.hpp"
 
 namespace saw {
 
 class Component;
+namespace detail {
+struct Access;
+}
 
 // One provided command. void/write commands are executed by `execute` in the server's
 // thread; read and qualified-read commands are run by `read` in the caller's thread.
@@ -24,26 +27,15 @@ struct Command {
   Signature signature;
   std::function<void(const void* arg)> execute;            // void, write
   std::function<Status(const void* arg, void* out)> read;  // read (arg unused), qualified read
-  // A proxy's void/write command (the server is in another process): hands the argument on
-  // at once, in the caller's thread, and says whether it was taken.
-  std::function<Status(const void* arg)> forward;
-  // A proxy's read command: the value with the time of the row it came from.
-  std::function<Status(void* out, RowStamp& stamp)> read_stamped;
-  const StateTable* table = nullptr;  // read commands backed by a column
+  const StateTable* table = nullptr;                       // read commands backed by a column
   std::uint32_t column = 0;
   std::optional<Limits> limits;  // write commands (see Limits)
 
-  Invoker invoker() {
-    return {[](void* self, const void* arg) { static_cast<Command*>(self)->execute(arg); }, this};
-  }
-};
-
-// One observer of an event: a mailbox slot in the observer's thread, or a direct call when
-// the observer has no thread of its own.
-struct Observer {
-  Mailbox* mailbox = nullptr;
-  std::uint32_t target = 0;
-  Invoker direct{};
+ private:
+  friend struct detail::Access;
+  // Only a proxy (a component in another process) sets these; see detail/binding.hpp.
+  detail::ForwardCall forward_;
+  detail::StampedRead read_stamped_;
 };
 
 // Events are emitted from the server's thread only (one producer per observer mailbox).
@@ -52,10 +44,7 @@ class EventBase {
   EventBase(std::string name, Signature signature) : name_(std::move(name)), signature_(signature) {}
   const std::string& name() const noexcept { return name_; }
   const Signature& signature() const noexcept { return signature_; }
-  void add_observer(Observer o) { observers_.push_back(o); }
   std::size_t observer_count() const noexcept { return observers_.size(); }
-  // For events built from a description (add_event_remote): emits `arg`, signature().arg.size bytes.
-  Status emit_described(const void* arg) noexcept { return emit_erased(arg, signature_.arg.size); }
   // Deliveries refused because an observer's mailbox was full.
   std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
 
@@ -74,9 +63,14 @@ class EventBase {
   }
 
  private:
+  friend struct detail::Access;
+  void add_observer(detail::Observer o) { observers_.push_back(o); }
+  // For events built from a description (a proxy's): emits `arg`, signature().arg.size bytes.
+  Status emit_described(const void* arg) noexcept { return emit_erased(arg, signature_.arg.size); }
+
   std::string name_;
   Signature signature_;
-  std::vector<Observer> observers_;
+  std::vector<detail::Observer> observers_;
   std::atomic<std::uint64_t> dropped_{0};
 };
 
@@ -155,15 +149,6 @@ class ProvidedInterface {
     return add_event<EventWrite<T>>(std::move(name));
   }
 
-  // For proxies, which rebuild an interface from a description: a command as it is, and an
-  // event of a given signature that something else emits.
-  void add_command(Command c) { add(std::move(c)); }
-  EventBase& add_event_remote(std::string name, Signature s) {
-    check_new_name(name, true);
-    events_.push_back(std::make_unique<EventBase>(std::move(name), s));
-    return *events_.back();
-  }
-
   // Slots in each client's command mailbox.
   void set_mailbox_capacity(std::size_t n) { mailbox_capacity_ = n; }
   std::size_t mailbox_capacity() const noexcept { return mailbox_capacity_; }
@@ -177,6 +162,14 @@ class ProvidedInterface {
   const std::vector<std::unique_ptr<EventBase>>& events() const noexcept { return events_; }
 
  private:
+  friend struct detail::Access;
+  // For proxies, which rebuild an interface from a description: a command as it is, and an
+  // event of a given signature that something else emits.
+  EventBase& add_event_remote(std::string name, Signature s) {
+    check_new_name(name, true);
+    events_.push_back(std::make_unique<EventBase>(std::move(name), s));
+    return *events_.back();
+  }
   void add(Command c);
   // Commands and events are separate namespaces (CRTK has both a read and an event
   // `operating_state`); within each, a name is unique.

@@ -25,11 +25,7 @@ struct EventHandler {
   Signature signature;
   Need need;
   std::function<void(const void*)> handle;
-  bool bound = false;
-
-  Invoker invoker() {
-    return {[](void* self, const void* arg) { static_cast<EventHandler*>(self)->handle(arg); }, this};
-  }
+  bool bound = false;  // set by connect()
 };
 
 class RequiredInterface {
@@ -75,12 +71,13 @@ class RequiredInterface {
   // "server.provided" once connected, else empty.
   const std::string& connected_to() const noexcept { return connected_to_; }
   bool is_connected() const noexcept { return !connected_to_.empty(); }
-  void set_connected_to(std::string s) { connected_to_ = std::move(s); }
 
   // True if any function or handler is required: such an interface must be connected to start.
   bool has_required_members() const noexcept;
 
  private:
+  friend struct detail::Access;
+  void set_connected_to(std::string s) { connected_to_ = std::move(s); }
   void add_handler(EventHandler h);
   void check_new_name(const std::string& name, bool handler) const;
 

@@ -8,7 +8,6 @@
 
 #include "saw/component.hpp"
 #include "saw/latency_histogram.hpp"
-#include "saw/pacer.hpp"
 
 namespace saw {
 
@@ -60,18 +59,21 @@ class Task : public Component {
   // The newest statistics row (readable from any thread).
   TaskStatistics statistics() const noexcept;
   StateColumn<TaskStatistics> statistics_column() const noexcept { return stats_column_; }
-
-  // For the manager: the thread sets itself up, reports thread_ready(), then waits until
-  // `first_wakeup` is non-zero and runs until `running` is false.
-  void start_thread(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running);
-  void join();
-  // Stepped mode: one cycle at simulated time t.
-  void step(TimeNs t) noexcept;
-  bool thread_ready() const noexcept { return ready_.load(std::memory_order_acquire); }
-  // Once thread_ready(): what the thread could not get (SCHED_FIFO, affinity), empty if all.
+  // Once Manager::start() has returned: what the thread could not get (SCHED_FIFO, affinity),
+  // empty if all. The manager's rt_warnings() lists it too.
   const std::string& rt_setup_error() const noexcept { return rt_setup_error_; }
 
  private:
+  // The manager's, through detail::Access.
+  friend struct detail::Access;
+  // The thread sets itself up, reports thread_ready(), then waits until `first_wakeup` is
+  // non-zero and runs until `running` is false.
+  void start_thread(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running);
+  bool thread_ready() const noexcept { return ready_.load(std::memory_order_acquire); }
+  void join();
+  // Stepped mode: one cycle at simulated time t.
+  void step(TimeNs t) noexcept;
+
   void thread_main(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running);
   void periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) noexcept;
   void continuous_loop(const std::atomic<bool>& running) noexcept;

@@ -10,6 +10,8 @@
 #include "saw/bridge/layout.hpp"
 #include "saw/bridge/shm_segment.hpp"
 #include "saw/component.hpp"
+#include "saw/detail/cycle_hook.hpp"
+#include "saw/detail/spsc_ring.hpp"
 
 namespace saw::bridge {
 
@@ -33,7 +35,7 @@ struct ExportOptions {
   TimeNs client_timeout = 500'000'000;  // a client slot whose heartbeat is older is freed
 };
 
-class Exporter : public Component::CycleHook {
+class Exporter : public detail::CycleHook {
  public:
   // Before the manager starts. Throws BridgeError if the name is held by a live process, a
   // type is not registered for other processes (type_info.hpp), or a name (of the component,
@@ -43,7 +45,6 @@ class Exporter : public Component::CycleHook {
       : Exporter(component, provided, ExportOptions{slots}) {}
   ~Exporter() override;
 
-  void after_cycle(Component& c, TimeNs time) noexcept override;
   const std::string& segment_name() const noexcept { return segment_.name(); }
 
   // Counters, readable from any thread.
@@ -59,12 +60,14 @@ class Exporter : public Component::CycleHook {
   std::uint64_t slots_reclaimed() const noexcept { return load(slots_reclaimed_); }
 
  private:
+  void after_cycle(Component& c, TimeNs time) noexcept override;
+
   struct Read {
     const Command* command;
     std::uint32_t offset, size;
   };
   struct Slot {
-    std::unique_ptr<SpscRing> commands, events;  // consumer and producer views, own indices private
+    std::unique_ptr<detail::SpscRing> commands, events;  // consumer and producer views, own indices private
   };
   using Counter = std::atomic<std::uint64_t>;
   static std::uint64_t load(const Counter& c) noexcept { return c.load(std::memory_order_relaxed); }

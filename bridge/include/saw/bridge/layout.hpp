@@ -8,7 +8,7 @@
 #include <string>
 
 #include "saw/cache_line.hpp"
-#include "saw/spsc_ring.hpp"
+#include "saw/detail/spsc_ring.hpp"
 
 namespace saw::bridge {
 
@@ -167,23 +167,24 @@ class SegmentView {
 
 // Views of slot i's rings, for either side (each view keeps its own index privately):
 // commands go client → server, events server → client.
-inline SpscRing command_ring(const SegmentView& v, std::uint32_t i) {
-  return SpscRing(&v.client_slot(i).commands_head, &v.server_slot(i).commands_tail, v.command_storage(i),
-                  v.layout().ring_capacity, v.layout().command_slot_size);
+inline detail::SpscRing command_ring(const SegmentView& v, std::uint32_t i) {
+  return detail::SpscRing(&v.client_slot(i).commands_head, &v.server_slot(i).commands_tail,
+                          v.command_storage(i), v.layout().ring_capacity, v.layout().command_slot_size);
 }
-inline SpscRing event_ring(const SegmentView& v, std::uint32_t i) {
-  return SpscRing(&v.server_slot(i).events_head, &v.client_slot(i).events_tail, v.event_storage(i),
-                  v.layout().ring_capacity, v.layout().event_slot_size);
+inline detail::SpscRing event_ring(const SegmentView& v, std::uint32_t i) {
+  return detail::SpscRing(&v.server_slot(i).events_head, &v.client_slot(i).events_tail, v.event_storage(i),
+                          v.layout().ring_capacity, v.layout().event_slot_size);
 }
 // The same, owned (SpscRing cannot move): for views kept beside a Proxy's link or an Exporter.
-inline std::unique_ptr<SpscRing> make_command_ring(const SegmentView& v, std::uint32_t i) {
-  return std::make_unique<SpscRing>(&v.client_slot(i).commands_head, &v.server_slot(i).commands_tail,
-                                    v.command_storage(i), v.layout().ring_capacity,
-                                    v.layout().command_slot_size);
+inline std::unique_ptr<detail::SpscRing> make_command_ring(const SegmentView& v, std::uint32_t i) {
+  return std::make_unique<detail::SpscRing>(&v.client_slot(i).commands_head, &v.server_slot(i).commands_tail,
+                                            v.command_storage(i), v.layout().ring_capacity,
+                                            v.layout().command_slot_size);
 }
-inline std::unique_ptr<SpscRing> make_event_ring(const SegmentView& v, std::uint32_t i) {
-  return std::make_unique<SpscRing>(&v.server_slot(i).events_head, &v.client_slot(i).events_tail,
-                                    v.event_storage(i), v.layout().ring_capacity, v.layout().event_slot_size);
+inline std::unique_ptr<detail::SpscRing> make_event_ring(const SegmentView& v, std::uint32_t i) {
+  return std::make_unique<detail::SpscRing>(&v.server_slot(i).events_head, &v.client_slot(i).events_tail,
+                                            v.event_storage(i), v.layout().ring_capacity,
+                                            v.layout().event_slot_size);
 }
 
 // now − then for a time stamp read from the segment, whatever its bits: computed modulo 2^64

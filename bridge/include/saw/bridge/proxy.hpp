@@ -45,7 +45,6 @@ class Proxy : public Component {
         ProxyOptions options = {});
   ~Proxy() override;
 
-  Mailbox* remote_events() noexcept override { return events_.get(); }
   bool is_remote() const noexcept override { return true; }
   // From the calling thread.
   bool server_alive() noexcept { return alive(link()); }
@@ -63,12 +62,14 @@ class Proxy : public Component {
   bool wait_for_update(std::uint32_t& seen, TimeNs timeout) noexcept;
 
  private:
+  detail::Mailbox* remote_events() noexcept override { return events_.get(); }
+
   struct Link {
     ShmSegment segment;
     SegmentView view;
     std::uint32_t slot;
     std::uint64_t token;
-    std::unique_ptr<SpscRing> commands, events;
+    std::unique_ptr<detail::SpscRing> commands, events;
     ClientSlot& client() const noexcept { return view.client_slot(slot); }
     ServerSlot& server() const noexcept { return view.server_slot(slot); }
   };
@@ -97,7 +98,7 @@ class Proxy : public Component {
   Link* link_ = nullptr;                      // the calling thread's
   const Link* mailbox_on_ = nullptr;          // the monitor's: whose event ring the mailbox has
   std::atomic<Link*> offered_{nullptr};       // monitor → calling thread
-  std::unique_ptr<Mailbox> events_;
+  std::unique_ptr<detail::Mailbox> events_;
   std::atomic<std::uint64_t> reconnects_{0}, commands_refused_{0};
   std::atomic<std::uint32_t> stop_{0};
   mutable std::mutex error_mutex_;  // non-RT: the monitor writes, anyone reads

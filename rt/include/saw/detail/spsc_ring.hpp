@@ -1,4 +1,4 @@
-// SpscRing: a bounded single-producer single-consumer ring of fixed-size byte slots.
+// SpscRing: a bounded single-producer single-consumer ring of fixed-size byte slots (internal).
 #pragma once
 
 #include <atomic>
@@ -8,7 +8,7 @@
 
 #include "saw/cache_line.hpp"
 
-namespace saw {
+namespace saw::detail {
 
 // The two indices of a ring, each on its own cache line. Standard layout and address-free,
 // so it can live in shared memory between processes.
@@ -115,4 +115,4 @@ class SpscRing {
   std::uint64_t cached_head_ = 0;               // consumer's copy of the producer's
 };
 
-}  // namespace saw
+}  // namespace saw::detail

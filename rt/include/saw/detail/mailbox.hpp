@@ -1,4 +1,4 @@
-// Mailbox: one connection's bounded queue of commands or events, drained by its consumer.
+// Mailbox: one connection's bounded queue of commands or events, drained by its consumer (internal).
 #pragma once
 
 #include <atomic>
@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "saw/invoker.hpp"
-#include "saw/spsc_ring.hpp"
+#include "saw/detail/invoker.hpp"
+#include "saw/detail/spsc_ring.hpp"
 #include "saw/status.hpp"
 
-namespace saw {
+namespace saw::detail {
 
 // The producer is the thread of the calling component (commands) or of the emitting
 // component (events); the consumer is the thread of the component that executes them.
@@ -83,4 +83,4 @@ class Mailbox {
   std::atomic<std::uint64_t> executed_{0};    // written by the consumer only
 };
 
-}  // namespace saw
+}  // namespace saw::detail

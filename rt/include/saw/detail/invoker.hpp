@@ -1,7 +1,7 @@
-// Invoker: a type-erased call target (function pointer plus object) that never allocates.
+// Invoker: a type-erased call target (function pointer plus object) that never allocates (internal).
 #pragma once
 
-namespace saw {
+namespace saw::detail {
 
 // The argument pointers are checked against TypeInfo when interfaces are bound, so the
 // casts inside the thunks are always to the right type.
@@ -13,4 +13,4 @@ struct Invoker {
   explicit operator bool() const noexcept { return fn != nullptr; }
 };
 
-}  // namespace saw
+}  // namespace saw::detail

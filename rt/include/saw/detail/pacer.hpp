@@ -1,11 +1,11 @@
-// Pacer: a periodic task's absolute wake-up grid, with overrun accounting that keeps phase.
+// Pacer: a periodic task's absolute wake-up grid, with overrun accounting that keeps phase (internal).
 #pragma once
 
 #include <cstdint>
 
 #include "saw/clock.hpp"
 
-namespace saw {
+namespace saw::detail {
 
 // Wake-ups are start + k·period, never "now + period", so the rate cannot drift. A cycle
 // that ends past its next wake-up skips whole periods and stays on the grid.
@@ -38,4 +38,4 @@ class Pacer {
   std::uint64_t missed_ = 0;
 };
 
-}  // namespace saw
+}  // namespace saw::detail
