@@ -248,6 +248,8 @@ std::size_t SocketCanBus::send(std::span<const Frame> frames) noexcept {
       break;
     }
     accepted += static_cast<std::size_t>(sent);
+    if (state_.load(std::memory_order_relaxed) == BusState::down)  // the interface is back
+      state_.store(BusState::error_active, std::memory_order_relaxed);
     if (static_cast<std::size_t>(sent) < count) break;
   }
   if (accepted > 0) bump(sent_, accepted);

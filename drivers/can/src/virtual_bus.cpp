@@ -255,8 +255,10 @@ bool VirtualBus::write_one(const Frame& f, TimeNs now) noexcept {
     // waiting for it could be forever. Its frame is lost (its completion CAS fails) and any of its
     // late payload stores are caught by the check word. Acquire: when the previous owner
     // completed normally, our payload stores come after its stores in each word's order.
+    // Release: a reader that sees our claim also sees our ticket taken from write_ticket, so it
+    // can tell a claim from garbage (a sequence beyond every ticket handed out).
   } while (
-      !s.sequence.compare_exchange_weak(seen, writing, std::memory_order_acquire, std::memory_order_relaxed));
+      !s.sequence.compare_exchange_weak(seen, writing, std::memory_order_acq_rel, std::memory_order_relaxed));
   const auto words = detail::frame_to_words(f);
   const auto time = static_cast<std::uint64_t>(now);
   // Release (seqlock writer, without a fence): a reader whose acquire load sees any of these
