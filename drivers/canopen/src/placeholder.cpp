@@ -1,0 +1,2 @@
+// Replaced as the package grows.
+namespace saw::canopen {}
