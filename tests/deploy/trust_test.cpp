@@ -254,7 +254,8 @@ TEST(TrustBoundaries, ParameterBoundsAreFileErrors) {
 namespace {
 
 // The gateway publishes read commands and events by type: a FaultInfo goes to DDS as the
-// text of crtk_msgs/StringStamped, on rt/<component>/fault, whoever raised it.
+// text of crtk_msgs/StringStamped, on rt/<component>/fault (and on rt/<component>/error, see
+// tests/gateway/error_topic_test.cpp), whoever raised it.
 TEST(TrustBoundaries, TheGatewayMapsAFaultToText) {
   const auto* m = saw::gateway::find_mapping(saw::type_info_of<saw::FaultInfo>().name);
   ASSERT_NE(m, nullptr);

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "saw/bridge/exporter.hpp"
+#include "saw/fault.hpp"
 #include "saw/gateway/gateway.hpp"
 #include "saw/gateway/participant.hpp"
 #include "saw/manager.hpp"
@@ -17,7 +18,8 @@
 namespace saw::testing {
 
 // Provided "arm": count (read), add (write, limited to ±10,000,000), tripled (qualified read),
-// ticked (event, every 10th cycle).
+// ticked (event, every 10th cycle), trip (void: raises `fault`, a FaultInfo event, as a drive's
+// emergency would).
 class CountingDevice : public Task {
  public:
   explicit CountingDevice(std::string name)
@@ -29,6 +31,14 @@ class CountingDevice : public Task {
     p.add_command_qualified_read<std::int64_t, std::int64_t>(
         "tripled", [](const std::int64_t& q, std::int64_t& r) { r = 3 * q; });
     ticked_ = &p.add_event_write<std::int64_t>("ticked");
+    fault_ = &p.add_event_write<FaultInfo>("fault");
+    p.add_command_void("trip", [this] {
+      FaultInfo f;
+      f.code = FaultCode::device_error;
+      f.set_source("node 5");
+      f.detail = 0x2310;
+      (void)(*fault_)(f);
+    });
   }
   void run() override {
     ++count_;
@@ -38,6 +48,7 @@ class CountingDevice : public Task {
  private:
   std::int64_t count_ = 0;
   EventWrite<std::int64_t>* ticked_;
+  EventWrite<FaultInfo>* fault_;
 };
 
 struct ServedDevice {

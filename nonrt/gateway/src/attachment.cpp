@@ -12,6 +12,7 @@
 #include "crtk_msgs/msg/StringStamped.h"
 #include "saw/crtk.hpp"
 #include "saw/detail/access.hpp"
+#include "saw/fault.hpp"
 #include "saw_msgs/msg/QueryPubSubTypes.h"
 #include "saw_msgs/msg/QueryReplyPubSubTypes.h"
 
@@ -100,6 +101,8 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
       out->writer =
           dds_.publisher->create_datawriter(dds_.topic(info.topic, *m), DdsContext::writer_qos(Flow::event));
       if (m == find_mapping(type_info_of<OperatingState>().name)) fault_writer_ = out->writer;
+      // CRTK clients watch `error` for why an arm faulted; the fault event says it.
+      out->fault_text = m == find_mapping(type_info_of<FaultInfo>().name);
     }
     // Numbered by ordinal among the interface's events, as the proxy's mailbox numbers them.
     detail::Access::remote_events(*proxy_)->set_target(
@@ -110,6 +113,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
                           o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()),
                                             o->self->name_);
                           o->self->event_count_.fetch_add(1, std::memory_order_relaxed);
+                          if (o->fault_text) o->self->publish_error("FAULT: " + o->mapping->to_text(arg));
                         },
                         out.get()});
     events_.push_back(std::move(out));
@@ -234,16 +238,22 @@ void Attachment::add_stats(GatewayStats& s) const {
 
 void Attachment::reject(const std::string& command, const std::string& why) {
   rejected_.fetch_add(1, std::memory_order_relaxed);
+  publish_error(command + " rejected: " + why);
+}
+
+void Attachment::publish_error(const std::string& text) {
   crtk_msgs::msg::StringStamped m;
   const auto wall = wall_from_monotonic(monotonic_now());
   m.header().stamp().sec(static_cast<std::int32_t>(wall / 1'000'000'000));
   m.header().stamp().nanosec(static_cast<std::uint32_t>(wall % 1'000'000'000));
   m.header().frame_id(name_);
-  m.string(command + " rejected: " + why);
+  m.string(text);
   if (error_writer_ != nullptr) error_writer_->write(&m);
 }
 
 void Attachment::publish_fault() {
+  const std::string why = proxy_->last_error();
+  publish_error("FAULT: the RT process serving it stopped answering" + (why.empty() ? "" : " (" + why + ")"));
   if (fault_writer_ == nullptr) return;
   const OperatingState fault{OperatingStateValue::fault, false, false};
   find_mapping(type_info_of<OperatingState>().name)

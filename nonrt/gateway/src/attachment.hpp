@@ -40,6 +40,7 @@ class Attachment {
     Attachment* self;
     const Mapping* mapping;
     fdds::DataWriter* writer;
+    bool fault_text = false;  // a FaultInfo: its text also goes to the CRTK error topic
   };
   struct QueryIn {
     const Command* command;  // of the query proxy (its own slot, used by the query thread only)
@@ -60,6 +61,8 @@ class Attachment {
   // A command value against the limits its component declares; the reason in `why` if outside.
   static bool within_limits(CommandIn& c, std::string& why);
   void reject(const std::string& command, const std::string& why);
+  // A line on rt/<component>/error (crtk_msgs/StringStamped), CRTK's topic for errors.
+  void publish_error(const std::string& text);
   void publish_fault();
 
   DdsContext& dds_;
