@@ -285,6 +285,18 @@ TEST(CanopenCia402Controller, ReachesOperationEnabledFromEveryStartState) {
   }
 }
 
+TEST(CanopenCia402Controller, ReachesOperationEnabledFromTheFaultStatesWithAReset) {
+  for (State start : {State::fault_reaction_active, State::fault}) {
+    SCOPED_TRACE(to_string(start));
+    Loop l(drive_in(start));
+    l.controller.set_target(Target::operation_enabled, 0);
+    l.controller.request_fault_reset(0);
+    l.run_until_reached();
+    EXPECT_EQ(l.out.progress, Progress::reached);
+    EXPECT_EQ(l.drive.state(), State::operation_enabled);
+  }
+}
+
 TEST(CanopenCia402Controller, WalksShutdownSwitchOnEnableOperation) {
   Loop l(drive_in(State::switch_on_disabled));
   l.controller.set_target(Target::operation_enabled, 0);

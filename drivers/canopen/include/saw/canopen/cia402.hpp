@@ -1,5 +1,4 @@
-// CiA 402 (IEC 61800-7-201) basics both sides share: drive states, statusword and controlword
-// bits, the device-control commands, modes of operation and the objects a servo drive has.
+// CiA 402 basics both sides share: drive states, statusword and controlword coding, modes, objects.
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,4 @@
-// The master side of the CiA 402 state machine: from each statusword, the controlword that
-// moves the drive one transition closer to a target state, with a timeout when it does not move.
+// The master side of CiA 402: each cycle, the controlword that walks a drive towards a target state.
 #pragma once
 
 #include <cstdint>

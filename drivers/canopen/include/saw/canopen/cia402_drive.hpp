@@ -1,5 +1,4 @@
-// The drive side of the CiA 402 state machine, for the simulated drive: every transition of
-// the standard's figure, driven by the controlword, with fault entry and reaction.
+// The drive side of CiA 402 for the simulated drive: every transition of the state machine figure.
 #pragma once
 
 #include <cstdint>

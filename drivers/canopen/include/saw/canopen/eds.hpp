@@ -1,6 +1,7 @@
-// EDS and DCF files (CiA 306), the INI files vendors ship with a device, read into a checked
-// description of its object dictionary. Configuration-time code: it allocates and throws
-// saw::deploy::ConfigError naming file:line:column and the key ("1018sub1.DefaultValue").
+// EDS and DCF files (CiA 306) read into a checked description of a device's object dictionary.
+//
+// Configuration-time code: it allocates and throws saw::deploy::ConfigError naming
+// file:line:column and the key ("1018sub1.DefaultValue").
 #pragma once
 
 #include <cstdint>

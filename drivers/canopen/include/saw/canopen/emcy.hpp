@@ -1,5 +1,4 @@
-// Emergency messages (CiA 301 7.2.7): decoding with names for the error codes of CiA 301 and
-// CiA 402 (IEC 61800-7-201), and a producer for the simulated drive.
+// Emergency messages (CiA 301 7.2.7): decoding, names for CiA 301/402 error codes, a producer.
 #pragma once
 
 #include <array>

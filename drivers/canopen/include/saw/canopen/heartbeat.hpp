@@ -1,5 +1,4 @@
-// Heartbeats (CiA 301 7.2.8.3.2): a producer for the simulated drive, and a consumer that
-// says when a node's heartbeat stops (and by how much it is late) and when it comes back.
+// Heartbeats (CiA 301 7.2.8.3.2): a producer, and a consumer that reports lost and returning nodes.
 #pragma once
 
 #include <array>

@@ -1,5 +1,4 @@
-// NMT (CiA 301 7.2.8): node-control commands as frames, node states, boot-up and heartbeat
-// messages, and the state machine a node runs (for the simulated drive).
+// NMT (CiA 301 7.2.8): commands as frames, node states, boot-up and heartbeat, a node's NMT machine.
 #pragma once
 
 #include <cstdint>

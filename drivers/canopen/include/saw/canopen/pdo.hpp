@@ -1,5 +1,4 @@
-// PDOs (CiA 301 7.2.2, 7.5.2.35-38): mappings, their configuration as SDO writes, and the RT
-// path that packs mapped values into a frame and unpacks them from one.
+// PDOs (CiA 301 7.2.2): mappings, their configuration as SDO writes, allocation-free pack and unpack.
 #pragma once
 
 #include <array>

@@ -1,5 +1,4 @@
-// Drive units and SI: position and velocity counts through encoder resolution and gear ratio,
-// torque in per mille of the rated torque (CiA 402 0x6071, 0x6077) and newton-metres.
+// Drive units and SI: counts to radians or metres, per mille of rated torque to newton-metres.
 #pragma once
 
 #include <cstdint>
