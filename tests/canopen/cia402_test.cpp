@@ -471,6 +471,12 @@ TEST(CanopenUnits, RefusesNonsenseFactors) {
   EXPECT_THROW(DriveUnits::rotary(4096, -1, 1), std::invalid_argument);
   EXPECT_THROW(DriveUnits::rotary(4096, 1, NAN), std::invalid_argument);
   EXPECT_THROW(DriveUnits::linear(4096, 1, 0, 1), std::invalid_argument);
+  const DriveUnits unset;
+  std::int32_t counts = 7;
+  std::int16_t pm = 7;
+  EXPECT_EQ(unset.position_to_counts(1.0, counts), Codec::invalid) << "never 0 counts by default";
+  EXPECT_EQ(unset.torque_to_per_mille(1.0, pm), Codec::invalid);
+  EXPECT_EQ(counts, 7);
 }
 
 }  // namespace

@@ -367,6 +367,22 @@ TEST(CanopenEds, MissingMandatoryObjectsAndBrokenMappings) {
   }
 }
 
+TEST(CanopenEds, ExtendedPdoIdentifiersAreRefused) {
+  const std::string pdo =
+      "[1400]\nParameterName=RPDO1\nObjectType=0x9\nSubNumber=2\n"                                    // 26
+      "[1400sub0]\nParameterName=n\nDataType=0x0005\nAccessType=ro\nDefaultValue=1\n"                 // 30
+      "[1400sub1]\nParameterName=COB-ID\nDataType=0x0007\nAccessType=rw\nDefaultValue=0x20000200\n";  // 35
+  const Eds eds = parse_eds(minimal(pdo), "vendor.eds");
+  try {
+    (void)eds_pdo_mappings(eds, 3);
+    ADD_FAILURE() << "took a 29-bit identifier";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.line(), 35) << e.what();
+    EXPECT_EQ(e.key(), "0x1400:01");
+    EXPECT_NE(std::string(e.what()).find("not an 11-bit identifier"), std::string::npos) << e.what();
+  }
+}
+
 TEST(CanopenEds, AnUnreadableFileIsNamed) {
   try {
     (void)load_eds("/nonexistent/drive.eds");

@@ -503,6 +503,11 @@ std::vector<PdoMapping> eds_pdo_mappings(const Eds& eds, std::uint8_t node) {
         throw ConfigError(eds.file, cob_entry->line, 1, to_string(cob),
                           "a PDO's COB-ID needs an UNSIGNED32 value");
       m.enabled = (id & pdo_invalid) == 0;
+      // Bit 30 (no RTR) does not matter to us; bit 29 (a 29-bit identifier) and identifier bits
+      // above the 11th would mean frames CANopen's classic set does not use.
+      if (m.enabled && (id & 0x3FFFF800u) != 0)
+        throw ConfigError(eds.file, cob_entry->line, 1, to_string(cob),
+                          "COB-ID is not an 11-bit identifier (29-bit PDOs are not supported)");
       m.cob_id = id & CAN_SFF_MASK;
       if (const auto t = eds.value({m.communication_index(), 2}, node)) (void)to_value(*t, m.transmission);
       if (const auto t = eds.value({m.communication_index(), 3}, node)) (void)to_value(*t, m.inhibit_time);

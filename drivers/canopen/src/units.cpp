@@ -45,18 +45,24 @@ Codec round_into(double v, T& out) noexcept {
   return Codec::ok;
 }
 
+// Units that were never set (a default-constructed DriveUnits) convert nothing, rather than
+// turning every setpoint into 0 counts.
+bool usable(double factor) noexcept { return std::isfinite(factor) && factor > 0; }
+
 }  // namespace
 
 Codec DriveUnits::position_to_counts(double si, std::int32_t& counts) const noexcept {
+  if (!usable(counts_per_si())) return Codec::invalid;
   return round_into(si * counts_per_si(), counts);
 }
 
 Codec DriveUnits::velocity_to_counts(double si_per_s, std::int32_t& counts_per_s) const noexcept {
+  if (!usable(counts_per_si())) return Codec::invalid;
   return round_into(si_per_s * counts_per_si(), counts_per_s);
 }
 
 Codec DriveUnits::torque_to_per_mille(double nm, std::int16_t& per_mille) const noexcept {
-  if (!(rated_torque > 0)) return Codec::invalid;
+  if (!usable(rated_torque)) return Codec::invalid;
   return round_into(nm / rated_torque * 1000.0, per_mille);
 }
 
