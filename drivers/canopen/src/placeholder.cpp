@@ -1,2 +1,0 @@
-// Replaced as the package grows.
-namespace saw::canopen {}
