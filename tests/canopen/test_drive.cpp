@@ -1,5 +1,6 @@
 #include "test_drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <variant>
 
@@ -153,8 +154,9 @@ void TestDrive::on_sync(TimeNs now) noexcept {
     velocity_ = 0;
   } else if (drive_.mode_display() == csp) {
     const auto target = static_cast<double>(target_position());
-    velocity_ = (target - position_) / dt;
-    position_ = target;
+    const double step = std::clamp(target - position_, -config_.csp_max_step, config_.csp_max_step);
+    velocity_ = step / dt;
+    position_ += step;
   } else if (drive_.mode_display() == csv) {
     velocity_ = target_velocity();
     position_ += velocity_ * dt;
@@ -227,7 +229,7 @@ void TestDrive::step(TimeNs now) noexcept {
   if (auto f = nmt_.poll()) send(*f);
   if (auto f = server_->poll(now)) send(*f);
   if (auto f = emcy_.poll(now)) send(*f);
-  if (auto f = heartbeat_.poll(now, nmt_.state())) send(*f);
+  if (auto f = heartbeat_.poll(now, nmt_.state()); f && !heartbeat_silent_) send(*f);
 }
 
 }  // namespace saw::canopen::test

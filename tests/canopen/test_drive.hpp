@@ -25,6 +25,7 @@ struct TestDriveConfig {
   double torque_gain = 2000;  // CST: counts/s² per ‰ of rated torque
   double damping = 5;         // CST: 1/s
   std::int32_t initial_position = 0;
+  double csp_max_step = 1e12;  // CSP: counts per SYNC the drive can move (a drive that lags)
 };
 
 class TestDrive {
@@ -40,6 +41,8 @@ class TestDrive {
   void clear_fault() noexcept;
   // A silent drive sends nothing at all (unplugged); it still listens.
   void set_silent(bool silent) noexcept { silent_ = silent; }
+  // Only its heartbeat stops (its PDOs go on).
+  void set_heartbeat_silent(bool silent) noexcept { heartbeat_silent_ = silent; }
 
   std::uint8_t node() const noexcept { return config_.node; }
   NmtState nmt_state() const noexcept { return nmt_.state(); }
@@ -81,7 +84,7 @@ class TestDrive {
   std::vector<std::vector<ObjectAddress>> tpdo_objects_;
   std::vector<Write> writes_;
   std::uint16_t heartbeat_ms_ = 0;
-  bool fault_ = false, silent_ = false, sync_pending_ = false;
+  bool fault_ = false, silent_ = false, heartbeat_silent_ = false, sync_pending_ = false;
   std::uint16_t controlword_ = 0;
   double position_ = 0, velocity_ = 0;
   TimeNs last_sync_ = 0;

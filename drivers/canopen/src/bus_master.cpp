@@ -198,7 +198,7 @@ Codec BusMaster::set_setpoint(std::size_t i, double si) noexcept {
   Codec c = Codec::ok;
   if (a.config.mode == cia402::cst) {
     std::int16_t per_mille = 0;
-    c = a.config.units.torque_to_per_mille(si, per_mille);
+    c = a.config.units.effort_to_per_mille(si, per_mille);
     if (c == Codec::ok) c = pdo.set(slot, per_mille);
   } else {
     std::int32_t counts = 0;
@@ -317,7 +317,7 @@ void BusMaster::Impl::update_feedback(Axis& a, TimeNs now) noexcept {
   a.previous_time = now;
   a.previous_counts = fb.position_counts;
   std::int16_t torque = 0;
-  if (a.read(a.torque, torque)) fb.torque = u.per_mille_to_torque(torque);
+  if (a.read(a.torque, torque)) fb.torque = u.per_mille_to_effort(torque);
 }
 
 void BusMaster::receive(TimeNs now) noexcept {

@@ -35,7 +35,8 @@ ObjectAddress mode_target(cia402::Mode mode) noexcept;
 void check(const AxisConfig& a);
 
 // What the last TPDOs said about a drive, in SI (units.hpp). Velocity is the drive's when a TPDO
-// maps 0x606C, else the difference of positions; torque is 0 unless 0x6077 is mapped.
+// maps 0x606C, else the difference of positions; torque is the joint's effort (through the gear)
+// when 0x6077 is mapped, else 0.
 struct AxisFeedback {
   bool valid = false;        // every TPDO arrived at least once
   bool fresh = false;        // a TPDO arrived since the last cycle

@@ -67,7 +67,8 @@ class BusMaster {
   // drive is in fault).
   void set_state_target(std::size_t i, cia402::Target t, TimeNs now) noexcept;
   void request_fault_reset(std::size_t i, TimeNs now) noexcept;
-  // The mode's target in SI (rad or m, per second, N·m): converted to drive units and packed.
+  // The mode's target in SI (rad or m, per second, or the joint's effort in N·m or N through the
+  // gear): converted to drive units and packed.
   // A value the conversion or the PDO entry refuses is not packed (the previous one stays) and
   // the reason is returned.
   Codec set_setpoint(std::size_t i, double si) noexcept;
