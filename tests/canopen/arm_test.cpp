@@ -67,6 +67,21 @@ TEST(CanopenArm, CspFollowsServoJp) {
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
 }
 
+TEST(CanopenArm, JointOffsetsShiftPositionsBothWays) {
+  CanopenArmConfig c = arm_config(cia402::csp);
+  c.joints[2].offset = 1.2;  // the elbow drive's zero is the joint's 1.2 rad
+  ArmRig rig(c);
+  rig.enable();
+  rig.cycle();
+  EXPECT_NEAR(rig.read<JointState>("measured_js").position[2], 1.2, 1e-12);
+  rig.write("servo_jp", rig.joints(0, 0, 1.21));
+  rig.cycle();
+  EXPECT_EQ(rig.drives[2].target_position(), std::lround(0.01 / count)) << "the drive gets 0.01 rad";
+  rig.cycle();
+  EXPECT_NEAR(rig.read<JointState>("measured_js").position[2], 1.21, count);
+  EXPECT_NEAR(rig.read<saw::Pose>("measured_cp").position[2], -0.133 * std::sin(1.21), 1e-3);
+}
+
 TEST(CanopenArm, ServoCfBecomesJointTorquesThroughTheJacobianTranspose) {
   ArmRig rig(arm_config(cia402::cst));
   rig.enable();

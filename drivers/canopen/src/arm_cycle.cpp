@@ -125,10 +125,10 @@ void CanopenArm::run() {
 void CanopenArm::read_feedback() noexcept {
   for (std::size_t i = 0; i < n_; ++i) {
     const AxisFeedback& f = master_->feedback(i);
-    q_[i] = f.position;
+    q_[i] = f.position + config_.joints[i].offset;
     qd_[i] = f.velocity;
     tau_[i] = f.torque;
-    measured_js_.position[i] = f.position;
+    measured_js_.position[i] = q_[i];
     measured_js_.velocity[i] = f.velocity;
     measured_js_.effort[i] = f.torque;
   }
@@ -208,7 +208,7 @@ void CanopenArm::check_axis(std::size_t i) noexcept {
     return raise_fault(FaultReason::joint_limit, FaultCode::limit_exceeded, i);
   // The position read now answers the target sent one SYNC before.
   if (config_.mode == cia402::csp && j.following_error > 0 && following() &&
-      std::abs(master_->setpoint(i) - q_[i]) > j.following_error)
+      std::abs(master_->setpoint(i) + j.offset - q_[i]) > j.following_error)
     return raise_fault(FaultReason::following_error, FaultCode::limit_exceeded, i);
 }
 
@@ -255,7 +255,8 @@ void CanopenArm::send_setpoints() noexcept {
     } else {
       sp = drive ? command_[i] : 0.0;
     }
-    if (master_->set_setpoint(i, sp) == Codec::ok) target_[i] = sp;
+    const double drive_sp = config_.mode == cia402::csp ? sp - config_.joints[i].offset : sp;
+    if (master_->set_setpoint(i, drive_sp) == Codec::ok) target_[i] = sp;
     setpoint_js_.position[i] = config_.mode == cia402::csp ? target_[i] : q_[i];
     setpoint_js_.velocity[i] = config_.mode == cia402::csv ? target_[i] : 0.0;
     setpoint_js_.effort[i] = config_.mode == cia402::cst ? target_[i] : 0.0;

@@ -55,7 +55,10 @@ struct Axis {
   AxisConfig config;
   std::vector<PdoPacker> rpdos;
   std::vector<PdoUnpacker> tpdos;
-  Slot controlword, target, statusword, position, velocity, torque, mode_display;
+  // Every RPDO slot of the controlword and of the mode's target gets the value: a drive applies
+  // them in the order its RPDOs come, so a second mapping of either must not carry a stale one.
+  std::vector<Slot> controlwords, targets;
+  Slot statusword, position, velocity, torque, mode_display;
   std::uint32_t tpdo_seen = 0;  // bit per TPDO: received at least once
   bool tpdo_this_cycle = false;
   cia402::Controller controller;
@@ -152,8 +155,12 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
       return Slot{};
     };
     const auto r = addresses(a.config, PdoKind::rpdo), t = addresses(a.config, PdoKind::tpdo);
-    a.controlword = find(r, cia402::object::controlword);
-    a.target = find(r, mode_target(a.config.mode));
+    for (std::size_t p = 0; p < r.size(); ++p)
+      for (std::size_t k = 0; k < r[p].size(); ++k) {
+        const Slot slot{static_cast<int>(p), static_cast<int>(k)};
+        if (r[p][k] == cia402::object::controlword) a.controlwords.push_back(slot);
+        if (r[p][k] == mode_target(a.config.mode)) a.targets.push_back(slot);
+      }
     a.statusword = find(t, cia402::object::statusword);
     a.position = find(t, cia402::object::position_actual_value);
     a.velocity = find(t, cia402::object::velocity_actual_value);
@@ -193,18 +200,18 @@ void BusMaster::request_fault_reset(std::size_t i, TimeNs now) noexcept {
 
 Codec BusMaster::set_setpoint(std::size_t i, double si) noexcept {
   Axis& a = impl_->axes[i];
-  PdoPacker& pdo = a.rpdos[static_cast<std::size_t>(a.target.pdo)];
-  const auto slot = static_cast<std::size_t>(a.target.slot);
-  Codec c = Codec::ok;
-  if (a.config.mode == cia402::cst) {
-    std::int16_t per_mille = 0;
-    c = a.config.units.effort_to_per_mille(si, per_mille);
-    if (c == Codec::ok) c = pdo.set(slot, per_mille);
-  } else {
-    std::int32_t counts = 0;
-    c = a.config.mode == cia402::csv ? a.config.units.velocity_to_counts(si, counts)
-                                     : a.config.units.position_to_counts(si, counts);
-    if (c == Codec::ok) c = pdo.set(slot, counts);
+  const DriveUnits& u = a.config.units;
+  // The value in drive units first: nothing is packed unless it converts.
+  std::int16_t per_mille = 0;
+  std::int32_t counts = 0;
+  Codec c = a.config.mode == cia402::cst   ? u.effort_to_per_mille(si, per_mille)
+            : a.config.mode == cia402::csv ? u.velocity_to_counts(si, counts)
+                                           : u.position_to_counts(si, counts);
+  for (const Slot& s : a.targets) {
+    if (c != Codec::ok) break;
+    PdoPacker& pdo = a.rpdos[static_cast<std::size_t>(s.pdo)];
+    const auto slot = static_cast<std::size_t>(s.slot);
+    c = a.config.mode == cia402::cst ? pdo.set(slot, per_mille) : pdo.set(slot, counts);
   }
   if (c == Codec::ok) a.setpoint = si;
   return c;
@@ -395,8 +402,9 @@ void BusMaster::transmit(TimeNs now) noexcept {
   m.out_count = 0;
   for (Axis& a : m.axes) {
     a.control = a.controller.update(a.feedback.statusword, now);
-    (void)a.rpdos[static_cast<std::size_t>(a.controlword.pdo)].set(
-        static_cast<std::size_t>(a.controlword.slot), a.control.controlword);
+    for (const Slot& s : a.controlwords)
+      (void)a.rpdos[static_cast<std::size_t>(s.pdo)].set(static_cast<std::size_t>(s.slot),
+                                                         a.control.controlword);
     for (const PdoPacker& p : a.rpdos) m.out(p.frame());
   }
   m.service_sdo(now);

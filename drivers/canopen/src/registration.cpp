@@ -112,6 +112,7 @@ JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode m
   c.max_velocity = j.get_in_range("max_velocity", 1e-6, 1e4, 1);
   c.max_torque = j.get_in_range("max_torque", 0, 1e5, 0);
   c.following_error = j.get_in_range("following_error", 0, 1e3, 0);
+  c.offset = j.get_in_range("offset", -1e6, 1e6, 0);
   const bool own_pdos = j.has("pdo") || j.has("eds");
   c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory);
   if (kinematics != nullptr) {
