@@ -148,7 +148,6 @@ void CanopenArm::provide_interfaces() {
     crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { servo_cf(w); });
     if (config_.max_force > 0) p.limit(arm::servo_cf.name, -config_.max_force, config_.max_force);
   }
-  using cia402::Mode;
   crtk::provide(p, joint_space::servo_jp, [this](const JointState& js) { servo_joints(js, cia402::csp); });
   crtk::provide(p, joint_space::servo_jv, [this](const JointState& js) { servo_joints(js, cia402::csv); });
   crtk::provide(p, joint_space::servo_jf, [this](const JointState& js) { servo_joints(js, cia402::cst); });
