@@ -149,3 +149,26 @@ TEST(CanopenDeployment, TheSimulationDeploymentParses) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(CanopenDeployment, TheSummaryNamesTheFaultAndItsEmergency) {
+  canopen::CanopenStatus s;
+  s.state = saw::OperatingStateValue::fault;
+  s.reason = canopen::FaultReason::emcy;
+  s.faults = 1;
+  s.fault.code = saw::FaultCode::device_error;
+  s.fault.detail = 0x2310;
+  s.fault.set_source("elbow_pitch");
+  s.syncs = 1000;
+  s.refused.not_finite = 2;
+  const auto* format = registry().summary_format(saw::type_info_of<canopen::CanopenStatus>());
+  ASSERT_NE(format, nullptr);
+  const std::string line = (*format)(&s);
+  EXPECT_HAS(line, "FAULT, bus error-active: 1000 SYNC");
+  EXPECT_HAS(line, "emergency message (device error) on elbow_pitch, detail 0x2310");
+  EXPECT_HAS(line, "continuous over-current (device output side)");
+  EXPECT_HAS(line, "2 commands refused, never sent: 2 not finite");
+}
+
+}  // namespace

@@ -8,6 +8,7 @@
 
 #include "saw/canopen/canopen_arm.hpp"
 #include "saw/canopen/eds.hpp"
+#include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
 
 namespace saw::canopen {
@@ -214,6 +215,9 @@ std::string summary_line(const CanopenStatus& s) {
                   std::string(to_string(s.fault.code)).c_str(), std::string(s.fault.source_name()).c_str(),
                   s.fault.detail, static_cast<double>(s.fault.since_start_ns) * 1e-6);
     out += b;
+    const bool emcy_code =
+        s.reason == FaultReason::emcy || (s.reason == FaultReason::drive_fault && s.fault.detail != 0);
+    if (emcy_code) out += ": " + std::string(emcy_name(static_cast<std::uint16_t>(s.fault.detail)));
   }
   if (s.emcy != 0 || s.heartbeat_losses != 0 || s.bad_pdos != 0) {
     std::snprintf(b, sizeof b, "\n%llu EMCY, %llu heartbeat losses, %llu bad PDOs",
