@@ -112,7 +112,6 @@ struct BusMaster::Impl {
   TimeNs first_cycle = 0;
   int sdo_axis = -1;  // the axis running a runtime transfer
   std::uint32_t sdo_tag = 0;
-  std::uint64_t dropped_seen = 0;
 };
 
 namespace {
