@@ -9,6 +9,7 @@
 #include "gateway_process.hpp"
 #include "run_summary.hpp"
 #include "saw/bridge/registration.hpp"
+#include "saw/canopen/registration.hpp"
 #include "saw/deploy/deployment.hpp"
 #include "saw/drivers/sim_registration.hpp"
 #include "saw/teleop/registration.hpp"
@@ -21,6 +22,7 @@ void on_signal(int) { stop_requested.store(true, std::memory_order_relaxed); }
 
 void register_packages(saw::deploy::ComponentRegistry& registry) {
   saw::bridge::register_components(registry);
+  saw::canopen::register_components(registry);
   saw::drivers::sim::register_components(registry);
   saw::teleop::register_components(registry);
 }

@@ -110,7 +110,9 @@ std::vector<SdoWrite> configuration_writes(const PdoMapping& m) {
   check(m);
   const std::uint16_t comm = m.communication_index(), map = m.mapping_index();
   std::vector<SdoWrite> w;
-  const std::uint32_t cob_id = m.enabled ? m.cob_id : 0;
+  // A disabled PDO keeps its identifier under bit 31: a device may refuse a write that changes
+  // the identifier bits of a PDO that is still valid (CiA 301 7.5.2.35).
+  const std::uint32_t cob_id = m.cob_id & CAN_SFF_MASK;
   w.push_back({{comm, 1}, DataType::unsigned32, cob_id | pdo_invalid});
   if (!m.enabled) return w;
   w.push_back({{map, 0}, DataType::unsigned8, 0});

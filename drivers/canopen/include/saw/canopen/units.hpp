@@ -39,6 +39,17 @@ struct DriveUnits {
   double per_mille_to_torque(std::int16_t per_mille) const noexcept {
     return per_mille * rated_torque / 1000.0;
   }
+  // The same at the joint: effort at the output (N·m for a rotary joint, N for a linear one)
+  // through the gear (and the lead), an ideal transmission without friction.
+  double effort_per_motor_torque() const noexcept {
+    return gear_ratio * 2 * std::numbers::pi / si_per_revolution;
+  }
+  Codec effort_to_per_mille(double effort, std::int16_t& per_mille) const noexcept {
+    return torque_to_per_mille(effort / effort_per_motor_torque(), per_mille);
+  }
+  double per_mille_to_effort(std::int16_t per_mille) const noexcept {
+    return per_mille_to_torque(per_mille) * effort_per_motor_torque();
+  }
 };
 
 }  // namespace saw::canopen

@@ -1,0 +1,85 @@
+// Why a CANopen component went to FAULT, and what a run of it comes to (its summary column).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+#include <tuple>
+
+#include "saw/crtk.hpp"
+#include "saw/fault.hpp"
+
+namespace saw::canopen {
+
+// The CANopen reason behind a FaultInfo (whose code is the generic one).
+enum class FaultReason : std::uint8_t {
+  none,
+  drive_fault,      // a statusword showed fault or fault reaction active (detail: the last EMCY code)
+  emcy,             // an EMCY with an error code (detail: the code)
+  heartbeat_lost,   // no heartbeat within heartbeat_timeout (age: how long it was silent)
+  node_rebooted,    // a boot-up after start-up: the drive's configuration is gone (restart needed)
+  bus_off,          // the bus is off or down (detail: can::BusState)
+  feedback_stale,   // no TPDO within feedback_timeout (age: the newest one's)
+  command_stale,    // no servo command within command_timeout (on_command_timeout: fault)
+  joint_limit,      // a measured position left [min, max]
+  following_error,  // CSP: |target − position| above following_error
+  enable_timeout,   // a drive did not reach operation enabled within the transition timeout
+};
+constexpr std::size_t enum_count(FaultReason) { return 11; }
+constexpr std::string_view enum_type_name(FaultReason) { return "saw::canopen::FaultReason"; }
+// Lower case, a literal (the RT log keeps the pointer): "heartbeat lost".
+const char* to_string(FaultReason r) noexcept;
+
+// Commands refused before they became a PDO, by why.
+struct RefusedCommands {
+  static constexpr std::string_view type_name = "saw::canopen::RefusedCommands";
+  static constexpr std::uint32_t layout_version = 1;
+  std::uint64_t not_finite = 0;  // NaN or infinity anywhere in it
+  std::uint64_t over_limit = 0;  // a position, step, velocity, torque or force beyond its limit
+  std::uint64_t wrong_mode = 0;  // servo_jp outside csp, servo_jv outside csv, servo_jf/cf outside cst
+  std::uint64_t wrong_size = 0;  // a joint state whose size is not the number of joints
+  static constexpr auto fields = std::tuple{&RefusedCommands::not_finite, &RefusedCommands::over_limit,
+                                            &RefusedCommands::wrong_mode, &RefusedCommands::wrong_size};
+  std::uint64_t total() const noexcept { return not_finite + over_limit + wrong_mode + wrong_size; }
+};
+
+// A CANopen component's state and counters: a summary column (printed when a run ends).
+struct CanopenStatus {
+  static constexpr std::string_view type_name = "saw::canopen::CanopenStatus";
+  static constexpr std::uint32_t layout_version = 1;
+  OperatingStateValue state = OperatingStateValue::disabled;
+  FaultReason reason = FaultReason::none;
+  std::uint8_t bus_state = 0;  // can::BusState
+  std::uint8_t joints = 0;
+  std::uint32_t faults = 0;  // times it went to FAULT
+  FaultInfo fault;           // the last fault (kept after recovery)
+  std::uint64_t frames_received = 0, frames_sent = 0, send_refused = 0, foreign_frames = 0;
+  std::uint64_t syncs = 0;
+  std::uint64_t emcy = 0, heartbeat_losses = 0, bad_pdos = 0;
+  std::uint64_t watchdog_trips = 0;
+  std::uint64_t sdo_done = 0, sdo_failed = 0, sdo_refused = 0;
+  RefusedCommands refused;
+  TimeNs command_timeout = 0;
+  static constexpr auto fields = std::tuple{&CanopenStatus::state,
+                                            &CanopenStatus::reason,
+                                            &CanopenStatus::bus_state,
+                                            &CanopenStatus::joints,
+                                            &CanopenStatus::faults,
+                                            &CanopenStatus::fault,
+                                            &CanopenStatus::frames_received,
+                                            &CanopenStatus::frames_sent,
+                                            &CanopenStatus::send_refused,
+                                            &CanopenStatus::foreign_frames,
+                                            &CanopenStatus::syncs,
+                                            &CanopenStatus::emcy,
+                                            &CanopenStatus::heartbeat_losses,
+                                            &CanopenStatus::bad_pdos,
+                                            &CanopenStatus::watchdog_trips,
+                                            &CanopenStatus::sdo_done,
+                                            &CanopenStatus::sdo_failed,
+                                            &CanopenStatus::sdo_refused,
+                                            &CanopenStatus::refused,
+                                            &CanopenStatus::command_timeout};
+};
+
+}  // namespace saw::canopen

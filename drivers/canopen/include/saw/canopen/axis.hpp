@@ -1,0 +1,67 @@
+// One CiA 402 drive as the bus master runs it: its configuration, and what each cycle reads of it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "saw/canopen/cia402.hpp"
+#include "saw/canopen/nmt.hpp"
+#include "saw/canopen/pdo.hpp"
+#include "saw/canopen/units.hpp"
+#include "saw/clock.hpp"
+
+namespace saw::canopen {
+
+struct AxisConfig {
+  std::string name;  // the joint's name: what faults and logs call it
+  std::uint8_t node = 1;
+  cia402::Mode mode = cia402::csp;  // written to 0x6060 at start-up; its target is the one sent
+  DriveUnits units;
+  // Every PDO the start-up configures (disabled ones are written as not valid). The RPDOs must
+  // map the controlword and the mode's target, the TPDOs the statusword and position actual.
+  std::vector<PdoMapping> pdos;
+  // The drive sends its heartbeat this often (0x1017, written at start-up) ...
+  TimeNs heartbeat_period = 100'000'000;
+  // ... and is lost when none came for this long (the master's consumer time; above the period).
+  TimeNs heartbeat_timeout = 250'000'000;
+};
+
+// The object that carries the mode's target: 0x607A (csp), 0x60FF (csv), 0x6071 (cst).
+ObjectAddress mode_target(cia402::Mode mode) noexcept;
+
+// Set-up: throws std::invalid_argument naming the axis and what is wrong (node-ID, units,
+// heartbeat times, a PDO that check() refuses, the objects the mode needs not mapped).
+void check(const AxisConfig& a);
+
+// What the last TPDOs said about a drive, in SI (units.hpp). Velocity is the drive's when a TPDO
+// maps 0x606C, else the difference of positions; torque is the joint's effort (through the gear)
+// when 0x6077 is mapped, else 0.
+struct AxisFeedback {
+  bool valid = false;        // every TPDO arrived at least once
+  bool fresh = false;        // a TPDO arrived since the last cycle
+  TimeNs last_received = 0;  // when the last TPDO arrived (the cycle's time)
+  std::uint16_t statusword = 0;
+  cia402::State state = cia402::State::unknown;
+  std::int8_t mode_display = 0;  // 0x6061 when mapped, else 0
+  std::int32_t position_counts = 0;
+  double position = 0, velocity = 0, torque = 0;
+  bool has_velocity = false, has_torque = false;
+};
+
+// What the master heard about a drive besides its PDOs. Counters only grow: a reader compares
+// them with the values it saw last.
+struct AxisHealth {
+  bool heartbeat_seen = false;
+  bool heartbeat_lost = false;  // silent for longer than heartbeat_timeout, not back yet
+  TimeNs silent_for = 0;        // at the last loss
+  std::uint32_t heartbeat_losses = 0;
+  std::uint32_t boot_ups = 0;  // boot-ups after start-up: the drive reset, its set-up is gone
+  NmtState nmt_state = NmtState::initialising;
+  std::uint64_t emcy_count = 0;     // EMCY messages with an error (code not 0)
+  std::uint16_t last_emcy = 0;      // the newest one's code
+  std::uint8_t error_register = 0;  // from the newest EMCY (0 after an error reset)
+  std::uint64_t bad_pdos = 0;       // frames on a TPDO identifier of the wrong length or kind
+};
+
+}  // namespace saw::canopen

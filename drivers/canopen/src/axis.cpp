@@ -1,0 +1,69 @@
+#include "saw/canopen/axis.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include "saw/canopen/cob.hpp"
+
+namespace saw::canopen {
+namespace {
+
+bool maps(const AxisConfig& a, PdoKind kind, ObjectAddress object) {
+  for (const PdoMapping& m : a.pdos)
+    if (m.kind == kind && m.enabled)
+      for (std::size_t i = 0; i < m.count; ++i)
+        if (m.entries[i].address == object) return true;
+  return false;
+}
+
+}  // namespace
+
+ObjectAddress mode_target(cia402::Mode mode) noexcept {
+  using namespace cia402;
+  return mode == csv   ? object::target_velocity
+         : mode == cst ? object::target_torque
+                       : object::target_position;
+}
+
+void check(const AxisConfig& a) {
+  const std::string who = "drive '" + a.name + "' (node " + std::to_string(a.node) + ")";
+  const auto fail = [&](const std::string& what) { throw std::invalid_argument(who + ": " + what); };
+  if (!valid_node_id(a.node)) fail("node-ID must be 1..127");
+  if (a.mode != cia402::csp && a.mode != cia402::csv && a.mode != cia402::cst)
+    fail("mode must be cyclic synchronous position, velocity or torque (csp, csv, cst)");
+  try {
+    a.units.check();
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
+  constexpr TimeNs ms = 1'000'000;
+  if (a.heartbeat_period < ms || a.heartbeat_period > 65535 * ms)
+    fail("heartbeat period must be 1 ms to 65.535 s (0x1017 holds milliseconds)");
+  if (a.heartbeat_timeout <= a.heartbeat_period) fail("heartbeat timeout must be above the heartbeat period");
+  for (const PdoMapping& m : a.pdos) {
+    try {
+      canopen::check(m);
+    } catch (const std::invalid_argument& e) {
+      fail(e.what());
+    }
+  }
+  for (std::size_t i = 0; i < a.pdos.size(); ++i)
+    for (std::size_t j = i + 1; j < a.pdos.size(); ++j) {
+      const PdoMapping &p = a.pdos[i], &q = a.pdos[j];
+      if (p.kind == q.kind && p.number == q.number)
+        fail(std::string(to_string(p.kind)) + std::to_string(p.number) + " is configured twice");
+      if (p.enabled && q.enabled && p.cob_id == q.cob_id)
+        fail("two PDOs on identifier " + std::to_string(p.cob_id));
+    }
+  const auto need = [&](PdoKind kind, ObjectAddress object, const char* name) {
+    if (!maps(a, kind, object))
+      fail(std::string("no ") + std::string(to_string(kind)) + " maps " + name + " (" + to_string(object) +
+           ")");
+  };
+  need(PdoKind::rpdo, cia402::object::controlword, "the controlword");
+  need(PdoKind::rpdo, mode_target(a.mode), "the mode's target");
+  need(PdoKind::tpdo, cia402::object::statusword, "the statusword");
+  need(PdoKind::tpdo, cia402::object::position_actual_value, "the position actual value");
+}
+
+}  // namespace saw::canopen

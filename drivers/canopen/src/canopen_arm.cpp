@@ -1,0 +1,209 @@
+// CanopenArm's construction, interfaces, start-up and state commands (the cycle: arm_cycle.cpp).
+#include "saw/canopen/canopen_arm.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+#include "saw/canopen/pdo_text.hpp"
+#include "saw/log.hpp"
+
+namespace saw::canopen {
+namespace {
+
+// The buses this process is master of: two masters on one bus would both send SYNC and fight
+// over the drives' controlwords. Set-up only (a lock, an allocation).
+std::mutex claims_mutex;
+std::map<std::string, std::string>& claims() {
+  static std::map<std::string, std::string> c;
+  return c;
+}
+
+std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
+  std::vector<AxisConfig> axes;
+  for (const JointConfig& j : c.joints) {
+    AxisConfig a;
+    a.name = j.name;
+    a.node = j.node;
+    a.mode = c.mode;
+    a.units = j.units;
+    a.pdos = j.pdos.empty() ? default_pdo_mappings(c.mode, j.node) : j.pdos;
+    a.heartbeat_period = c.heartbeat_period;
+    a.heartbeat_timeout = c.heartbeat_timeout;
+    axes.push_back(std::move(a));
+  }
+  return axes;
+}
+
+std::unique_ptr<can::Bus> open(const std::string& uri) {
+  can::BusConfig c;
+  c.uri = uri;
+  return can::open_bus(c);
+}
+
+}  // namespace
+
+CanopenArmConfig checked(CanopenArmConfig c, const TaskConfig& task) {
+  const TimeNs period = task.period.count();
+  if (period <= 0) throw std::invalid_argument("a CANopen component's task must be periodic");
+  if (c.joints.empty() || c.joints.size() > JointState::max_joints)
+    throw std::invalid_argument("a CANopen component has 1 to " + std::to_string(JointState::max_joints) +
+                                " joints");
+  if (c.command_timeout == 0) c.command_timeout = 3 * period;
+  if (c.command_timeout < period) throw std::invalid_argument("command_timeout must be at least one period");
+  if (c.feedback_timeout == 0) c.feedback_timeout = std::max<TimeNs>(10 * period, 10'000'000);
+  if (c.feedback_timeout < 2 * period)
+    throw std::invalid_argument("feedback_timeout must be at least two periods");
+  if (c.chain && c.chain->joints.size() != c.joints.size())
+    throw std::invalid_argument("the chain has " + std::to_string(c.chain->joints.size()) +
+                                " joints, the arm " + std::to_string(c.joints.size()) + " drives");
+  for (JointConfig& j : c.joints) {
+    if (!(j.min < j.max)) throw std::invalid_argument("joint '" + j.name + "': min must be below max");
+    if (!(j.max_velocity > 0))
+      throw std::invalid_argument("joint '" + j.name + "': max_velocity must be above 0");
+    if (j.max_torque == 0) j.max_torque = j.units.rated_torque * j.units.effort_per_motor_torque();
+    if (!(j.max_torque > 0) || !(j.following_error >= 0))
+      throw std::invalid_argument("joint '" + j.name +
+                                  "': max_torque and following_error must not be negative");
+    if (j.name.size() > JointState::max_name)
+      throw std::invalid_argument("joint '" + j.name + "': a name has at most 31 characters");
+  }
+  const auto axes = axes_of(c);
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    check(axes[i]);
+    for (std::size_t k = 0; k < i; ++k)
+      if (axes[k].node == axes[i].node)
+        throw std::invalid_argument("joints '" + axes[k].name + "' and '" + axes[i].name + "' share node " +
+                                    std::to_string(axes[i].node));
+  }
+  return c;
+}
+
+struct CanopenArm::Claim {
+  Claim(std::string b, const std::string& owner) : bus(std::move(b)) {  // b: a URI, or a name and address
+    const std::lock_guard lock(claims_mutex);
+    const auto [it, fresh] = claims().emplace(bus, owner);
+    if (!fresh)
+      throw std::runtime_error("CAN bus " + bus + " has a CANopen master in this process already ('" +
+                               it->second + "'): put every drive of a bus in one component");
+  }
+  ~Claim() {
+    const std::lock_guard lock(claims_mutex);
+    claims().erase(bus);
+  }
+  std::string bus;
+};
+
+CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config)
+    : CanopenArm(std::move(name), task, std::move(config), nullptr, nullptr) {}
+
+CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus& bus)
+    : CanopenArm(std::move(name), task, std::move(config), nullptr, &bus) {}
+
+CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config,
+                       std::unique_ptr<can::Bus> owned, can::Bus* bus)
+    : Task(std::move(name), task),
+      config_(checked(std::move(config), task)),
+      n_(config_.joints.size()),
+      owned_bus_(bus != nullptr ? std::move(owned) : open(config_.bus)),
+      bus_(bus != nullptr ? *bus : *owned_bus_) {
+  // A bus of the caller's is known by its address: two of them may share a name.
+  claim_ = std::make_unique<Claim>(
+      bus != nullptr ? "'" + bus_.name() + "' at " + std::to_string(reinterpret_cast<std::uintptr_t>(bus))
+                     : config_.bus,
+      this->name());
+  BusMasterConfig m;
+  m.period = task.period.count();
+  m.controller.transition_timeout = config_.transition_timeout;
+  master_ = std::make_unique<BusMaster>(bus_, m, axes_of(config_));
+  if (config_.chain) kinematics_ = std::make_unique<ChainKinematics>(*config_.chain);
+  measured_js_.size = setpoint_js_.size = static_cast<std::uint32_t>(n_);
+  for (std::size_t i = 0; i < n_; ++i) {
+    (void)measured_js_.set_name(i, config_.joints[i].name);
+    (void)setpoint_js_.set_name(i, config_.joints[i].name);
+    max_torque_[i] = config_.joints[i].max_torque;
+  }
+  status_.joints = static_cast<std::uint8_t>(n_);
+  status_.command_timeout = config_.command_timeout;
+  provide_interfaces();
+}
+
+CanopenArm::~CanopenArm() = default;
+
+void CanopenArm::provide_interfaces() {
+  namespace arm = crtk::arm;
+  auto& st = state_table();
+  auto& p = provide(config_.interface_name);
+  crtk::provide(p, arm::measured_js, st, &measured_js_);
+  crtk::provide(p, joint_space::setpoint_js, st, &setpoint_js_);
+  crtk::provide(p, arm::operating_state, st, &state_);
+  p.add_command_read("fault", st.add_column("fault", &fault_));
+  p.add_command_read("command_timeout", st.add_column("command_timeout", &command_timeout_));
+  p.add_command_read("watchdog_trips", st.add_column("watchdog_trips", &watchdog_trips_));
+  if (kinematics_) {
+    crtk::provide(p, arm::measured_cp, st, &measured_cp_);
+    crtk::provide(p, arm::measured_cv, st, &measured_cv_);
+    crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { servo_cf(w); });
+    if (config_.max_force > 0) p.limit(arm::servo_cf.name, -config_.max_force, config_.max_force);
+  }
+  crtk::provide(p, joint_space::servo_jp, [this](const JointState& js) { servo_joints(js, cia402::csp); });
+  crtk::provide(p, joint_space::servo_jv, [this](const JointState& js) { servo_joints(js, cia402::csv); });
+  crtk::provide(p, joint_space::servo_jf, [this](const JointState& js) { servo_joints(js, cia402::cst); });
+  crtk::provide(p, arm::state_command, [this](const StateCommand& c) { state_command(c); });
+  state_event_ = &crtk::provide(p, arm::operating_state_event);
+  fault_event_ = &p.add_event_write<FaultInfo>("fault");
+
+  auto& c = provide("canopen");
+  c.add_command_read("status", st.add_column("status", &status_, ColumnUse::summary));
+  c.add_command_qualified_read<SdoRequest, SdoReply>("sdo", [this](const SdoRequest& q, SdoReply& r) {
+    r = master_->sdo_queue().transfer(q, 1'000'000'000);
+  });
+}
+
+void CanopenArm::startup() {
+  StartupSequence sequence(bus_, std::vector<AxisConfig>(axes_of(config_)), config_.startup);
+  run_startup(sequence, config_.startup_pause);
+  if (config_.start_enabled) enable_requested_ = true;
+}
+
+void CanopenArm::set_state(OperatingStateValue s) noexcept {
+  if (state_.state == s) return;
+  state_.state = s;
+  (void)(*state_event_)(state_);
+}
+
+void CanopenArm::target_all(cia402::Target t) noexcept {
+  for (std::size_t i = 0; i < n_; ++i) master_->set_state_target(i, t, now());
+}
+
+void CanopenArm::state_command(StateCommand c) noexcept {
+  switch (c) {
+    case StateCommand::enable:
+      enable_requested_ = true;  // acted on in the cycle, with its measurements
+      break;
+    case StateCommand::disable:
+      enable_requested_ = enabling_ = false;
+      state_.is_busy = false;
+      target_all(cia402::Target::switch_on_disabled);
+      set_state(OperatingStateValue::disabled);
+      break;
+    case StateCommand::pause:
+      if (state_.state == OperatingStateValue::enabled && !enabling_) set_state(OperatingStateValue::paused);
+      break;
+    case StateCommand::resume:
+      if (state_.state == OperatingStateValue::paused) set_state(OperatingStateValue::enabled);
+      break;
+    case StateCommand::home:
+      // Cyclic synchronous modes need an absolute position: the drives' encoders (or their own
+      // homing, done outside this component) give it. Nothing moves here.
+      if (!state_.is_homed) {
+        state_.is_homed = true;
+        (void)(*state_event_)(state_);
+      }
+      break;
+  }
+}
+
+}  // namespace saw::canopen

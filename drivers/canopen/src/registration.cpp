@@ -1,0 +1,269 @@
+// The CANopen types for deployments: each parameter read, range-checked and located (file:line:key).
+#include "saw/canopen/registration.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "saw/canopen/canopen_arm.hpp"
+#include "saw/canopen/eds.hpp"
+#include "saw/canopen/emcy.hpp"
+#include "saw/canopen/pdo_text.hpp"
+
+namespace saw::canopen {
+namespace {
+
+using namespace std::chrono_literals;
+using deploy::ComponentContext;
+using deploy::Params;
+
+struct CanopenSpec {
+  TaskConfig task;
+  CanopenArmConfig config;
+};
+
+TimeNs duration(const Params& p, const std::string& key, std::chrono::nanoseconds fallback,
+                std::chrono::nanoseconds lo, std::chrono::nanoseconds hi) {
+  const auto d = p.get_or<std::chrono::nanoseconds>(key, fallback);
+  if (d < lo || d > hi) {
+    char b[128];
+    std::snprintf(b, sizeof b, "must be from %g to %g s", static_cast<double>(lo.count()) * 1e-9,
+                  static_cast<double>(hi.count()) * 1e-9);
+    p.fail_at(key, b);
+  }
+  return d.count();
+}
+
+cia402::Mode parse_mode(const Params& p) {
+  return p.get_enum<cia402::Mode>("mode", {{"csp", cia402::csp}, {"csv", cia402::csv}, {"cst", cia402::cst}},
+                                  cia402::csp);
+}
+
+// `pdo: {rpdo1: [controlword, target_position], tpdo1: [...], ...}`: the PDOs 1..4 listed are
+// mapped, the others configured as not valid. `eds: file` instead: the file's PDOs (a DCF's
+// ParameterValues). Neither: the defaults for the mode.
+std::vector<PdoMapping> parse_pdos(const Params& p, cia402::Mode mode, std::uint8_t node,
+                                   const std::string& directory) {
+  if (p.has("pdo") && p.has("eds")) p.fail_at("eds", "give either pdo or eds, not both");
+  if (p.has("eds")) {
+    std::filesystem::path file = p.get<std::string>("eds");
+    if (file.is_relative() && !directory.empty()) file = std::filesystem::path(directory) / file;
+    return eds_pdo_mappings(load_eds(file.string()), node);  // its errors name the EDS file and line
+  }
+  if (!p.has("pdo")) {
+    p.mark_used("pdo");
+    return default_pdo_mappings(mode, node);
+  }
+  const Params pdo = p.child("pdo");
+  std::vector<PdoMapping> maps;
+  for (const PdoKind kind : {PdoKind::rpdo, PdoKind::tpdo})
+    for (std::uint16_t n = 1; n <= 4; ++n) {
+      const std::string key = (kind == PdoKind::rpdo ? "rpdo" : "tpdo") + std::to_string(n);
+      if (!pdo.has(key)) {
+        pdo.mark_used(key);
+        PdoMapping off;
+        off.kind = kind;
+        off.number = n;
+        off.enabled = false;
+        off.cob_id = default_pdo_cob_id(kind, n, node);
+        maps.push_back(off);
+        continue;
+      }
+      std::vector<PdoEntry> entries;
+      try {
+        for (const std::string& text : pdo.get<std::vector<std::string>>(key))
+          entries.push_back(parse_pdo_entry(text));
+        maps.push_back(make_pdo(kind, n, node, entries));
+      } catch (const std::invalid_argument& e) {
+        pdo.fail_at(key, e.what());
+      }
+    }
+  return maps;
+}
+
+// A joint's drive: node, units, limits, and (arm) its place in the chain.
+JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode mode, const Params& shared,
+                        const std::string& directory, ChainJoint* kinematics) {
+  JointConfig c;
+  c.name = name;
+  if (name.size() > JointState::max_name) j.fail("a joint's name has at most 31 characters");
+  const int node = j.get<int>("node");
+  if (!valid_node_id(static_cast<unsigned>(node))) j.fail_at("node", "a node-ID is 1..127");
+  c.node = static_cast<std::uint8_t>(node);
+  const auto type = j.get_enum<ChainJoint::Type>(
+      "type", {{"revolute", ChainJoint::Type::revolute}, {"prismatic", ChainJoint::Type::prismatic}},
+      ChainJoint::Type::revolute);
+  const double counts = j.get_in_range("counts_per_revolution", 1, 1e9, 0);
+  if (counts == 0) j.fail_at("counts_per_revolution", "required parameter is missing");
+  const double gear = j.get_in_range("gear_ratio", 1e-6, 1e6, 1);
+  const double rated = j.get_in_range("rated_torque", 1e-6, 1e4, 0);
+  if (rated == 0)
+    j.fail_at("rated_torque", "required parameter is missing (the motor's, N·m: 0x6076 / 1000)");
+  if (type == ChainJoint::Type::prismatic) {
+    const double lead = j.get_in_range("lead", 1e-6, 10, 0);
+    if (lead == 0) j.fail_at("lead", "a prismatic joint needs its lead (m of travel per output revolution)");
+    c.units = DriveUnits::linear(counts, gear, lead, rated);
+  } else {
+    c.units = DriveUnits::rotary(counts, gear, rated);
+  }
+  c.min = j.get<double>("min");
+  c.max = j.get<double>("max");
+  if (!(c.min < c.max)) j.fail_at("max", "must be above min");
+  c.max_velocity = j.get_in_range("max_velocity", 1e-6, 1e4, 1);
+  c.max_torque = j.get_in_range("max_torque", 0, 1e5, 0);
+  c.following_error = j.get_in_range("following_error", 0, 1e3, 0);
+  c.offset = j.get_in_range("offset", -1e6, 1e6, 0);
+  const bool own_pdos = j.has("pdo") || j.has("eds");
+  c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory);
+  if (kinematics != nullptr) {
+    kinematics->type = type;
+    kinematics->xyz = j.get_or<Vec3>("xyz", {0, 0, 0});
+    kinematics->rpy = j.get_or<Vec3>("rpy", {0, 0, 0});
+    kinematics->axis = j.get_or<Vec3>("axis", {0, 0, 1});
+    const auto& a = kinematics->axis;
+    if (!(std::hypot(a[0], a[1], a[2]) > 1e-9)) j.fail_at("axis", "must be a non-zero direction");
+  }
+  return c;
+}
+
+// What both types share: the bus, the mode, heartbeats, timeouts, the start-up.
+void parse_common(const ComponentContext& ctx, Params& p, const std::string& type, CanopenSpec& s) {
+  CanopenArmConfig& c = s.config;
+  c.bus = p.get<std::string>("bus");
+  if (!c.bus.starts_with("virtual:") && !c.bus.starts_with("socketcan:"))
+    p.fail_at("bus", "'" + c.bus + "' is not a bus: virtual:<name> or socketcan:<interface>");
+  c.mode = parse_mode(p);
+  s.task = deploy::periodic_task(ctx, p, type);
+  const auto period = s.task.period;
+  const Params hb = p.child("heartbeat");
+  c.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
+  c.heartbeat_timeout = duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.heartbeat_period), 1ms, 600s);
+  if (c.heartbeat_timeout <= c.heartbeat_period) hb.fail_at("timeout", "must be above the heartbeat period");
+  c.command_timeout = duration(p, "command_timeout", 3 * period, period, 10s);
+  c.on_command_timeout = p.get_enum<CommandTimeoutAction>(
+      "on_command_timeout", {{"hold", CommandTimeoutAction::hold}, {"fault", CommandTimeoutAction::fault}},
+      CommandTimeoutAction::hold);
+  c.feedback_timeout =
+      duration(p, "feedback_timeout", std::max<std::chrono::nanoseconds>(10 * period, 10ms), 2 * period, 10s);
+  c.max_force = p.get_in_range("max_force", 0, 1e5, 0);
+  c.start_enabled = p.get_or<bool>("start_enabled", false);
+  c.transition_timeout = duration(p, "transition_timeout", 1s, 10ms, 60s);
+  const Params st = p.child("startup");
+  c.startup.boot_timeout = duration(st, "boot_timeout", 2s, 10ms, 600s);
+  c.startup.sdo_timeout = duration(st, "sdo_timeout", 500ms, 1ms, 60s);
+  c.startup.operational_timeout = duration(st, "operational_timeout", 2s, 10ms, 600s);
+}
+
+// The checks that need the whole configuration (the drives' PDO maps against the mode, shared
+// node-IDs): at the parameters' mapping.
+void check_all(const Params& p, CanopenSpec& s) {
+  try {
+    s.config = checked(std::move(s.config), s.task);
+  } catch (const std::invalid_argument& e) {
+    p.fail(e.what());
+  }
+}
+
+CanopenSpec parse_drive(const ComponentContext& ctx, Params& p) {
+  CanopenSpec s;
+  parse_common(ctx, p, "canopen_drive", s);
+  s.config.interface_name = "drive";
+  const std::string joint = p.get_or<std::string>("joint", ctx.name);
+  s.config.joints.push_back(parse_joint(p, joint, s.config.mode, p, ctx.directory, nullptr));
+  check_all(p, s);
+  return s;
+}
+
+CanopenSpec parse_arm(const ComponentContext& ctx, Params& p) {
+  CanopenSpec s;
+  parse_common(ctx, p, "canopen_arm", s);
+  const auto names = p.get<std::vector<std::string>>("chain");
+  if (names.empty() || names.size() > JointState::max_joints)
+    p.fail_at("chain", "an arm has 1 to 8 joints, base to tip");
+  const Params joints = p.child("joints");
+  ChainSpec chain;
+  for (const std::string& name : names) {
+    if (!joints.has(name))
+      joints.fail_at(name, "the chain names joint '" + name + "': give its parameters here");
+    if (std::count(names.begin(), names.end(), name) > 1) p.fail_at("chain", "joint '" + name + "' twice");
+    ChainJoint& k = chain.joints.emplace_back();
+    s.config.joints.push_back(parse_joint(joints.child(name), name, s.config.mode, p, ctx.directory, &k));
+  }
+  const Params tip = p.child("tip");
+  chain.tip_xyz = tip.get_or<Vec3>("xyz", {0, 0, 0});
+  chain.tip_rpy = tip.get_or<Vec3>("rpy", {0, 0, 0});
+  s.config.chain = chain;
+  check_all(p, s);
+  return s;
+}
+
+std::string summary_line(const CanopenStatus& s) {
+  char b[512];
+  std::string out;
+  std::snprintf(
+      b, sizeof b, "%s, bus %s: %llu SYNC, %llu frames received, %llu sent (%llu refused), %llu for others",
+      std::string(to_string(s.state)).c_str(),
+      std::string(can::to_string(static_cast<can::BusState>(s.bus_state))).c_str(),
+      static_cast<unsigned long long>(s.syncs), static_cast<unsigned long long>(s.frames_received),
+      static_cast<unsigned long long>(s.frames_sent), static_cast<unsigned long long>(s.send_refused),
+      static_cast<unsigned long long>(s.foreign_frames));
+  out += b;
+  if (s.faults != 0) {
+    std::snprintf(b, sizeof b, "\n%u faults; the last: %s (%s) on %s, detail 0x%04X, %.1f ms after start",
+                  s.faults, to_string(s.fault.code == FaultCode::none ? FaultReason::none : s.reason),
+                  std::string(to_string(s.fault.code)).c_str(), std::string(s.fault.source_name()).c_str(),
+                  s.fault.detail, static_cast<double>(s.fault.since_start_ns) * 1e-6);
+    out += b;
+    const bool emcy_code =
+        s.reason == FaultReason::emcy || (s.reason == FaultReason::drive_fault && s.fault.detail != 0);
+    if (emcy_code) out += ": " + std::string(emcy_name(static_cast<std::uint16_t>(s.fault.detail)));
+  }
+  if (s.emcy != 0 || s.heartbeat_losses != 0 || s.bad_pdos != 0) {
+    std::snprintf(b, sizeof b, "\n%llu EMCY, %llu heartbeat losses, %llu bad PDOs",
+                  static_cast<unsigned long long>(s.emcy),
+                  static_cast<unsigned long long>(s.heartbeat_losses),
+                  static_cast<unsigned long long>(s.bad_pdos));
+    out += b;
+  }
+  if (s.refused.total() != 0) {
+    std::snprintf(
+        b, sizeof b,
+        "\n%llu commands refused, never sent: %llu not finite, %llu over a limit, %llu for another mode, "
+        "%llu of the wrong size",
+        static_cast<unsigned long long>(s.refused.total()),
+        static_cast<unsigned long long>(s.refused.not_finite),
+        static_cast<unsigned long long>(s.refused.over_limit),
+        static_cast<unsigned long long>(s.refused.wrong_mode),
+        static_cast<unsigned long long>(s.refused.wrong_size));
+    out += b;
+  }
+  if (s.watchdog_trips != 0) {
+    std::snprintf(b, sizeof b, "\nheld %llu times: no servo command for %.1f ms (command_timeout)",
+                  static_cast<unsigned long long>(s.watchdog_trips),
+                  static_cast<double>(s.command_timeout) * 1e-6);
+    out += b;
+  }
+  if (s.sdo_done + s.sdo_failed + s.sdo_refused != 0) {
+    std::snprintf(b, sizeof b, "\nruntime SDO: %llu done, %llu failed, %llu refused (queue full)",
+                  static_cast<unsigned long long>(s.sdo_done), static_cast<unsigned long long>(s.sdo_failed),
+                  static_cast<unsigned long long>(s.sdo_refused));
+    out += b;
+  }
+  return out;
+}
+
+}  // namespace
+
+void register_components(deploy::ComponentRegistry& registry) {
+  const auto make = [](const std::string& name, const CanopenSpec& s) {
+    return std::make_unique<CanopenArm>(name, s.task, s.config);
+  };
+  registry.add("canopen_drive", "one CiA 402 drive on a CAN bus (CRTK joint commands; csp, csv or cst)",
+               parse_drive, make);
+  registry.add("canopen_arm", "CiA 402 drives on one CAN bus as a CRTK arm (KDL chain; csp, csv or cst)",
+               parse_arm, make);
+  registry.add_summary_format<CanopenStatus>(summary_line);
+}
+
+}  // namespace saw::canopen

@@ -1,0 +1,220 @@
+#include "saw/canopen/startup.hpp"
+
+#include <chrono>
+#include <stdexcept>
+#include <thread>
+
+#include "saw/canopen/nmt.hpp"
+#include "saw/canopen/sdo_client.hpp"
+
+namespace saw::canopen {
+
+std::string_view to_string(StartupPhase p) noexcept {
+  switch (p) {
+    case StartupPhase::reset:
+      return "NMT reset communication";
+    case StartupPhase::boot:
+      return "waiting for boot-up";
+    case StartupPhase::configure:
+      return "SDO configuration";
+    case StartupPhase::start:
+      return "NMT start";
+    case StartupPhase::operational:
+      return "waiting for an operational heartbeat";
+    case StartupPhase::done:
+      return "done";
+    case StartupPhase::failed:
+      return "failed";
+  }
+  return "unknown";
+}
+
+std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
+  std::vector<StartupWrite> out;
+  for (const PdoMapping& m : axis.pdos) {
+    // Disabling a PDO the drive may not have (the defaults disable 2..4) is allowed to fail.
+    const bool optional = !m.enabled;
+    for (const SdoWrite& w : configuration_writes(m)) out.push_back({w, optional});
+  }
+  const auto heartbeat_ms = static_cast<std::uint32_t>(axis.heartbeat_period / 1'000'000);
+  out.push_back({{{0x1017, 0}, DataType::unsigned16, heartbeat_ms}, false});
+  out.push_back({{cia402::object::modes_of_operation, DataType::integer8,
+                  static_cast<std::uint32_t>(static_cast<std::uint8_t>(axis.mode))},
+                 false});
+  return out;
+}
+
+namespace {
+// Values are kept as 32 bits; a signed object's (the mode) is its two's complement.
+Number write_value(const SdoWrite& w) {
+  if (type_class(w.type) != TypeClass::signed_integer) return std::uint64_t{w.value};
+  switch (size_of(w.type)) {
+    case 1:
+      return std::int64_t{static_cast<std::int8_t>(w.value)};
+    case 2:
+      return std::int64_t{static_cast<std::int16_t>(w.value)};
+    default:
+      return std::int64_t{static_cast<std::int32_t>(w.value)};
+  }
+}
+}  // namespace
+
+struct StartupSequence::Node {
+  Node(const AxisConfig& a, TimeNs sdo_timeout)
+      : axis(a),
+        sdo(SdoClientConfig{SdoChannel::of_node(a.node), sdo_timeout, 64}),
+        writes(startup_writes(a)) {}
+  AxisConfig axis;
+  SdoClient sdo;
+  std::vector<StartupWrite> writes;
+  std::size_t next = 0;  // the write in flight (or the next one)
+  bool started = false;  // `next` was handed to the SDO client
+  bool booted = false;
+  bool operational = false;
+
+  std::string who() const { return "node " + std::to_string(axis.node) + " ('" + axis.name + "')"; }
+};
+
+StartupSequence::StartupSequence(can::Bus& bus, std::span<const AxisConfig> axes, StartupConfig config)
+    : bus_(bus), config_(config) {
+  for (const AxisConfig& a : axes) {
+    check(a);
+    nodes_.push_back(std::make_unique<Node>(a, config.sdo_timeout));
+  }
+  written_.resize(nodes_.size());
+}
+
+StartupSequence::~StartupSequence() = default;
+
+void StartupSequence::send(const can::Frame& f) {
+  if (bus_.send(std::span(&f, 1)) != 1)
+    fail("the bus refused a frame (state " + std::string(can::to_string(bus_.state())) + ")");
+}
+
+void StartupSequence::fail(const std::string& what) {
+  if (phase_ == StartupPhase::failed) return;
+  error_ = "CANopen start-up on " + bus_.name() + " (" + std::string(to_string(phase_)) + "): " + what;
+  phase_ = StartupPhase::failed;
+}
+
+void StartupSequence::receive(TimeNs now) {
+  can::Received in[64];
+  for (std::size_t n; (n = bus_.receive(in)) > 0;) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const can::Frame& f = in[i].frame;
+      const auto hb = parse_heartbeat(f);
+      for (auto& node : nodes_) {
+        node->sdo.on_frame(f, now);
+        if (!hb || hb->node != node->axis.node) continue;
+        // Only what follows our reset counts: a heartbeat from before it says nothing.
+        if (hb->boot_up() && phase_ == StartupPhase::boot) node->booted = true;
+        if (hb->state == NmtState::operational && phase_ == StartupPhase::operational)
+          node->operational = true;
+      }
+    }
+  }
+}
+
+bool StartupSequence::configure(TimeNs now) {
+  bool all_done = true;
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    Node& n = *nodes_[i];
+    if (n.started && !n.sdo.busy()) {
+      const StartupWrite& w = n.writes[n.next];
+      const SdoResult& r = n.sdo.result();
+      const bool missing = r.abort == SdoAbort::no_object || r.abort == SdoAbort::no_subindex;
+      if (r.status == SdoStatus::failed && !(w.optional && missing)) {
+        fail(n.who() + ": writing " + std::to_string(w.write.value) + " to " + to_string(w.write.address) +
+             " failed: " + std::string(to_string(r.abort)) + (r.remote ? " (the drive's abort)" : ""));
+        return false;
+      }
+      if (r.status == SdoStatus::done) written_[i].push_back(w.write);
+      ++n.next;
+      n.started = false;
+    }
+    if (!n.started && n.next < n.writes.size()) {
+      const SdoWrite& w = n.writes[n.next].write;
+      std::uint8_t bytes[8];
+      const std::span<std::uint8_t> span(bytes, size_of(w.type));
+      // Values are kept as 32 bits; a signed object's (the mode) is its two's complement.
+      const Number value = write_value(w);
+      if (encode(w.type, value, span) != Codec::ok || !n.sdo.download(w.address, span, now)) {
+        fail(n.who() + ": value " + std::to_string(w.value) + " does not fit " + to_string(w.address));
+        return false;
+      }
+      n.started = true;
+    }
+    while (auto f = n.sdo.poll(now)) send(*f);
+    all_done = all_done && n.next >= n.writes.size();
+  }
+  return all_done;
+}
+
+StartupPhase StartupSequence::step(TimeNs now) {
+  if (phase_ == StartupPhase::done || phase_ == StartupPhase::failed) return phase_;
+  receive(now);
+  const TimeNs in_phase = now - phase_start_;
+  const auto ms = [](TimeNs t) { return std::to_string(t / 1'000'000) + " ms"; };
+  switch (phase_) {
+    case StartupPhase::reset:
+      for (auto& n : nodes_) send(nmt_frame(NmtCommand::reset_communication, n->axis.node));
+      phase_ = StartupPhase::boot;
+      phase_start_ = now;
+      break;
+    case StartupPhase::boot: {
+      bool all = true;
+      for (auto& n : nodes_) all = all && n->booted;
+      if (all) {
+        phase_ = StartupPhase::configure;
+        phase_start_ = now;
+        (void)configure(now);
+      } else if (in_phase > config_.boot_timeout) {
+        for (auto& n : nodes_)
+          if (!n->booted)
+            fail(n->who() + ": no boot-up within " + ms(config_.boot_timeout) + " of the reset");
+      }
+      break;
+    }
+    case StartupPhase::configure:
+      if (configure(now)) phase_ = StartupPhase::start;
+      break;
+    case StartupPhase::start:
+      for (auto& n : nodes_) send(nmt_frame(NmtCommand::start, n->axis.node));
+      phase_ = StartupPhase::operational;
+      phase_start_ = now;
+      break;
+    case StartupPhase::operational: {
+      bool all = true;
+      for (auto& n : nodes_) all = all && n->operational;
+      if (all) {
+        phase_ = StartupPhase::done;
+      } else if (in_phase > config_.operational_timeout) {
+        for (auto& n : nodes_)
+          if (!n->operational)
+            fail(n->who() + ": no operational heartbeat within " + ms(config_.operational_timeout) +
+                 " of NMT start");
+      }
+      break;
+    }
+    case StartupPhase::done:
+    case StartupPhase::failed:
+      break;
+  }
+  return phase_;
+}
+
+void run_startup(StartupSequence& sequence, const StartupPause& pause) {
+  const auto sleep = [] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    return monotonic_now();
+  };
+  TimeNs now = pause ? pause() : monotonic_now();
+  while (true) {
+    const StartupPhase p = sequence.step(now);
+    if (p == StartupPhase::done) return;
+    if (p == StartupPhase::failed) throw std::runtime_error(sequence.error());
+    now = pause ? pause() : sleep();
+  }
+}
+
+}  // namespace saw::canopen

@@ -1,0 +1,84 @@
+// A CanopenArm's cycle with three drives (bus master, CiA 402 controllers, KDL, checks, faults
+// and their recovery, the watchdog, runtime SDO) allocates, locks, waits and prints nothing:
+// checked by the RT guard on every cycle, the in-process drives included.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "arm_rig.hpp"
+#include "guard_support.hpp"
+#include "saw/rt_context.hpp"
+
+namespace {
+
+using namespace saw::canopen;
+using namespace saw::canopen::test;
+using saw::OperatingStateValue;
+using saw::StateCommand;
+using saw::Wrench;
+
+TEST(RtGuard, CanopenArmCycleWithThreeDrivesIsRtClean) {
+  saw::testing::GuardWindow window;
+  TestDriveConfig soft;  // well damped: the forces below move the joints a few tenths of a radian
+  soft.torque_gain = 20;
+  soft.damping = 20;
+  ArmRig rig(arm_config(cia402::cst), soft);  // set-up and start-up: not RT
+  SdoQueue& sdo = rig.arm->master().sdo_queue();
+
+  constexpr int cycles = 3000;
+  int enabled_cycles = 0, replies = 0, ok_replies = 0;
+  // Each fault as it came: its cycle and reason (the array is written in the cycle, read after).
+  std::array<std::pair<int, FaultReason>, 8> faults{};
+  std::uint32_t seen = 0;
+  {
+    saw::RtContextScope rt;
+    for (int i = 0; i < cycles; ++i) {
+      saw::RtCycleScope cycle("canopen arm");
+      // What a client and the world do this cycle.
+      if (i == 0 || i == 950 || i == 1450 || i == 1850) rig.state_command(StateCommand::enable);
+      const bool commanding = i >= 20 && (i < 2200 || i > 2300);
+      if (commanding) {
+        const double s = 0.2 * std::sin(i * 0.01);
+        rig.write("servo_cf", i == 2500 ? Wrench{{NAN, 0, 0}, {0, 0, 0}} : Wrench{{s, s, -s}, {0, 0, 0}});
+      }
+      if (i == 800) rig.drives[2].raise_fault(0x2310);
+      if (i == 900) rig.drives[2].clear_fault();
+      if (i == 1300) rig.drives[1].set_heartbeat_silent(true);
+      if (i == 1400) rig.drives[1].set_heartbeat_silent(false);
+      if (i == 1800) rig.network.state = saw::can::BusState::bus_off;
+      if (i == 1805) rig.network.state = saw::can::BusState::error_active;
+      if (i % 100 == 50) {
+        SdoRequest q;
+        q.node = static_cast<std::uint8_t>(1 + (i / 100) % 3);
+        q.index = 0x1000;
+        (void)sdo.submit(q);
+      }
+      for (SdoReply r; sdo.take_reply(r);) {
+        ++replies;
+        ok_replies += r.ok();
+      }
+      rig.cycle();
+      enabled_cycles += rig.state() == OperatingStateValue::enabled;
+      if (rig.arm->status().faults != seen && seen < faults.size())
+        faults[seen++] = {i, rig.arm->fault_reason()};
+    }
+  }
+  const auto counts = window.counts();
+  EXPECT_EQ(rig.state(), OperatingStateValue::enabled) << "recovered from every fault";
+  std::string history;
+  for (std::uint32_t k = 0; k < seen; ++k)
+    history += std::to_string(faults[k].first) + ": " + to_string(faults[k].second) + "; ";
+  EXPECT_EQ(rig.arm->status().faults, 3u) << "the drive fault, the lost heartbeat, bus-off: " << history;
+  EXPECT_GT(enabled_cycles, 2500);
+  EXPECT_EQ(rig.arm->status().watchdog_trips, 1u);
+  EXPECT_EQ(rig.arm->status().refused.not_finite, 1u);
+  EXPECT_EQ(replies, 30);
+  EXPECT_GE(ok_replies, 27) << "(a transfer may fail while the bus is off)";
+  EXPECT_EQ(rig.arm->status().syncs, static_cast<std::uint64_t>(cycles));
+  EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
+  EXPECT_RT_CLEAN(counts);
+}
+
+}  // namespace

@@ -1,0 +1,174 @@
+// canopen_drive and canopen_arm in deployment files: what parses, and the file:line:key of
+// every refusal.
+#include "saw/canopen/registration.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "saw/canopen/canopen_arm.hpp"
+#include "saw/deploy/deployment_spec.hpp"
+#include "saw/drivers/sim_registration.hpp"
+#include "saw/teleop/registration.hpp"
+
+namespace {
+
+using saw::deploy::ComponentRegistry;
+using saw::deploy::ConfigError;
+namespace canopen = saw::canopen;
+
+ComponentRegistry& registry() {
+  static ComponentRegistry r = [] {
+    ComponentRegistry reg;
+    canopen::register_components(reg);
+    saw::drivers::sim::register_components(reg);
+    saw::teleop::register_components(reg);
+    return reg;
+  }();
+  return r;
+}
+
+const std::string good = R"(deployment: {name: canopen-test}
+components:
+  - name: arm
+    type: canopen_arm
+    task: {period: 1ms}
+    params:
+      bus: virtual:nowhere
+      mode: cst
+      chain: [a, b]
+      tip: {xyz: [0.1, 0, 0]}
+      heartbeat: {period: 20ms, timeout: 60ms}
+      joints:
+        a: {node: 1, counts_per_revolution: 4096, rated_torque: 0.5, min: -1, max: 1}
+        b:
+          node: 2
+          xyz: [0.2, 0, 0]
+          axis: [0, 1, 0]
+          counts_per_revolution: 4096
+          gear_ratio: 50
+          rated_torque: 0.5
+          min: -1
+          max: 1
+  - name: rail
+    type: canopen_drive
+    task: {period: 2ms}
+    params:
+      bus: socketcan:can1
+      node: 9
+      type: prismatic
+      lead: 0.01
+      counts_per_revolution: 2000
+      rated_torque: 1.2
+      min: 0
+      max: 0.5
+      pdo:
+        rpdo1: [controlword, target_position]
+        tpdo1: [statusword, position_actual, "0x2001:00:u16"]
+)";
+
+saw::deploy::DeploymentSpec parse(const std::string& text) {
+  return saw::deploy::parse_deployment(text, "cfg.yaml", registry());
+}
+
+// Replaces `from` by `to` once in the good file, parses it, and returns the error message.
+std::string error_of(const std::string& from, const std::string& to) {
+  std::string text = good;
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  text.replace(at, from.size(), to);
+  try {
+    (void)parse(text);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no error for: " << to;
+  return "";
+}
+
+#define EXPECT_HAS(text, fragment) EXPECT_NE((text).find(fragment), std::string::npos) << (text)
+
+TEST(CanopenDeployment, GoodFileParses) {
+  const auto spec = parse(good);
+  ASSERT_EQ(spec.components.size(), 2u);
+  EXPECT_EQ(spec.components[0].type, "canopen_arm");
+  EXPECT_EQ(spec.components[1].type, "canopen_drive");
+}
+
+TEST(CanopenDeployment, ErrorsNameFileLineAndKey) {
+  EXPECT_HAS(error_of("mode: cst", "mode: cyclic"),
+             "cfg.yaml:8:13: key 'components[0].params.mode': 'cyclic' is not one of: csp, csv, cst");
+  EXPECT_HAS(error_of("{node: 1,", "{node: 200,"),
+             "cfg.yaml:13:19: key 'components[0].params.joints.a.node': a node-ID is 1..127");
+  EXPECT_HAS(error_of("        a: {node: 1, counts_per_revolution: 4096,", "        a: {node: 1,"),
+             "key 'components[0].params.joints.a.counts_per_revolution': required parameter is missing");
+  EXPECT_HAS(error_of("chain: [a, b]", "chain: [a, c]"),
+             "key 'components[0].params.joints.c': the chain names joint 'c'");
+  EXPECT_HAS(error_of("bus: virtual:nowhere", "bus: can0"),
+             "cfg.yaml:7:12: key 'components[0].params.bus': 'can0' is not a bus");
+  EXPECT_HAS(error_of("timeout: 60ms", "timeout: 10ms"),
+             "key 'components[0].params.heartbeat.timeout': must be above the heartbeat period");
+  EXPECT_HAS(error_of("min: -1, max: 1}", "min: 1, max: -1}"),
+             "key 'components[0].params.joints.a.max': must be above min");
+  EXPECT_HAS(error_of("gear_ratio: 50", "gear_ratoi: 50"),
+             "cfg.yaml:19:11: key 'components[0].params.joints.b.gear_ratoi': unknown parameter (misspelt?)");
+  EXPECT_HAS(error_of("axis: [0, 1, 0]", "axis: [0, 0, 0]"),
+             "key 'components[0].params.joints.b.axis': must be a non-zero direction");
+  EXPECT_HAS(error_of("      lead: 0.01\n", ""),
+             "key 'components[1].params.lead': a prismatic joint needs its lead");
+  EXPECT_HAS(
+      error_of("\"0x2001:00:u16\"", "\"0x2001:00\""),
+      "cfg.yaml:37:16: key 'components[1].params.pdo.tpdo1': '0x2001:00': the type of 0x2001:00 is not "
+      "known here");
+  EXPECT_HAS(
+      error_of("rpdo1: [controlword, target_position]", "rpdo1: [controlword, target_torque]"),
+      "cfg.yaml:27:7: key 'components[1].params': drive 'rail' (node 9): no RPDO maps the mode's target "
+      "(0x607A:00)");
+  EXPECT_HAS(error_of("node: 9", "node: 9\n      eds: drive.eds"),
+             "key 'components[1].params.eds': give either pdo or eds, not both");
+  EXPECT_HAS(error_of("task: {period: 2ms}", "task: {period: 2ms}\n    params_x: 1"), "params_x");
+  EXPECT_HAS(error_of("rated_torque: 1.2", "rated_torque: -1"),
+             "key 'components[1].params.rated_torque': -1.000000 is out of range");
+}
+
+TEST(CanopenDeployment, AnEdsGivesThePdos) {
+  std::string text = good;
+  const std::string from =
+      "      pdo:\n        rpdo1: [controlword, target_position]\n"
+      "        tpdo1: [statusword, position_actual, \"0x2001:00:u16\"]\n";
+  text.replace(text.find(from), from.size(), "      eds: " SAW_CANOPEN_TEST_DATA "/drive.eds\n");
+  const auto spec = parse(text);
+  ASSERT_EQ(spec.components.size(), 2u);
+}
+
+TEST(CanopenDeployment, TheSimulationDeploymentParses) {
+  const auto spec = saw::deploy::load_deployment_spec(SAW_SOURCE_DIR "/config/canopen-sim.yaml", registry());
+  ASSERT_EQ(spec.components.size(), 3u);
+  EXPECT_EQ(spec.components[1].type, "canopen_arm");
+  EXPECT_EQ(spec.connections.size(), 2u);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(CanopenDeployment, TheSummaryNamesTheFaultAndItsEmergency) {
+  canopen::CanopenStatus s;
+  s.state = saw::OperatingStateValue::fault;
+  s.reason = canopen::FaultReason::emcy;
+  s.faults = 1;
+  s.fault.code = saw::FaultCode::device_error;
+  s.fault.detail = 0x2310;
+  s.fault.set_source("elbow_pitch");
+  s.syncs = 1000;
+  s.refused.not_finite = 2;
+  const auto* format = registry().summary_format(saw::type_info_of<canopen::CanopenStatus>());
+  ASSERT_NE(format, nullptr);
+  const std::string line = (*format)(&s);
+  EXPECT_HAS(line, "FAULT, bus error-active: 1000 SYNC");
+  EXPECT_HAS(line, "emergency message (device error) on elbow_pitch, detail 0x2310");
+  EXPECT_HAS(line, "continuous over-current (device output side)");
+  EXPECT_HAS(line, "2 commands refused, never sent: 2 not finite");
+}
+
+}  // namespace
