@@ -8,6 +8,8 @@
 
 #include "rig.hpp"
 #include "saw/canopen/canopen_arm.hpp"
+#include "saw/detail/access.hpp"
+#include "saw/detail/mailbox.hpp"
 
 namespace saw::canopen::test {
 
@@ -46,6 +48,11 @@ inline CanopenArmConfig arm_config(cia402::Mode mode, std::size_t joints = 3) {
   return c;
 }
 
+// What the manager queues for a write command: its execute, run in the arm's cycle.
+inline detail::Invoker execute_of(Command& c) {
+  return {[](void* self, const void* arg) { static_cast<Command*>(self)->execute(arg); }, &c};
+}
+
 struct ArmRig {
   explicit ArmRig(CanopenArmConfig c, TestDriveConfig drive = {}) : port(network.attach("arm bus")) {
     for (const JointConfig& j : c.joints) {
@@ -62,18 +69,18 @@ struct ArmRig {
     arm = std::make_unique<CanopenArm>("arm", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c, port);
     // Commands go through a mailbox, as from a connected client: run at the start of the next
     // cycle, stamped with its time.
-    arm->add_inbound(&mailbox);
+    detail::Access::add_inbound(*arm, &mailbox);
     for (const char* name : {"servo_jp", "servo_jv", "servo_jf", "state_command"})
-      targets[name] = mailbox.add_target(command(name).invoker());
+      targets[name] = mailbox.add_target(execute_of(command(name)));
     if (arm->provided("arm")->find_command("servo_cf") != nullptr)
-      targets["servo_cf"] = mailbox.add_target(command("servo_cf").invoker());
+      targets["servo_cf"] = mailbox.add_target(execute_of(command("servo_cf")));
     arm->state_table().finalize();
     arm->startup();
   }
   void cycle(int n = 1) {
     for (int i = 0; i < n; ++i) {
       port.now = now;
-      arm->step(now);
+      detail::Access::step(*arm, now);
       drives.step(now);
       now += ms;
     }
@@ -119,7 +126,7 @@ struct ArmRig {
   }
 
   RingNetwork network;
-  Mailbox mailbox{"test client", 64, sizeof(JointState)};
+  detail::Mailbox mailbox{"test client", 64, sizeof(JointState)};
   std::map<std::string, std::uint32_t> targets;
   RingPort& port;
   Drives drives{network, {}};

@@ -9,7 +9,7 @@
 #include <tuple>
 
 #include "saw/clock.hpp"
-#include "saw/spsc_ring.hpp"
+#include "saw/detail/spsc_ring.hpp"
 #include "saw/status.hpp"
 
 namespace saw::canopen {
@@ -81,7 +81,7 @@ class SdoQueue {
   std::uint64_t lost_replies() const noexcept { return lost_.load(std::memory_order_relaxed); }
 
  private:
-  SpscRing requests_, replies_;
+  detail::SpscRing requests_, replies_;
   std::mutex callers_;  // transfer()'s callers, all non-RT
   std::uint32_t next_tag_ = 1;
   // Figures for any thread: relaxed, they order nothing. refused_ may be bumped by several
