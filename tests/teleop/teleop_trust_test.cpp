@@ -302,6 +302,28 @@ TEST(TeleopTrust, NoQueuedCommandPairMakesAForceStep) {
   EXPECT_EQ(failed, 0);
 }
 
+// ---- A device in FAULT ----------------------------------------------------------------------
+
+// A slave whose drive faulted (an emergency, a lost node) still publishes fresh positions; the
+// teleoperation must not keep pushing the operator against it: FAULT, zero force, and why.
+TEST(TeleopTrust, ASideThatReportsFaultFaultsTheTeleoperation) {
+  for (const bool slave_faults : {true, false}) {
+    SCOPED_TRACE(slave_faults ? "slave" : "master");
+    Rig rig(basic());
+    rig.step(3);
+    rig.master.position[0] += 0.01;
+    rig.step(1);
+    ASSERT_GT(norm(rig.slave.force), 0.0);
+    (slave_faults ? rig.slave : rig.master).operating = OperatingStateValue::fault;
+    rig.step(1);
+    EXPECT_EQ(rig.teleop.operating_state(), OperatingStateValue::fault);
+    EXPECT_EQ(rig.teleop.fault().code, FaultCode::device_fault);
+    EXPECT_EQ(rig.teleop.fault().source_name(), slave_faults ? "slave" : "master");
+    EXPECT_EQ(norm(rig.slave.force), 0.0);
+    EXPECT_EQ(norm(rig.master.force), 0.0);
+  }
+}
+
 // ---- A dead source behind a delay ------------------------------------------------------------
 
 TEST(TeleopTrust, ADeadSourceBehindADelayStillFaults) {

@@ -24,8 +24,9 @@ enum class FaultCode : std::uint8_t {
   device_error,       // the device reported an error (a CANopen emergency): `detail` is its code
   device_lost,        // the device stopped answering (a missed CANopen heartbeat, a USB unplug)
   limit_exceeded,     // a measured value left its safe range (a joint limit, a current)
+  device_fault,       // a device this one drives reports FAULT (its own fault says why)
 };
-constexpr std::size_t enum_count(FaultCode) { return 8; }
+constexpr std::size_t enum_count(FaultCode) { return 9; }
 constexpr std::string_view enum_type_name(FaultCode) { return "saw::FaultCode"; }
 
 constexpr std::string_view to_string(FaultCode c) {
@@ -46,6 +47,8 @@ constexpr std::string_view to_string(FaultCode c) {
       return "device lost";
     case FaultCode::limit_exceeded:
       return "limit exceeded";
+    case FaultCode::device_fault:
+      return "device in FAULT";
   }
   return "?";
 }
@@ -55,8 +58,8 @@ constexpr std::string_view to_string(FaultCode c) {
 // bounded: filled in RT code without allocating.
 struct FaultInfo {
   static constexpr std::string_view type_name = "saw::FaultInfo";
-  static constexpr std::uint32_t layout_version = 1;
-  static constexpr std::size_t max_source = 23;  // characters, then at least one NUL
+  static constexpr std::uint32_t layout_version = 2;  // 2: FaultCode::device_fault
+  static constexpr std::size_t max_source = 23;       // characters, then at least one NUL
 
   FaultCode code = FaultCode::none;
   Status last_read = Status::ok;  // the input's last read result (disconnected: its peer is gone)

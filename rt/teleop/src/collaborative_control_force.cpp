@@ -106,6 +106,7 @@ void CollaborativeControlForce::require_side(Side& s, const char* iface) {
   crtk::require(r, crtk::arm::servo_cf, s.cf, s.side == FaultSide::master ? Need::optional : Need::required);
   crtk::require(r, delayed_arm::source_time, s.source_time, Need::optional);
   crtk::require(r, delayed_arm::delay, s.delay, Need::optional);
+  crtk::require(r, crtk::operating_state, s.state, Need::optional);
 }
 
 void CollaborativeControlForce::set_operating_state(OperatingStateValue s) noexcept {
@@ -194,6 +195,13 @@ bool CollaborativeControlForce::read_side(Side& s, Input& out, FaultInfo& why) n
     ++rejected_inputs_;
   }
   s.status = st;
+  // A device in FAULT (a drive's emergency, a lost node) is not driven, however fresh its
+  // position: the teleoperation faults too, and says which side.
+  OperatingState device;
+  if (s.state.is_bound() && s.state(device) == Status::ok && device.state == OperatingStateValue::fault) {
+    why = fault_on(s.side, FaultCode::device_fault);
+    return false;
+  }
   // A read that fails (a writer pre-empted mid-row, a NaN, a peer gone) keeps the last good
   // value; only an input older than stale_timeout is a fault.
   const auto stale_ns = static_cast<TimeNs>(config_.stale_timeout * 1e9);

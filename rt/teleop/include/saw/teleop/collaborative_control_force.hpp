@@ -124,6 +124,7 @@ class CollaborativeControlForce : public Task {
     FunctionRead<Twist> cv;
     FunctionWrite<Wrench> cf;
     FunctionRead<TimeNs> source_time, delay;  // bound when a DelayTask sits in between
+    FunctionRead<OperatingState> state;       // bound when the device reports its state
     Input last{};
     TimeNs time = 0;  // of the last good input: its row's, or its source row's plus the delay
     bool valid = false, not_finite = false;

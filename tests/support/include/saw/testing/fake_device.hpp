@@ -23,21 +23,25 @@ class FakeDevice : public Component {
       ++commands;
     });
     clutch_ = &crtk::provide(p, arm::clutch);
+    crtk::provide(p, arm::operating_state, state_table(), &state_);
   }
   // Publishes the current position and velocity as a row stamped t (what a device cycle does).
   void publish(TimeNs t) {
     pose_.position = position;
     twist_.linear = velocity;
+    state_.state = operating;
     state_table().advance(t);
   }
   void press_clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
 
   Vec3 position{}, velocity{}, force{};
+  OperatingStateValue operating = OperatingStateValue::enabled;
   int commands = 0;
 
  private:
   Pose pose_;
   Twist twist_;
+  OperatingState state_{OperatingStateValue::enabled, true, false};
   EventWrite<ButtonEvent>* clutch_;
 };
 
