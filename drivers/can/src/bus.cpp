@@ -2,6 +2,9 @@
 
 #include <stdexcept>
 
+#include "saw/can/socketcan_bus.hpp"
+#include "saw/can/virtual_bus.hpp"
+
 namespace saw::can {
 
 std::string_view to_string(BusState s) noexcept {
@@ -21,7 +24,10 @@ std::string_view to_string(BusState s) noexcept {
 }
 
 std::unique_ptr<Bus> open_bus(const BusConfig& config) {
-  throw std::runtime_error("CAN bus '" + config.uri + "': no backend is built yet");
+  const std::string_view uri = config.uri;
+  if (uri.starts_with("socketcan:")) return std::make_unique<SocketCanBus>(config);
+  if (uri.starts_with("virtual:")) return std::make_unique<VirtualBus>(config, uri.substr(8));
+  throw std::runtime_error("CAN bus '" + config.uri + "': expected socketcan:<ifname> or virtual:<name>");
 }
 
 }  // namespace saw::can
