@@ -3,6 +3,8 @@
 // socketcand interface).
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "saw/can/socketcand.hpp"
 
 namespace {
@@ -131,6 +133,65 @@ TEST(SocketcandProtocol, TheFramerCutsElementsAndResynchronisesAfterGarbage) {
   EXPECT_FALSE(f.next(error).has_value());
   EXPECT_NE(error.find("longer than"), std::string::npos);
   EXPECT_EQ(f.next(error).value_or(""), "< echo >");
+}
+
+// What a hostile or broken client can send: random tokens, brackets and bytes in random chunks.
+// Nothing crashes, every element the framer yields is bounded, and every frame a command carries
+// is one the bus would accept.
+TEST(SocketcandProtocol, RandomInputNeverCrashesAndOnlyWellFormedFramesComeOut) {
+  const std::vector<std::string> tokens = {
+      "<",   ">",   " ",        "send",     "fdsend", "sendrtr", "open", "rawmode", "echo", "123",
+      "7FF", "800", "1AAAAAAA", "3FFFFFFF", "0",      "8",       "12",   "64",      "9",    "11",
+      "ff",  "F",   "zz",       "-1",       "\x01",   "\n",      "\t",   "\xff",    "add",  "vcan0"};
+  std::mt19937 rng(1234);
+  socketcand::Framer framer;
+  std::size_t elements = 0, commands = 0, frames = 0;
+  for (int round = 0; round < 20000; ++round) {
+    std::string chunk;
+    if (round % 4 == 0) {  // a command's shape with random fields, often almost right
+      static const char* kinds[] = {"send", "sendrtr", "fdsend"};
+      static const char* ids[] = {"123", "7FF", "800", "1AAAAAAA", "3FFFFFFF", "zz", "1"};
+      const std::string kind = kinds[rng() % 3];
+      chunk = "< " + kind + " " + ids[rng() % 7] + " ";
+      if (kind == "fdsend") chunk += std::to_string(rng() % 9) + " ";
+      const auto len =
+          static_cast<unsigned>(kind == "fdsend" ? (rng() % 2 != 0 ? 12 : rng() % 70) : rng() % 10);
+      chunk += std::to_string(len);
+      const unsigned bytes = len + (rng() % 4 == 0 ? 1 : 0);
+      for (unsigned i = 0; i < bytes; ++i) chunk += " " + std::to_string(rng() % 100);
+      chunk += " >";
+    }
+    const int n = static_cast<int>(rng() % 24);
+    for (int i = 0; i < n; ++i) {
+      if (rng() % 8 == 0)
+        chunk += static_cast<char>(rng() % 256);
+      else
+        chunk += tokens[rng() % tokens.size()] + (rng() % 2 != 0 ? " " : "");
+    }
+    framer.feed(chunk);
+    std::string error;
+    for (int guard = 0; guard < 1000; ++guard) {
+      const auto element = framer.next(error);
+      if (!element && error.empty()) break;
+      if (!element) continue;
+      ++elements;
+      ASSERT_LE(element->size(), socketcand::Framer::max_element);
+      std::string why;
+      const auto c = socketcand::parse_command(*element, why);
+      if (!c) {
+        EXPECT_FALSE(why.empty());
+        continue;
+      }
+      ++commands;
+      if (c->kind == Command::Kind::send) {
+        ++frames;
+        EXPECT_TRUE(well_formed(c->frame)) << *element;
+      }
+    }
+  }
+  EXPECT_GT(elements, 5000u);
+  EXPECT_GT(commands, 10u) << "the generator never made a valid command: the test proves little";
+  EXPECT_GT(frames, 0u);
 }
 
 }  // namespace

@@ -141,27 +141,29 @@ void SocketcandServer::accept_clients() {
 
 void SocketcandServer::read_from(Client& c) {
   char buf[4096];
-  for (;;) {
+  // A bounded amount per pass, each chunk answered before the next is read: one client cannot
+  // hold the loop, and what it sends is never buffered whole.
+  for (int chunk = 0; chunk < 16 && !c.closed && !c.close_after_flush; ++chunk) {
     const ssize_t n = ::recv(c.fd, buf, sizeof buf, MSG_DONTWAIT);
     if (n == 0) return close(c, "disconnected");
     if (n < 0) {
-      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) break;
+      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return;
       return close(c, std::strerror(errno));
     }
     c.framer.feed(std::string_view(buf, static_cast<std::size_t>(n)));
-    if (static_cast<std::size_t>(n) < sizeof buf) break;
-  }
-  std::string error;
-  for (;;) {
-    auto element = c.framer.next(error);
-    if (element) {
-      handle(c, *element);
-      if (c.closed) return;
-    } else if (!error.empty()) {
-      c.out += socketcand::format_error(error);
-    } else {
-      break;
+    std::string error;
+    while (!c.closed && !c.close_after_flush) {
+      auto element = c.framer.next(error);
+      if (element)
+        handle(c, *element);
+      else if (!error.empty())
+        c.out += socketcand::format_error(error);
+      else
+        break;
     }
+    // Answers pile up only for a client that sends and never reads.
+    if (c.out.size() > max_queued) return close(c, "sends and does not read its answers");
+    if (static_cast<std::size_t>(n) < sizeof buf) return;
   }
 }
 
