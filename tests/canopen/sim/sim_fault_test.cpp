@@ -3,6 +3,8 @@
 // SDO aborts; and injection through the bus itself (0x2F00).
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "saw/canopen/sim/drive_dictionary.hpp"
 #include "sim_master.hpp"
 
@@ -130,6 +132,48 @@ TEST(SimDriveFault, BusOffSilencesTheNodeThenItReportsTheRecovery) {
   EXPECT_TRUE(b.emcys()[1].is_reset());
   EXPECT_EQ(b.upload_value<std::uint32_t>({0x1000, 0}, DataType::unsigned32), 0x00020192u);
   EXPECT_EQ(b.drive.nmt_state(), NmtState::operational) << "bus-off is not a reset";
+}
+
+TEST(SimDriveFault, BusOffFaultsAnEnabledDriveAs0x6007Says) {
+  Bench b;
+  Master m(b);
+  b.tick();
+  m.start(cia402::csv);
+  ASSERT_TRUE(m.reach(cia402::Target::operation_enabled));
+  Fault f{FaultKind::bus_off};
+  f.duration = 100 * ms;
+  b.drive.inject(f);
+  b.run_for(50 * ms);
+  EXPECT_EQ(b.drive.drive_state(), cia402::State::fault) << "0x6007 = 1 in sim_drive.eds: fault signal";
+  EXPECT_TRUE(b.emcys().empty()) << "nothing gets out during bus-off";
+  ASSERT_TRUE(b.run_until([&] { return !b.emcys().empty(); }, 100 * ms));
+  b.run_for(5 * ms);
+  ASSERT_EQ(b.emcys().size(), 1u) << "the queued EMCY, and no reset: the fault is still there";
+  EXPECT_EQ(b.emcys()[0].code, 0x8140);
+  EXPECT_EQ(b.drive.error_code(), 0x8140);
+  m.controller.request_fault_reset(b.now);
+  ASSERT_TRUE(m.reach(cia402::Target::operation_enabled));
+  ASSERT_EQ(b.emcys().size(), 2u);
+  EXPECT_TRUE(b.emcys()[1].is_reset());
+}
+
+TEST(SimDriveFault, BusOffWithAbortConnectionQuickStopStopsTheDrive) {
+  Bench b;
+  Master m(b);
+  b.tick();
+  b.write({0x6007, 0}, DataType::integer16, std::int16_t{3});
+  m.start(cia402::csv);
+  ASSERT_TRUE(m.reach(cia402::Target::operation_enabled));
+  m.target_velocity = 10 * 4096;
+  b.run_for(100 * ms);
+  Fault f{FaultKind::bus_off};
+  f.duration = 200 * ms;
+  b.drive.inject(f);
+  b.run_for(2 * ms);
+  EXPECT_EQ(b.drive.drive_state(), cia402::State::quick_stop_active);
+  b.run_for(150 * ms);
+  EXPECT_EQ(b.drive.drive_state(), cia402::State::switch_on_disabled) << "quick stop option 2";
+  EXPECT_LT(std::abs(b.drive.motor().velocity()), 0.1);
 }
 
 TEST(SimDriveFault, SdoAbortOnOneObjectUntilCleared) {

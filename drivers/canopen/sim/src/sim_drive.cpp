@@ -38,6 +38,7 @@ constexpr ObjectAddress sync_id{0x1005, 0};
 constexpr ObjectAddress emcy_id{0x1014, 0};
 constexpr ObjectAddress emcy_inhibit{0x1015, 0};
 constexpr ObjectAddress heartbeat_time{0x1017, 0};
+constexpr ObjectAddress abort_connection_option{0x6007, 0};
 constexpr ObjectAddress position_demand{0x6062, 0};
 constexpr ObjectAddress following_error_timeout{0x6066, 0};
 constexpr ObjectAddress min_position_limit{0x607D, 1};
@@ -157,6 +158,8 @@ void SimDrive::reset(NmtReset what) noexcept {
     error_code_ = 0;
     error_register_ = 0;
     fault_input_ = false;
+    forced_command_.reset();
+    bus_off_fault_ = false;
     following_error_since_.reset();
     pending_[index(FaultKind::over_current)].reset();
     pending_[index(FaultKind::following_error)].reset();
@@ -251,6 +254,10 @@ void SimDrive::end_fault(FaultKind kind) noexcept {
   if (!until_[index(kind)]) return;
   until_[index(kind)].reset();
   if (kind == FaultKind::bus_off) {
+    if (bus_off_fault_) {
+      bus_off_fault_ = false;  // its EMCY waited in the queue; the drive's fault stays until reset
+      return;
+    }
     // CANopenNode's behaviour: the event is reported once the node can talk again, and reset.
     push_history(code::bus_off_recovered);
     (void)emcy_.raise(code::bus_off_recovered,
@@ -267,6 +274,27 @@ void SimDrive::clear(FaultKind kind) noexcept {
 
 void SimDrive::clear_all() noexcept {
   for (unsigned k = 1; k <= fault_kind_count; ++k) clear(static_cast<FaultKind>(k));
+}
+
+void SimDrive::abort_connection() noexcept {
+  // CiA 402's abort connection (0x6007) acts on a drive that is driving; a bus-off is one of
+  // its events. Absent 0x6007, nothing happens (the drive keeps its last setpoints).
+  if (!drive_.following() && drive_.state() != cia402::State::quick_stop_active) return;
+  switch (get_or<std::int16_t>(object::abort_connection_option, 0)) {
+    case 1:  // fault signal: the EMCY waits in the queue until the bus is back
+      raise(code::bus_off_recovered, error_register::communication);
+      fault_input_ = true;
+      bus_off_fault_ = true;
+      break;
+    case 2:
+      forced_command_ = cia402::controlword::disable_voltage_command;
+      break;
+    case 3:
+      forced_command_ = cia402::controlword::quick_stop_command;
+      break;
+    default:
+      break;
+  }
 }
 
 std::uint8_t SimDrive::active_faults() const noexcept {
@@ -300,6 +328,7 @@ void SimDrive::update_faults() noexcept {
                                                         : 0;
           until_[k - 1] = d > 0 ? now_ + d : forever;
           if (kind == FaultKind::sdo_abort) sdo_abort_ = f;
+          if (kind == FaultKind::bus_off) abort_connection();
           break;
         }
       }
@@ -520,8 +549,10 @@ void SimDrive::control() noexcept {
 
   const cia402::State before = drive_.state();
   const bool standstill = std::abs(motor_.velocity()) < standstill_speed;
-  const cia402::State state =
-      drive_.update({get_or<std::uint16_t>(cia402::object::controlword, 0), fault_input_, standstill, true});
+  const std::uint16_t controlword =
+      forced_command_.value_or(get_or<std::uint16_t>(cia402::object::controlword, 0));
+  forced_command_.reset();
+  const cia402::State state = drive_.update({controlword, fault_input_, standstill, true});
   fault_input_ = false;
   if (before == cia402::State::fault && state == cia402::State::switch_on_disabled) clear_errors();  // 15
 
@@ -630,7 +661,9 @@ void SimDrive::produce() noexcept {
   const NmtState state = nmt_.state();
   if (state != NmtState::pre_operational && state != NmtState::operational) return;
   while (auto f = sdo_->poll(now_)) queue(*f);  // a segmented transfer's timeout abort
-  while (auto f = emcy_.poll(now_)) {
+  // A controller in bus-off keeps what it has to send; EMCYs wait for the bus (the producer
+  // queues 8), cyclic traffic is lost.
+  while (auto f = bus_off() ? std::nullopt : emcy_.poll(now_)) {
     if (!emcy_enabled_) continue;  // 0x1014 bit 31: EMCY switched off
     f->id = emcy_id_;
     ++counters_.emcys;

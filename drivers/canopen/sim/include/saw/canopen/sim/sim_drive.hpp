@@ -116,6 +116,7 @@ class SimDrive {
   void refresh_identifiers() noexcept;
   void refresh_producers() noexcept;
   void end_fault(FaultKind kind) noexcept;
+  void abort_connection() noexcept;
   SdoAbort check_write(ObjectAddress address, std::span<const std::uint8_t> data) const noexcept;
   void written(ObjectAddress address) noexcept;
   SdoAbort injected_abort(ObjectAddress address) const noexcept;
@@ -187,8 +188,10 @@ class SimDrive {
   // Errors.
   std::uint16_t error_code_ = 0;
   std::uint8_t error_register_ = 0;
-  bool fault_input_ = false;       // a fault appeared this cycle: the 402 machine's fault input
-  bool pdo_length_error_ = false;  // EMCY 0x8210 sent, until an RPDO of the right length
+  bool fault_input_ = false;                     // a fault appeared this cycle: the 402 machine's fault input
+  bool pdo_length_error_ = false;                // EMCY 0x8210 sent, until an RPDO of the right length
+  bool bus_off_fault_ = false;                   // the bus-off faulted the drive (0x6007 = 1)
+  std::optional<std::uint16_t> forced_command_;  // 0x6007 = 2, 3: the drive's own command, once
 
   // Faults: events waiting for the next step, lasting ones with their end (max: until cleared).
   std::array<std::optional<Fault>, fault_kind_count> pending_{};
