@@ -60,7 +60,7 @@ void print_summary(const std::vector<Simulated>& drives, TimeNs elapsed, std::ui
 int main(int argc, char** argv) {
   CLI::App app{"saw-can-sim: simulated CiA 402 servo drives (CANopen slaves) on a sawrt CAN bus"};
   std::string bus, config_file, eds;
-  std::vector<int> nodes;
+  std::vector<std::string> nodes;
   std::vector<std::string> injections;
   double duration = 0, period_us = 250;
   int priority = 0;
@@ -68,11 +68,11 @@ int main(int argc, char** argv) {
   MotorParameters motor;
   bool print_eds = false;
   app.add_option("--bus", bus, "virtual:<name> or socketcan:<ifname> (overrides the config file's)");
-  app.add_option("--node", nodes, "a drive with this node-ID (1..127); repeatable")
-      ->check(CLI::Range(1, 127));
+  app.add_option("--node", nodes, "a drive: <node-ID 1..127>[:<EDS or DCF>]; repeatable");
   app.add_option("--config", config_file,
                  "YAML: bus, period, drives (node, eds, heartbeat_ms, motor), faults");
-  app.add_option("--eds", eds, "EDS/DCF of the --node drives (default: the built-in sim_drive.eds)");
+  app.add_option("--eds", eds,
+                 "EDS/DCF of the --node drives that name none (default: the built-in sim_drive.eds)");
   app.add_option("--heartbeat-ms", heartbeat_ms,
                  "power-on producer heartbeat time 0x1017 of the --node drives")
       ->check(CLI::Range(0, 65535));
@@ -109,10 +109,16 @@ int main(int argc, char** argv) {
     if (app.count("--period-us") > 0 || config_file.empty())
       config.period = static_cast<TimeNs>(period_us * 1e3);
     motor.check();
-    for (const int n : nodes) {
+    for (const std::string& text : nodes) {
       SimDriveConfig d;
-      d.node = static_cast<std::uint8_t>(n);
-      d.eds = eds;
+      const std::size_t colon = text.find(':');
+      const std::string id = text.substr(0, colon);
+      const bool number =
+          !id.empty() && id.size() <= 3 && id.find_first_not_of("0123456789") == std::string::npos;
+      if (!number || std::stoi(id) < 1 || std::stoi(id) > 127)
+        throw std::invalid_argument("--node " + text + ": expected <node-ID 1..127>[:<EDS path>]");
+      d.node = static_cast<std::uint8_t>(std::stoi(id));
+      d.eds = colon == std::string::npos ? eds : text.substr(colon + 1);
       d.motor = motor;
       if (heartbeat_ms) d.heartbeat_ms = static_cast<std::uint16_t>(*heartbeat_ms);
       config.drives.push_back(d);
