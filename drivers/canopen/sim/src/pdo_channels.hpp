@@ -51,7 +51,7 @@ class PdoChannels {
   // inhibit time (0x1800 sub 3, 100 µs) has passed, or when the event timer (sub 5, ms) runs out.
   std::optional<can::Frame> poll(TimeNs now) noexcept;
 
-  // Frames that configured PDOs could not be built from (an EDS with an invalid mapping).
+  // PDOs whose configuration could not be built (an EDS with an invalid mapping): not used.
   std::uint64_t invalid_configurations() const noexcept { return invalid_; }
   std::uint64_t refused_values() const noexcept { return refused_values_; }
   bool rpdo_enabled(std::uint16_t number) const noexcept;  // 1-based

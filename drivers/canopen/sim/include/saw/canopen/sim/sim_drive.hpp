@@ -57,7 +57,7 @@ struct SimDriveCounters {
 // Everything lives in the object dictionary, as on a real drive: RPDOs and SDO writes land in
 // it; TPDOs, SDO reads and the application read it. So a master may remap PDOs by SDO in
 // pre-operational (0x1400.., 0x1600.., 0x1800.., 0x1A00.., with CiA 301's procedure and
-// aborts), set 0x1017, write 0x6060 (shown in 0x6061 after the drive's next cycle) and so on.
+// aborts), set 0x1017, write 0x6060 (shown in 0x6061 once the drive's cycle has run), etc.
 //
 // After construction, step(), inject() and clear() neither allocate nor throw, except that a
 // PDO configuration write or an NMT reset rebuilds PDOs (allocation, at configuration time).
@@ -73,7 +73,8 @@ class SimDrive {
   void step(TimeNs now) noexcept;
 
   // Takes effect at the next step. Events (over-current, following error) raise their EMCY and
-  // put the drive in fault; lasting faults hold until `fault.duration` ends or clear().
+  // put the drive in fault; lasting faults hold until `fault.duration` ends or clear(). A bus-off
+  // is also an abort-connection event for an enabled drive (0x6007: fault, disable, quick stop).
   void inject(const Fault& fault) noexcept;
   void clear(FaultKind kind) noexcept;
   void clear_all() noexcept;
