@@ -15,7 +15,7 @@
 #include "saw/canopen/sim/drive_dictionary.hpp"
 #include "saw/canopen/sim/sim_config.hpp"
 #include "saw/canopen/sim/sim_drive.hpp"
-#include "saw/pacer.hpp"
+#include "saw/detail/pacer.hpp"
 #include "saw/rt_thread.hpp"
 
 namespace {
@@ -32,7 +32,7 @@ struct Simulated {
 };
 
 void print_summary(const std::vector<Simulated>& drives, TimeNs elapsed, std::uint64_t cycles,
-                   const saw::Pacer& pacer, TimeNs worst_late) {
+                   const saw::detail::Pacer& pacer, TimeNs worst_late) {
   std::printf(
       "saw-can-sim: %.3f s, %llu cycles, %llu overruns (%llu periods missed), latest wake-up %.1f us\n",
       static_cast<double>(elapsed) * 1e-9, static_cast<unsigned long long>(cycles),
@@ -161,7 +161,7 @@ int main(int argc, char** argv) {
 
   const TimeNs start = saw::monotonic_now();
   const TimeNs end = duration > 0 ? start + static_cast<TimeNs>(duration * 1e9) : 0;
-  saw::Pacer pacer(start, config.period);
+  saw::detail::Pacer pacer(start, config.period);
   std::size_t next_fault = 0;
   std::uint64_t cycles = 0;
   TimeNs worst_late = 0;
