@@ -101,26 +101,25 @@ def can_section(r):
         return [CAN_TITLE, "", "(can: not run)", ""]
     j = json.load(open(path))
     io = j["io"]
-    empty, runs = io[0], io[1:]
+    runs = io[1:]
     g = j["goals"]
     when = datetime.datetime.fromtimestamp(os.path.getmtime(path), datetime.timezone.utc)
     lines = [
         CAN_TITLE,
         "",
-        f"Command: {r.cmd('can')}. Run {when.strftime('%Y-%m-%d %H:%M UTC')}, {j['cpus']} CPUs, load average",
-        f"(1, 5, 15 min) {j['load_before']} before and {j['load_after']} after: other work shared the machine.",
-        "The drives are `saw-can-sim` in another process (250 µs cycle, SCHED_FIFO",
-        f"{j['sim_priority']}, CPU {j['other_cpu']}), on a `virtual:` bus of the run's own; the master is a 1 kHz",
-        f"SCHED_FIFO {j['priority']} task on CPU {j['cpu']} running a `BusMaster` as `CanopenArm` does: `receive()`,",
-        "a csp setpoint per drive (`set_setpoint`, packed into its RPDO), `transmit()` (the CiA 402",
-        "controllers, the RPDOs, SYNC), each timed with `CLOCK_MONOTONIC` read around it; \"in the bus\":",
-        "the part spent inside the virtual bus's `receive()` and `send()` (the ring), the rest is the",
-        "`BusMaster`'s own (routing, PDO unpack and pack, feedback in SI, the controllers). Default PDOs:",
-        "per drive one RPDO out, two TPDOs in, plus one SYNC a cycle. The empty cycle is the same task",
-        "with no bus, the same clock reads around nothing, and the same company (`saw-can-sim` with the",
-        "most drives, unconfigured, and the listener on the other CPU); drive counts and the empty cycle",
-        f"take turns ({j['rounds']} × {j['seconds']:g} s each) so a slow stretch of the VM falls on all. Whole cycle: the",
-        "task's own compute time (wake-up to sleep: mailboxes, `run()`, the state row).",
+        f"Command: {r.cmd('can')} (alone: `tools/performance.sh --can`, which rewrites only this section).",
+        f"Run {when.strftime('%Y-%m-%d %H:%M UTC')}; load average (1, 5, 15 min) {j['load_before']} before, "
+        f"{j['load_after']} after, on {j['cpus']} CPUs.",
+        "",
+        f"The drives: `saw-can-sim` in another process (250 µs cycle, SCHED_FIFO {j['sim_priority']}, CPU {j['other_cpu']}) on a",
+        f"`virtual:` bus of the run's own. The master: a 1 kHz SCHED_FIFO {j['priority']} task on CPU {j['cpu']} running a",
+        "`BusMaster` as `CanopenArm` does — `receive()`, a csp setpoint per drive packed into its RPDO,",
+        "`transmit()` (CiA 402 controllers, RPDOs, SYNC) — timed with `CLOCK_MONOTONIC` around each; in",
+        "brackets the part spent inside the bus's `receive()`/`send()` (the ring), the rest is the",
+        "`BusMaster`'s. Default PDOs: per drive one RPDO out and two TPDOs in, one SYNC a cycle. The empty",
+        "cycle is the same task with the same clock reads around nothing and the same company",
+        "(`saw-can-sim` with the most drives, unconfigured, and the listener, on the other CPU); all take",
+        f"turns, {j['rounds']} × {j['seconds']:g} s each. Whole cycle: the task's own wake-up-to-sleep time.",
         "",
         "| drives | frames in / out per cycle | CAN I/O p50 µs | p99 µs | max µs | receive p50 µs (in the bus) | transmit p50 µs (in the bus) | whole cycle p50 µs | p99 µs | wake-up p99 µs | cycles |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
@@ -134,9 +133,8 @@ def can_section(r):
             f"{us(e['cycle']['p99'])} | {e['wakeup']['p99']:.0f} | {e['io']['n']} |")
     lines += [
         "",
-        "SYNC period: another attachment of the bus reads every SYNC with the bus's stamp (the sending",
-        "task's `CLOCK_MONOTONIC` as its `send()` took the frame); each interval's distance from 1 ms,",
-        "beside the wake-up latency of the same task in the same cycles (its own statistics).",
+        "SYNC period: a listener (another attachment) keeps each SYNC's bus stamp — the sender's",
+        "`CLOCK_MONOTONIC` when its `send()` took the frame — beside the same cycles' wake-up latency.",
         "",
         "| drives | SYNC intervals | \\|interval − 1 ms\\| p50 µs | p99 µs | max µs | intervals ≥ 1.5 ms | task wake-up p99 µs | wake-up max µs | p99 ratio |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -155,15 +153,15 @@ def can_section(r):
         lines += ["", "Windows that failed: " + "; ".join(failures)]
     lines += [
         "",
-        "End to end: `config/canopen-sim.yaml` as it is (its bus renamed), with `saw-can-sim` started",
-        "as the file's comment says. A RT-cycle observer (`saw::set_rt_cycle_observer`) stamps each",
-        "teleoperation and arm cycle's wake-up and end, and the master's newest state row at the",
-        "teleoperation cycle's both ends (a cycle whose row changed meanwhile is not counted); a",
-        "listener keeps the bus's stamp of each RPDO. The arm runs the commands queued for it at the",
-        "start of its cycle, so a teleoperation cycle's command is carried by the first arm cycle",
-        "that began after it ended, unless the next teleoperation cycle's command came before that",
-        "(superseded), or the timing cannot tell (ambiguous: not counted). By design the path is one",
-        "period: the teleoperation runs 300 µs after the devices, the arm sends at its next cycle.",
+        "End to end: `config/canopen-sim.yaml` as it is (its bus renamed), `saw-can-sim` started as its",
+        "comment says. An RT-cycle observer (`saw::set_rt_cycle_observer`) stamps each teleoperation and",
+        "arm cycle's wake-up and end, and the master's newest row at both ends of a teleoperation cycle",
+        "(the row it used, unless a new one came meanwhile: not counted); the listener keeps each RPDO's",
+        "bus stamp. The arm runs its queued commands at the start of its cycle, so a teleoperation",
+        "cycle's command rides the RPDO of the first arm cycle that began after it ended — unless the",
+        "next teleoperation cycle's command also came first (superseded) or the stamps cannot tell",
+        "(ambiguous); neither is counted. By design the path is one period: the teleoperation runs",
+        "300 µs after the devices, the arm sends at its next cycle.",
         "",
     ]
     e2e = j.get("e2e")
@@ -172,10 +170,7 @@ def can_section(r):
     else:
         if e2e["failure"]:
             lines += [f"Failed: {e2e['failure']}", ""]
-        lines += [
-            "| path | p50 µs | p99 µs | max µs | n |",
-            "|---|---|---|---|---|",
-        ]
+        lines += ["| path | p50 µs | p99 µs | max µs | n |", "|---|---|---|---|---|"]
         for key, name in (("total", "master row → RPDO on the bus (end to end)"),
                           ("to_command", "master row → end of the teleoperation cycle that sent the command"),
                           ("to_rpdo", "end of that teleoperation cycle → RPDO on the bus")):
@@ -185,8 +180,8 @@ def can_section(r):
         lines += [
             "",
             f"{e2e['seconds']:g} s: {e2e['teleop_cycles']} teleoperation cycles, {e2e['matched']} matched to their RPDO, "
-            f"{e2e['superseded']} superseded, {e2e['ambiguous']} ambiguous, {e2e['row_changed']} with a master row "
-            f"changed mid-cycle. The teleoperation's own figure, master sample → force command: mean "
+            f"{e2e['superseded']} superseded, {e2e['ambiguous']} ambiguous, {e2e['row_changed']} with a new master row "
+            f"mid-cycle. The teleoperation's own figure, master sample → force command: mean "
             f"{e2e['teleop_age_mean']:.1f} µs, max {e2e['teleop_age_max']:.1f} µs. Wake-up p99: master {w['master']:.0f} µs, "
             f"arm {w['slave']:.0f} µs, teleoperation {w['teleop']:.0f} µs; `saw-can-sim` overruns {e2e['sim_overruns']}.",
             "",
@@ -198,8 +193,9 @@ def can_section(r):
     lines += [
         "| goal (one run) | measured | verdict |",
         "|---|---|---|",
-        f"| CAN I/O with {io_goal['drives']} drives adds ≤ {io_goal['limit']} µs to a cycle (p99, against the empty cycle) | "
-        f"+{io_goal['added_p50']:.2f} µs at p50, +{io_goal['added_p99']:.2f} µs at p99 | {verdict(io_goal['met'])} |",
+        f"| CAN I/O with {io_goal['drives']} drives adds ≤ {io_goal['limit']} µs to a cycle (against the empty cycle) | "
+        f"+{io_goal['added_p50']:.2f} µs at p50, +{io_goal['added_p99']:.2f} µs at p99 | "
+        f"p50 {verdict(io_goal['met_p50'])}, p99 {verdict(io_goal['met'])} |",
         f"| SYNC jitter p99 ≤ {sync_goal['limit']} × the sending task's wake-up p99 ({sync_goal['drives']} drives) | "
         f"{sync_goal['sync_p99']:.1f} / {sync_goal['wakeup_p99']:.1f} µs = {sync_goal['ratio']:.2f} | {verdict(sync_goal['met'])} |",
     ]
@@ -208,13 +204,12 @@ def can_section(r):
                      f"p99 {e2e['total']['p99']:.0f} µs | reported |")
     lines += [
         "",
-        "How to read them: the medians grow with the frames a cycle handles, in the ring and in the",
-        f"`BusMaster` alike (with {last['drives']} drives the ring is {share:.0%} of the median); the p99 and max of a",
-        "few-µs section on this VM are mostly the machine (compare the empty cycle's whole-cycle tail),",
-        "so the goal's p99 margin is a property of the run as much as of the code. On SocketCAN the",
-        "ring's share becomes a `recvmmsg`/`sendmmsg` pair (not measured: no `AF_CAN` on this machine).",
-        "The SYNC's jitter is the task's wake-up latency carried onto the bus — the cycle sends SYNC a",
-        "few µs after it wakes — so its tail follows the machine's wake-up tail.",
+        "The medians grow with the frames a cycle handles, in the ring and in the `BusMaster` alike",
+        f"(with {last['drives']} drives the ring is {share:.0%} of the median). The p99 of a few-µs section moves from",
+        "run to run on a shared VM (compare the empty cycle's whole-cycle p99 with its median): read the",
+        "goal's p99 margin with the run's load. On SocketCAN the ring's share becomes a",
+        "`recvmmsg`/`sendmmsg` pair (not measured: no `AF_CAN` here). SYNC leaves a few µs after the",
+        "task wakes, so its jitter is the task's wake-up latency carried onto the bus.",
         "",
     ]
     return lines

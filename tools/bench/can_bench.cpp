@@ -786,10 +786,11 @@ int main(int argc, char** argv) {
   const double add99 = fig[big].io.p99_us - fig[0].io.p99_us;
   const double sync_ratio = fig[big].wakeup.p99_us > 0 ? fig[big].sync.p99_us / fig[big].wakeup.p99_us : 0;
   const bool io_met = !runs[big].samples.empty() && add99 <= 10.0;
+  const bool io_met_p50 = !runs[big].samples.empty() && add50 <= 10.0;
   const bool sync_met = fig[big].sync.n > 0 && sync_ratio <= 1.2;
   std::printf(
-      "\ngoal: CAN I/O with %d drives adds ≤ 10 µs to a cycle: +%.3f µs at p50, +%.3f µs at p99 (%s)\n",
-      runs[big].drives, add50, add99, verdict(io_met));
+      "\ngoal: CAN I/O with %d drives adds ≤ 10 µs to a cycle: +%.3f µs at p50 (%s), +%.3f µs at p99 (%s)\n",
+      runs[big].drives, add50, verdict(io_met_p50), add99, verdict(io_met));
   std::printf(
       "goal: SYNC jitter p99 ≤ 1.2 × the task's wake-up p99 (%d drives): %.1f / %.1f µs = %.2f (%s)\n",
       runs[big].drives, fig[big].sync.p99_us, fig[big].wakeup.p99_us, sync_ratio, verdict(sync_met));
@@ -850,10 +851,11 @@ int main(int argc, char** argv) {
       j << "]}" << (i + 1 < runs.size() ? "," : "") << "\n";
     }
     j << "  ],\n  \"goals\": {\"io\": {\"drives\": " << runs[big].drives << ", \"added_p50\": " << add50
-      << ", \"added_p99\": " << add99 << ", \"limit\": 10, \"met\": " << (io_met ? "true" : "false")
-      << "}, \"sync\": {\"drives\": " << runs[big].drives << ", \"sync_p99\": " << fig[big].sync.p99_us
-      << ", \"wakeup_p99\": " << fig[big].wakeup.p99_us << ", \"ratio\": " << sync_ratio
-      << ", \"limit\": 1.2, \"met\": " << (sync_met ? "true" : "false") << "}}";
+      << ", \"added_p99\": " << add99 << ", \"limit\": 10, \"met_p50\": " << (io_met_p50 ? "true" : "false")
+      << ", \"met\": " << (io_met ? "true" : "false") << "}, \"sync\": {\"drives\": " << runs[big].drives
+      << ", \"sync_p99\": " << fig[big].sync.p99_us << ", \"wakeup_p99\": " << fig[big].wakeup.p99_us
+      << ", \"ratio\": " << sync_ratio << ", \"limit\": 1.2, \"met\": " << (sync_met ? "true" : "false")
+      << "}}";
     if (e2e_run.ran) {
       j << ",\n  \"e2e\": {\"config\": " << json_string(o.config) << ", \"bus\": " << json_string(e2e_run.bus)
         << ", \"seconds\": " << e2e_seconds << ", \"failure\": " << json_string(e2e_run.failure)
