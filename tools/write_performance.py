@@ -110,6 +110,7 @@ def can_section(r):
         f"Command: {r.cmd('can')} (alone: `tools/performance.sh --can`, which rewrites only this section).",
         f"Run {when.strftime('%Y-%m-%d %H:%M UTC')}; load average (1, 5, 15 min) {j['load_before']} before, "
         f"{j['load_after']} after, on {j['cpus']} CPUs.",
+        *([f"Warnings: {'; '.join(j['warnings'])}."] if j.get("warnings") else []),
         "",
         f"The drives: `saw-can-sim` in another process (250 µs cycle, SCHED_FIFO {j['sim_priority']}, CPU {j['other_cpu']}) on a",
         f"`virtual:` bus of the run's own. The master: a 1 kHz SCHED_FIFO {j['priority']} task on CPU {j['cpu']} running a",

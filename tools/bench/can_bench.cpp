@@ -342,6 +342,13 @@ struct IoRun {
   std::vector<std::string> failures;
 };
 
+// What the tasks could not get (SCHED_FIFO, affinity, locked memory), said once in the header.
+std::vector<std::string> rt_warnings;
+void note_warnings(const saw::Manager& m) {
+  for (const auto& w : m.rt_warnings())
+    if (std::find(rt_warnings.begin(), rt_warnings.end(), w) == rt_warnings.end()) rt_warnings.push_back(w);
+}
+
 struct Options {
   double seconds = 1.0;
   int rounds = 2, priority = 80, cpu = 1, other_cpu = 0, sim_priority = 70, max_drives = 6;
@@ -368,6 +375,7 @@ void io_window(const Options& o, IoRun& run, int round) {
     saw::Manager m;
     m.add(task);
     m.start();  // the drives' start-up: NMT reset, SDO configuration, NMT start
+    note_warnings(m);
     const auto deadline = std::chrono::steady_clock::now() + 3s;
     while (!task.enabled() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(5ms);
     if (!task.enabled()) {
@@ -581,6 +589,7 @@ void e2e(const Options& o, double seconds, E2eRun& out) {
     rec.teleop.reserve(capacity);
     e2e_recorder.store(&rec, std::memory_order_release);
     d.start();
+    note_warnings(d.manager());
     const auto deadline = std::chrono::steady_clock::now() + 10s;
     while (!(enabled(*slave) && enabled(*teleop)) && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(10ms);
@@ -743,8 +752,10 @@ int main(int argc, char** argv) {
       "# saw-bench-can: %d × %.1f s per drive count in turns; master task 1 kHz SCHED_FIFO %d on CPU %d; "
       "saw-can-sim (250 µs cycle, SCHED_FIFO %d) and the listener on CPU %d; virtual bus\n",
       o.rounds, o.seconds, o.priority, o.cpu, o.sim_priority, o.other_cpu);
-  std::printf("# load average (1, 5, 15 min) before %s, after %s; %d CPUs\n\n", load_before.c_str(),
+  std::printf("# load average (1, 5, 15 min) before %s, after %s; %d CPUs\n", load_before.c_str(),
               load_after.c_str(), ncpu);
+  for (const auto& w : rt_warnings) std::printf("# warning: %s\n", w.c_str());
+  std::printf("\n");
   std::printf(
       "CAN I/O per cycle (receive + setpoints + transmit; bus: inside the bus's receive() and send()), µs;\n"
       "whole cycle: wake-up to sleep\n");
@@ -834,7 +845,9 @@ int main(int argc, char** argv) {
     j << "  \"seconds\": " << o.seconds << ", \"rounds\": " << o.rounds << ", \"priority\": " << o.priority
       << ", \"load_before\": " << json_string(load_before) << ", \"load_after\": " << json_string(load_after)
       << ", \"cpus\": " << ncpu << ", \"cpu\": " << o.cpu << ", \"other_cpu\": " << o.other_cpu
-      << ", \"sim_priority\": " << o.sim_priority << ",\n  \"io\": [\n";
+      << ", \"sim_priority\": " << o.sim_priority << ",\n  \"warnings\": [";
+    for (std::size_t k = 0; k < rt_warnings.size(); ++k) j << (k ? ", " : "") << json_string(rt_warnings[k]);
+    j << "],\n  \"io\": [\n";
     for (std::size_t i = 0; i < runs.size(); ++i) {
       const auto& f = fig[i];
       const auto& r = runs[i];
