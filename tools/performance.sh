@@ -1,30 +1,47 @@
 #!/usr/bin/env bash
 # One command: runs every benchmark of sawrt on this machine and rewrites docs/performance.md
 # (machine, kernel, date, commands, tables, goals) and the plots in docs/img/. Takes about 8
-# minutes; --quick (about 3) shortens the jitter runs and the benchmark loops for a first look.
+# minutes; --quick (about 3) shortens the jitter runs and the benchmark loops for a first look;
+# --can runs only the CANopen benchmark (about 15 s) and rewrites only its section.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
-quick=0
+quick=0 can_only=0
 [[ "${1:-}" == "--quick" ]] && quick=1
-tools/build.sh saw-rt saw-gateway saw-bench-core saw-bench-shm saw-bench-2p saw-latency saw-jitter saw-gateway-kill
-out=build/perf
-rm -rf "$out" && mkdir -p "$out" docs/img
+[[ "${1:-}" == "--can" ]] && can_only=1
 bin=build/release/tools/bench
-calls=10000 jitter=60 e2e=10 rounds=10
-if ((quick)); then calls=2000 jitter=10 e2e=5 rounds=3; fi
 run() {  # name, command...: the command line and its output into $out/name.{cmd,md}
   local name=$1; shift
   echo "== $name: $*" >&2
   echo "$*" >"$out/$name.cmd"
   "$@" >"$out/$name.md" 2>"$out/$name.err" || echo "exit $?" >>"$out/$name.md"
 }
+# CANopen on the virtual bus (saw-can-sim runs the drives): 2 rounds of 1 s per drive count and
+# 4 s of teleoperation, about 15 s in all.
+can_rounds=2 can_e2e=4
+if ((quick)); then can_rounds=1 can_e2e=2; fi
+if ((can_only)); then
+  tools/build.sh saw-bench-can saw-can-sim
+  out=build/perf-can
+  rm -rf "$out" && mkdir -p "$out"
+  run can $bin/saw-bench-can --rounds $can_rounds --e2e-seconds $can_e2e --json $out/can.json
+  .venv/bin/python tools/write_performance.py $out docs/performance.md --only can
+  echo "rewrote the CANopen section of docs/performance.md" >&2
+  exit 0
+fi
+tools/build.sh saw-rt saw-gateway saw-bench-core saw-bench-shm saw-bench-2p saw-latency saw-jitter saw-gateway-kill \
+  saw-bench-can saw-can-sim
+out=build/perf
+rm -rf "$out" && mkdir -p "$out" docs/img
+calls=10000 jitter=60 e2e=10 rounds=10
+if ((quick)); then calls=2000 jitter=10 e2e=5 rounds=3; fi
 run core $bin/saw-bench-core --markdown --calls $calls
 run shm $bin/saw-bench-shm --markdown --calls $calls
 run local2p $bin/saw-bench-2p --markdown --calls $calls
 run latency $bin/saw-latency --calls $calls --csv $out/latency.csv
 run jitter $bin/saw-jitter --load --markdown --duration $jitter --out $out/jitter
 run gateway_kill $bin/saw-gateway-kill --rounds $rounds
+run can $bin/saw-bench-can --rounds $can_rounds --e2e-seconds $can_e2e --json $out/can.json
 run e2e_one build/release/bin/saw-rt config/teleop-sim.yaml --duration $e2e
 # Two processes: the operator's side (master) and the patient's side (slave + teleoperation).
 echo "build/release/bin/saw-rt config/teleop-sim-hosts.yaml --host operator & ... --host patient" >$out/e2e_two.cmd
