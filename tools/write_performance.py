@@ -213,11 +213,6 @@ def can_section(r):
         "leaves a few µs after the task wakes, so its jitter is the task's wake-up latency carried onto",
         "the bus.",
         "",
-        "Across runs (not this run's figures: the development VM, 2 vCPUs shared with other builds, ten",
-        "runs on 2026-11-23 with these settings or shorter windows): 6 drives added +3.8 to +7.3 µs at",
-        "p50 (always within the goal) and +5.6 to +12.2 µs at p99 (over 10 µs in 4 of 10); the SYNC",
-        "ratio was 0.48 to 0.97 in the eight whose SYNC table was kept (always met); master row → RPDO",
-        "was 1007 to 1026 µs at p50 in the seven that ran the teleoperation for 3 s or more.",
         "",
     ]
     return lines
