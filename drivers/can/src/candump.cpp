@@ -76,6 +76,11 @@ std::optional<Frame> parse_frame(std::string_view text, std::string* error) {
   } else if ((id & CAN_ERR_FLAG) != 0) {
     if ((id & ~(CAN_ERR_FLAG | CAN_ERR_MASK)) != 0)
       return fail(error, "error frame identifier " + std::string(id_text) + " has bits above 3FFFFFFF");
+    // The error classes are bits 0..9 (linux/can/error.h); well_formed(), the check every frame
+    // from outside passes, takes no identifier bit above the 11th without CAN_EFF_FLAG.
+    if ((id & CAN_ERR_MASK & ~CAN_SFF_MASK) != 0)
+      return fail(error,
+                  "error frame identifier " + std::string(id_text) + " has error class bits above 7FF");
     f.id = id;
   } else {
     if (id > CAN_EFF_MASK)
