@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <stdexcept>
 
 namespace saw::can {
@@ -171,6 +172,9 @@ std::optional<LogEntry> parse_log_line(std::string_view line, std::string* error
     auto& v = i < dot ? secs : usecs;
     v = v * 10 + (c - '0');
   }
+  // Up to 12 digits are read, but a TimeNs holds only 9223372035 s (year 2262) in nanoseconds.
+  if (secs > (std::numeric_limits<TimeNs>::max() - 999'999'999) / 1'000'000'000)
+    return failed("time stamp '" + std::string(stamp) + "' is beyond the year 2262");
   std::string_view rest = line.substr(close + 1);
   if (rest.empty() || rest.front() != ' ') return failed("a space expected after the time stamp");
   rest.remove_prefix(1);
