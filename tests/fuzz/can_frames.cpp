@@ -26,7 +26,6 @@
 // length and the reserved bytes with garbage. A record cut short at the end takes zeros.
 #include <algorithm>
 #include <bit>
-#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -38,6 +37,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "saw/can/candump.hpp"
@@ -129,7 +129,8 @@ void check_number(const char* who, DataType t, const Number& n) {
     defect(who, "a decoded " + std::string(co::to_string(t)) + " is outside the type's range");
 }
 
-// The numeric types whose size is `bytes`: how an upload's bytes might be read.
+// An upload's bytes read as each numeric type: those of its size decode to a value of the type,
+// the others are refused as the wrong length.
 void check_decodes(const char* who, std::span<const std::uint8_t> bytes) {
   static constexpr DataType types[] = {
       DataType::boolean,    DataType::integer8,   DataType::unsigned8,  DataType::integer16,
