@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <stdexcept>
 
 namespace saw::can {
@@ -76,6 +77,11 @@ std::optional<Frame> parse_frame(std::string_view text, std::string* error) {
   } else if ((id & CAN_ERR_FLAG) != 0) {
     if ((id & ~(CAN_ERR_FLAG | CAN_ERR_MASK)) != 0)
       return fail(error, "error frame identifier " + std::string(id_text) + " has bits above 3FFFFFFF");
+    // The error classes are bits 0..9 (linux/can/error.h); well_formed(), the check every frame
+    // from outside passes, takes no identifier bit above the 11th without CAN_EFF_FLAG.
+    if ((id & CAN_ERR_MASK & ~CAN_SFF_MASK) != 0)
+      return fail(error,
+                  "error frame identifier " + std::string(id_text) + " has error class bits above 7FF");
     f.id = id;
   } else {
     if (id > CAN_EFF_MASK)
@@ -166,6 +172,9 @@ std::optional<LogEntry> parse_log_line(std::string_view line, std::string* error
     auto& v = i < dot ? secs : usecs;
     v = v * 10 + (c - '0');
   }
+  // Up to 12 digits are read, but a TimeNs holds only 9223372035 s (year 2262) in nanoseconds.
+  if (secs > (std::numeric_limits<TimeNs>::max() - 999'999'999) / 1'000'000'000)
+    return failed("time stamp '" + std::string(stamp) + "' is beyond the year 2262");
   std::string_view rest = line.substr(close + 1);
   if (rest.empty() || rest.front() != ' ') return failed("a space expected after the time stamp");
   rest.remove_prefix(1);

@@ -384,13 +384,17 @@ std::optional<Number> Eds::value(ObjectAddress a, std::uint8_t node) const {
   if (!v->node_relative) return v->number;
   // The offset was checked against the type alone: the sum must fit it too.
   Number sum;
+  bool fits = true;
   if (const auto* i = std::get_if<std::int64_t>(&v->number)) {
     sum = *i + node;
   } else {
-    sum = std::get<std::uint64_t>(v->number) + node;
+    const std::uint64_t offset = std::get<std::uint64_t>(v->number);
+    // An UNSIGNED64 offset near 2^64 would wrap around to a small value that fits.
+    fits = offset <= std::numeric_limits<std::uint64_t>::max() - node;
+    sum = offset + node;
   }
   std::uint8_t scratch[8];
-  if (encode(e->type, sum, scratch) != Codec::ok)
+  if (!fits || encode(e->type, sum, scratch) != Codec::ok)
     throw ConfigError(file, e->line, 1, to_string(a),
                       "'" + v->text + "' with node-ID " + std::to_string(node) + " does not fit " +
                           std::string(to_string(e->type)));

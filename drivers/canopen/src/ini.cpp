@@ -67,9 +67,13 @@ File parse(std::string_view text, const std::string& path) {
       file.sections.push_back(Section{std::string(name), line_number, {}});
     } else {
       const std::size_t eq = line.find('=');
-      if (file.sections.empty())
-        throw deploy::ConfigError(path, line_number, column, std::string(line.substr(0, eq)),
+      if (file.sections.empty()) {
+        // The key, or the line itself when there is none ("=x"): an error always names one.
+        std::string_view key = line.substr(0, eq);
+        trim(key);
+        throw deploy::ConfigError(path, line_number, column, std::string(key.empty() ? line : key),
                                   "outside any section");
+      }
       Section& section = file.sections.back();
       if (eq == std::string_view::npos)
         throw deploy::ConfigError(path, line_number, column, "[" + section.name + "]",

@@ -19,8 +19,11 @@ void SdoServer::abort(ObjectAddress address, SdoAbort code) noexcept {
 void SdoServer::on_frame(const can::Frame& f, TimeNs now) noexcept {
   if (f.can_id() != config_.channel.request || !canopen_data_frame(f)) return;
   if (f.len != sdo::frame_length) {
-    // Bytes past len are zero in a Frame, so the multiplexer read here is what was sent, or 0.
-    return abort(sdo::multiplexer(f), SdoAbort::command_specifier);
+    // The multiplexer as far as the frame carries it, the rest 0: bytes past len are whatever the
+    // sender's buffer or virtual-bus slot held, not something to echo.
+    can::Frame carried;
+    std::copy_n(f.data, std::min<std::size_t>(f.len, 4), carried.data);
+    return abort(sdo::multiplexer(carried), SdoAbort::command_specifier);
   }
   switch (sdo::specifier(f)) {
     case sdo::ccs::initiate_download:
