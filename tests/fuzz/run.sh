@@ -20,7 +20,7 @@ while (($#)); do
     *) targets+=("$1"); shift ;;
   esac
 done
-((${#targets[@]})) || targets=(bridge_segment deploy_yaml gateway_sample)
+((${#targets[@]})) || targets=(bridge_segment deploy_yaml gateway_sample can_frames canopen_eds)
 
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz --target "${targets[@]/#/fuzz_}"  # only what runs here
@@ -36,7 +36,7 @@ for t in "${targets[@]}"; do
   [ "$t" = bridge_segment ] && args+=(-max_len=16384)  # a whole small segment (two pages at least)
   echo "== fuzz $t: $seconds s at most$( ((runs >= 0)) && echo ", $runs inputs from seed $seed")"
   if "$out/tests/fuzz/fuzz_$t" "${args[@]}" "$out/corpus/$t" "tests/fuzz/$t" >"$out/$t.log" 2>&1; then
-    grep -E "^#[0-9]+ +DONE|stat::number_of_executed_units|stat::peak_rss_mb" "$out/$t.log" || true
+    grep -E "^#[0-9]+[[:space:]]+DONE|stat::number_of_executed_units|stat::peak_rss_mb" "$out/$t.log" || true
   else
     failed+=("$t")
     tail -n 60 "$out/$t.log"
