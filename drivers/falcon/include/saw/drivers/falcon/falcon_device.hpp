@@ -1,0 +1,115 @@
+// FalconDevice: a Novint Falcon as a CRTK arm, a periodic task exchanging one packet per cycle.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string_view>
+
+#include "saw/crtk_arm.hpp"
+#include "saw/drivers/falcon/delta_kinematics.hpp"
+#include "saw/drivers/falcon/transport.hpp"
+#include "saw/fault.hpp"
+#include "saw/task.hpp"
+
+namespace saw::drivers::falcon {
+
+struct FalconConfig {
+  DeltaGeometry geometry;
+  double max_force = 8.0;  // N: a servo_cf whose norm exceeds it is refused
+  // The workspace (m, in measured_cp's frame): outside it, force pushing further out is dropped.
+  Eigen::Vector3d workspace_min = Eigen::Vector3d::Constant(-0.06);
+  Eigen::Vector3d workspace_max = Eigen::Vector3d::Constant(0.06);
+  // measured_cp = tip − origin; NaN (the default): the tip at encoder counts 0 (the arms at 35°).
+  Eigen::Vector3d origin = Eigen::Vector3d::Constant(NAN);
+  bool start_enabled = true;
+  bool home_on_start = true;      // home in the first cycles (the encoders are relative until then)
+  std::int16_t homing_dac = 500;  // DAC counts driving the arms up onto their index while homing
+  TimeNs homing_timeout = 5'000'000'000;
+  // A failed exchange (no answer, USB error, corrupt or short frame, a pose out of the model):
+  // this many in a row → FAULT, zero force. An unplug faults at once.
+  int max_missed = 10;
+  double velocity_filter = 0.3;          // 0..1: weight of the newest finite-difference velocity
+  std::uint8_t clutch_buttons = 0x04;    // status:: bits raising the clutch event (centre button)
+  std::uint8_t operator_buttons = 0x02;  // ... and operator_present (forward button)
+  TimeNs command_timeout = 0;            // 0: 3 periods (as sim_haptic_device)
+};
+
+// What a run comes to (the "summary" column).
+struct FalconSummary {
+  static constexpr std::string_view type_name = "saw::drivers::falcon::FalconSummary";
+  static constexpr std::uint32_t layout_version = 1;
+  std::uint64_t exchanges = 0;
+  std::uint64_t no_answer = 0, usb_errors = 0, bad_frames = 0, out_of_model = 0;
+  std::uint64_t refused_commands = 0, watchdog_trips = 0, saturated = 0;
+  std::uint32_t faults = 0;
+  std::int32_t last_usb_error = 0;
+  TimeNs command_timeout = 0;
+  FaultInfo fault{};  // the last fault
+};
+
+// Provided "arm" (CRTK, as sim_haptic_device): measured_cp, measured_cv, measured_js (arm angles),
+// operating_state, fault, servo_force, command_timeout, watchdog_trips (reads); servo_cf,
+// state_command (writes); operating_state, clutch, operator_present, fault (events).
+// Provided "falcon": summary, leds (reads).
+// The transport is opened in startup() (not RT); run() does one bounded exchange.
+class FalconDevice : public Task {
+ public:
+  FalconDevice(std::string name, TaskConfig task, FalconConfig config,
+               std::unique_ptr<FalconTransport> transport);
+  ~FalconDevice() override;
+
+  void startup() override;
+  void cleanup() override;
+  void run() override;
+
+  const FalconConfig& device_config() const noexcept { return config_; }
+  const FalconSummary& summary() const noexcept { return summary_; }
+  const OperatingState& operating_state() const noexcept { return state_; }
+  const FaultInfo& fault() const noexcept { return fault_; }
+  FalconTransport& transport() noexcept { return *transport_; }
+  Eigen::Vector3d position() const noexcept { return x_ - origin_; }
+  bool homing() const noexcept { return homing_; }
+
+ private:
+  void servo_cf(const Wrench& w) noexcept;
+  void state_command(StateCommand c) noexcept;
+  void set_state(OperatingStateValue s) noexcept;
+  void watch_commands() noexcept;
+  MotorCommand command() noexcept;
+  void measure(const DeviceReport& r) noexcept;
+  void missed(FaultCode code, std::int32_t error) noexcept;
+  void raise(FaultCode code, std::int32_t error) noexcept;
+  void publish() noexcept;
+
+  FalconConfig config_;
+  DeltaKinematics kinematics_;
+  std::unique_ptr<FalconTransport> transport_;
+  Eigen::Vector3d theta_ = Eigen::Vector3d::Zero(), theta_dot_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d x_ = Eigen::Vector3d::Zero(), origin_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d j_ = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  // accepted servo_cf
+  bool measured_ = false, homing_ = false, commanded_ = false;
+  TimeNs homing_start_ = 0, last_command_ = 0, t0_ = -1;
+  int consecutive_missed_ = 0;
+  std::uint8_t buttons_ = 0;
+
+  // State-table sources.
+  Pose measured_cp_{};
+  Twist measured_cv_{};
+  JointState measured_js_{};
+  OperatingState state_{};
+  Vec3 servo_force_{};
+  bool command_timeout_ = false;
+  std::uint64_t watchdog_trips_ = 0;
+  std::uint8_t leds_ = 0;
+  FaultInfo fault_{};
+  FalconSummary summary_{};
+
+  EventWrite<OperatingState>* state_event_ = nullptr;
+  EventWrite<ButtonEvent>* clutch_event_ = nullptr;
+  EventWrite<ButtonEvent>* operator_event_ = nullptr;
+  EventWrite<FaultInfo>* fault_event_ = nullptr;
+};
+
+}  // namespace saw::drivers::falcon

@@ -1,0 +1,35 @@
+// The `falcon` component's parameters: the config structs and the parser, next to each other.
+#pragma once
+
+#include <string>
+
+#include "saw/deploy/params.hpp"
+#include "saw/deploy/registry.hpp"
+#include "saw/drivers/falcon/falcon_device.hpp"
+#include "saw/drivers/falcon/sim_firmware.hpp"
+#include "saw/drivers/falcon/usb_transport.hpp"
+
+namespace saw::drivers::falcon {
+
+enum class TransportKind : std::uint8_t { usb, sim };
+
+// Everything a deployment says about one Falcon.
+struct FalconSpec {
+  TaskConfig task;
+  FalconConfig device;
+  TransportKind transport = TransportKind::usb;
+  UsbConfig usb;          // transport: usb (firmware, bus, index, exchange_timeout)
+  SimFirmwareConfig sim;  // transport: sim (hand script, dynamics)
+};
+
+// params: transport (usb|sim), firmware, usb: {bus, index, exchange_timeout_ms}, max_force,
+// workspace: {min, max}, origin, start_enabled, home_on_start, homing_dac, homing_timeout,
+// max_missed, clutch_buttons, operator_buttons, command_timeout, calibration: {dac_per_newton_metre,
+// dac_limit, angle_at_zero}, sim: {initial_angles, inertia, damping, hand: {amplitude, frequency,
+// stiffness, damping}}. Errors name file:line and the key (deploy::Params).
+FalconSpec parse_falcon(const deploy::ComponentContext& ctx, deploy::Params& p);
+
+// The transport the spec names (not opened).
+std::unique_ptr<FalconTransport> make_transport(const FalconSpec& s);
+
+}  // namespace saw::drivers::falcon
