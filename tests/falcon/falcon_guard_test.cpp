@@ -1,0 +1,52 @@
+// The falcon component's cycle on the simulated firmware (packet codec, exchange, kinematics,
+// homing, forces, the watchdog, corrupt frames, faults and their recovery) allocates, locks,
+// waits and prints nothing: checked by the RT guard on every cycle.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "falcon_rig.hpp"
+#include "guard_support.hpp"
+#include "saw/rt_context.hpp"
+
+namespace {
+
+using namespace saw::drivers::falcon;
+
+TEST(RtGuard, FalconCycleOnTheSimulatedFirmwareIsRtClean) {
+  saw::testing::GuardWindow window;
+  test::FalconRig rig;  // set-up and open: not RT
+  constexpr int cycles = 3000;
+  int enabled = 0;
+  {
+    saw::RtContextScope rt;
+    for (int i = 0; i < cycles; ++i) {
+      saw::RtCycleScope cycle("falcon");
+      rig.sim->set_hand(rig.homed());  // the operator takes the grip once it has homed
+      const bool commanding = rig.homed() && (i < 1500 || i > 1600);
+      if (commanding) {
+        const double s = std::sin(i * 0.01);
+        rig.force(i == 2000 ? NAN : s, -s, 0.5 * s);
+      }
+      if (i == 1200) rig.sim->set_buttons(status::button_center);
+      if (i == 1300) rig.sim->set_buttons(0);
+      if (i == 1700) rig.sim->corrupt_answers(20);  // past max_missed: FAULT
+      if (i == 1800) rig.write("state_command", saw::StateCommand::enable);
+      if (i == 2200) rig.sim->drop_answers(3);
+      rig.cycle();
+      enabled += rig.state() == saw::OperatingStateValue::enabled;
+    }
+  }
+  const auto counts = window.counts();
+  EXPECT_TRUE(rig.homed());
+  EXPECT_EQ(rig.state(), saw::OperatingStateValue::enabled);
+  EXPECT_EQ(rig.device->summary().faults, 1u);
+  EXPECT_EQ(rig.device->summary().refused_commands, 1u);
+  EXPECT_EQ(rig.device->summary().watchdog_trips, 1u);
+  EXPECT_EQ(rig.device->summary().no_answer, 3u);
+  EXPECT_GT(enabled, 2500);
+  EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
+  EXPECT_RT_CLEAN(counts);
+}
+
+}  // namespace
