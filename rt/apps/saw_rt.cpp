@@ -11,6 +11,7 @@
 #include "saw/bridge/registration.hpp"
 #include "saw/canopen/registration.hpp"
 #include "saw/deploy/deployment.hpp"
+#include "saw/drivers/falcon/registration.hpp"
 #include "saw/drivers/sim_registration.hpp"
 #include "saw/teleop/registration.hpp"
 
@@ -23,6 +24,7 @@ void on_signal(int) { stop_requested.store(true, std::memory_order_relaxed); }
 void register_packages(saw::deploy::ComponentRegistry& registry) {
   saw::bridge::register_components(registry);
   saw::canopen::register_components(registry);
+  saw::drivers::falcon::register_components(registry);
   saw::drivers::sim::register_components(registry);
   saw::teleop::register_components(registry);
 }

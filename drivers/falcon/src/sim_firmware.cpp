@@ -25,7 +25,10 @@ void SimFalconFirmware::step(double dt) noexcept {
   Eigen::Matrix3d j;
   if (!kinematics_.forward(theta_, x) || !kinematics_.jacobian(theta_, x, j)) j.setZero();
   const Eigen::Vector3d xd = j * theta_dot_;
-  hand_force_ = (config_.hand || !hand_offset_.isZero())
+  // The simulated operator takes the grip once the Falcon has homed (homing pushes the arms
+  // against their stops: a hand holding the grip would stop it).
+  const bool held = homed_[0] && homed_[1] && homed_[2] && !(control_ & control::homing);
+  hand_force_ = held && (config_.hand || !hand_offset_.isZero())
                     ? Eigen::Vector3d(config_.hand_stiffness * (target - x) - config_.hand_damping * xd)
                     : Eigen::Vector3d::Zero();
   const Eigen::Vector3d tau = torque_ + j.transpose() * hand_force_ - config_.damping * theta_dot_;

@@ -23,7 +23,7 @@ struct SimFirmwareConfig {
   // Until homed the encoders count from where the arms were at power-up: this far off.
   std::array<std::int16_t, 3> power_up_offset{123, -456, 789};
   double index_angle = 0.3;  // rad: an arm reaching this (going up) in homing mode is homed
-  // The operator's hand: a spring-damper pulling the grip towards origin + a sinusoid.
+  // The operator's hand (once homed): a spring-damper pulling the grip to origin + a sinusoid.
   bool hand = false;
   Eigen::Vector3d hand_amplitude = Eigen::Vector3d::Zero();  // m
   double hand_frequency = 0.5;                               // Hz
