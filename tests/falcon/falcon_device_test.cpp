@@ -88,18 +88,7 @@ TEST(FalconDevice, OutsideTheWorkspaceNoForcePushesFurtherOut) {
   EXPECT_EQ(rig.read<Vec3>("servo_force")[0], 0.0);
 }
 
-TEST(FalconDevice, GripButtonsRaiseClutchAndOperatorPresentEvents) {
-  FalconRig rig;
-  rig.home();
-  rig.sim->set_buttons(status::button_center);
-  rig.cycle();
-  rig.sim->set_buttons(status::button_center | status::button_forward);
-  rig.cycle();
-  rig.sim->set_buttons(0);
-  rig.cycle();
-  // The events went out (no client here): what the device saw is in its measured buttons.
-  EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
-}
+// The grip buttons' events: arm_interface_test.cpp (they need a connected client).
 
 TEST(FalconDevice, CorruptFramesAreRefusedAndPastTheLimitFaultWithZeroForce) {
   FalconRig rig;
