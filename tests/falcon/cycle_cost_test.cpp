@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "falcon_rig.hpp"
+#include "saw/drivers/falcon/threaded_transport.hpp"
 
 namespace saw::drivers::falcon {
 namespace {
@@ -54,6 +55,11 @@ TEST(FalconCycleCost, PrintsTheCodecExchangeAndCycleCosts) {
   const Packet cmd = encode_command(MotorCommand{});
   print("simulated exchange (firmware + dynamics, 4 substeps)",
         time_each(n, [&] { (void)sim.exchange(cmd, in); }));
+  ThreadedTransport threaded(std::make_unique<SimTransport>(), 0);
+  threaded.open();
+  print("cycle side of the I/O-thread transport (post + take)",
+        time_each(n, [&] { (void)threaded.exchange(cmd, in); }));
+  threaded.close();
   test::FalconRig rig;
   rig.home();
   rig.sim->set_hand(true);

@@ -1,10 +1,12 @@
 // The Falcon package's type for deployments: each parameter read, range-checked and located.
 #include "saw/drivers/falcon/registration.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
 #include "saw/drivers/falcon/falcon_params.hpp"
+#include "saw/drivers/falcon/threaded_transport.hpp"
 #include "saw/eigen.hpp"
 
 namespace saw::drivers::falcon {
@@ -52,6 +54,9 @@ FalconSpec parse_falcon(const deploy::ComponentContext& ctx, Params& p) {
   s.transport = p.get_enum<TransportKind>(
       "transport", {{"usb", TransportKind::usb}, {"sim", TransportKind::sim}}, TransportKind::usb);
   s.task = deploy::periodic_task(ctx, p, "falcon");
+  s.io_thread = p.get_or<bool>("io_thread", s.transport == TransportKind::usb);
+  const int io_default = s.task.priority > 0 ? std::min(s.task.priority + 1, 99) : 0;
+  s.io_priority = static_cast<int>(p.get_in_range("io_priority", 0, 99, io_default));
   FalconConfig& c = s.device;
   c.max_force = p.get_in_range("max_force", 0.1, 20, c.max_force);
   if (p.has("workspace")) {
@@ -116,8 +121,13 @@ FalconSpec parse_falcon(const deploy::ComponentContext& ctx, Params& p) {
 }
 
 std::unique_ptr<FalconTransport> make_transport(const FalconSpec& s) {
-  if (s.transport == TransportKind::sim) return std::make_unique<SimTransport>(s.sim);
-  return std::make_unique<UsbTransport>(s.usb);
+  std::unique_ptr<FalconTransport> t;
+  if (s.transport == TransportKind::sim)
+    t = std::make_unique<SimTransport>(s.sim);
+  else
+    t = std::make_unique<UsbTransport>(s.usb);
+  if (s.io_thread) t = std::make_unique<ThreadedTransport>(std::move(t), s.io_priority);
+  return t;
 }
 
 void register_components(deploy::ComponentRegistry& registry) {

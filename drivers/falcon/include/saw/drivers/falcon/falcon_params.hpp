@@ -20,10 +20,14 @@ struct FalconSpec {
   TransportKind transport = TransportKind::usb;
   UsbConfig usb;          // transport: usb (firmware, bus, index, exchange_timeout)
   SimFirmwareConfig sim;  // transport: sim (hand script, dynamics)
+  // The exchanges in an I/O thread beside the task (ThreadedTransport): the default on USB,
+  // whose transfers may wait longer than a period and allocate inside libusb.
+  bool io_thread = false;
+  int io_priority = 0;  // SCHED_FIFO; default: the task's priority + 1 (0 stays 0)
 };
 
-// params: transport (usb|sim), firmware, usb: {bus, index, exchange_timeout_ms}, max_force,
-// workspace: {min, max}, origin, start_enabled, home_on_start, homing_dac, homing_timeout,
+// params: transport (usb|sim), io_thread, io_priority, firmware, usb: {bus, index, exchange_timeout_ms},
+// max_force, workspace: {min, max}, origin, start_enabled, home_on_start, homing_dac, homing_timeout,
 // max_missed, clutch_buttons, operator_buttons, command_timeout, calibration: {dac_per_newton_metre,
 // dac_limit, angle_at_zero}, sim: {initial_angles, inertia, damping, hand: {amplitude, frequency,
 // stiffness, damping}}. Errors name file:line and the key (deploy::Params).
