@@ -61,6 +61,8 @@ TEST(FalconThreadedTransport, AFalconHomesAndIsPushedThroughTheIoThread) {
   EXPECT_EQ(device.operating_state().state, OperatingStateValue::enabled);
   device.cleanup();  // stops the thread: the firmware may be read now
   EXPECT_TRUE(sim.homed(0) && sim.homed(1) && sim.homed(2));
+  EXPECT_TRUE(sim.motor_torque().isZero()) << "closing leaves the motors unpowered";
+  EXPECT_EQ(sim.leds(), 0) << "and the LEDs off";
   std::printf("threaded: %llu exchanges, %llu without a new report\n",
               static_cast<unsigned long long>(device.summary().exchanges),
               static_cast<unsigned long long>(device.summary().no_answer));

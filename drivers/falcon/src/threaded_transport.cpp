@@ -107,7 +107,13 @@ ExchangeResult ThreadedTransport::exchange(const Packet& out, Packet& in) noexce
 }
 
 void ThreadedTransport::close() noexcept {
-  if (running_.exchange(false, std::memory_order_acq_rel) && thread_.joinable()) thread_.join();
+  if (running_.exchange(false, std::memory_order_acq_rel) && thread_.joinable()) {
+    thread_.join();
+    // The thread may have stopped before the cycle's last (zero) command went out: leave the
+    // motors unpowered from here.
+    Packet in{};
+    (void)inner_->exchange(encode_command(MotorCommand{}), in);
+  }
   inner_->close();
 }
 
