@@ -17,26 +17,29 @@ static_assert(sizeof(Packet) == 2 * sizeof(std::uint64_t));
 }  // namespace
 
 void ThreadedTransport::Slot::store(const Packet& p, ExchangeStatus s, std::int32_t e) noexcept {
-  const std::uint64_t n = seq.load(std::memory_order_relaxed);
-  seq.store(n + 1, std::memory_order_relaxed);  // odd: a store under way
-  std::atomic_thread_fence(std::memory_order_release);
+  const std::uint64_t n = seq.load(std::memory_order_relaxed);  // one writer: this thread's own
+  seq.store(n + 1, std::memory_order_relaxed);                  // odd: a store under way
+  // Each word is stored with release, so a reader that sees any of them also sees the odd
+  // sequence before it (a release store orders the writes before it): no fence needed, which
+  // TSan could not check.
   std::uint64_t w[2];
   to_words(p, w);
-  words[0].store(w[0], std::memory_order_relaxed);
-  words[1].store(w[1], std::memory_order_relaxed);
-  status.store(static_cast<std::uint32_t>(s), std::memory_order_relaxed);
-  error.store(e, std::memory_order_relaxed);
-  seq.store(n + 2, std::memory_order_release);
+  words[0].store(w[0], std::memory_order_release);
+  words[1].store(w[1], std::memory_order_release);
+  status.store(static_cast<std::uint32_t>(s), std::memory_order_release);
+  error.store(e, std::memory_order_release);
+  seq.store(n + 2, std::memory_order_release);  // even: complete; publishes the words
 }
 
 bool ThreadedTransport::Slot::load(Packet& p, ExchangeStatus& s, std::int32_t& e,
                                    std::uint64_t& at) const noexcept {
   const std::uint64_t a = seq.load(std::memory_order_acquire);
   if (a & 1) return false;
-  std::uint64_t w[2] = {words[0].load(std::memory_order_relaxed), words[1].load(std::memory_order_relaxed)};
-  const auto st = status.load(std::memory_order_relaxed);
-  const auto er = error.load(std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_acquire);
+  // Acquire loads: the sequence re-read below cannot move before them, and a word from a newer
+  // store brings that store's odd sequence with it, so the re-read sees the change.
+  std::uint64_t w[2] = {words[0].load(std::memory_order_acquire), words[1].load(std::memory_order_acquire)};
+  const auto st = status.load(std::memory_order_acquire);
+  const auto er = error.load(std::memory_order_acquire);
   if (seq.load(std::memory_order_relaxed) != a) return false;
   from_words(w, p);
   s = static_cast<ExchangeStatus>(st);
