@@ -60,8 +60,9 @@ FalconDevice::FalconDevice(std::string name, TaskConfig task, FalconConfig confi
   crtk::provide(arm, arm_if::measured_js, st, &measured_js_);
   crtk::provide(arm, arm_if::operating_state, st, &state_);
   arm.add_command_read("servo_force", st.add_column("servo_force", &servo_force_));
-  arm.add_command_read("command_timeout", st.add_column("command_timeout", &command_timeout_));
-  arm.add_command_read("watchdog_trips", st.add_column("watchdog_trips", &watchdog_trips_));
+  watchdog_.set_timeout(config_.command_timeout);
+  arm.add_command_read("command_timeout", watchdog_.holding_column());
+  arm.add_command_read("watchdog_trips", watchdog_.trips_column());
   arm.add_command_read("fault", st.add_column("fault", &fault_));
   crtk::provide(arm, arm_if::servo_cf, [this](const Wrench& w) { servo_cf(w); });
   arm.limit(arm_if::servo_cf.name, -config_.max_force, config_.max_force);
@@ -92,9 +93,7 @@ void FalconDevice::cleanup() {
 }
 
 void FalconDevice::servo_cf(const Wrench& w) noexcept {
-  last_command_ = now();
-  commanded_ = true;
-  command_timeout_ = false;
+  watchdog_.commanded(now());  // a refused command is fresh too: it zeroes the force itself
   const Eigen::Vector3d f(w.force[0], w.force[1], w.force[2]);
   if (!f.allFinite() || f.norm() > config_.max_force) {
     force_.setZero();  // never to the motors, nor keep pushing with the last good one
@@ -105,13 +104,10 @@ void FalconDevice::servo_cf(const Wrench& w) noexcept {
 }
 
 void FalconDevice::watch_commands() noexcept {
-  if (!commanded_ || now() - last_command_ <= config_.command_timeout) return;
+  if (!watchdog_.expired(now())) return;
   force_.setZero();
-  commanded_ = false;
-  command_timeout_ = true;
-  ++watchdog_trips_;
   saw::log(LogLevel::warning, name().c_str(), "no servo_cf for {} ns: force dropped to zero",
-           now() - last_command_);
+           now() - watchdog_.last_command());
 }
 
 void FalconDevice::set_state(OperatingStateValue s) noexcept {
@@ -169,7 +165,7 @@ MotorCommand FalconDevice::command() noexcept {
 
 void FalconDevice::raise(FaultCode code, std::int32_t error) noexcept {
   force_.setZero();
-  commanded_ = false;
+  watchdog_.disarm();
   homing_ = false;
   state_.is_busy = false;
   if (state_.state == OperatingStateValue::fault) return;
@@ -237,7 +233,7 @@ void FalconDevice::publish() noexcept {
     measured_js_.position[i] = theta_[static_cast<Eigen::Index>(i)];
     measured_js_.velocity[i] = theta_dot_[static_cast<Eigen::Index>(i)];
   }
-  summary_.watchdog_trips = watchdog_trips_;
+  summary_.watchdog_trips = watchdog_.trips();
 }
 
 void FalconDevice::run() {

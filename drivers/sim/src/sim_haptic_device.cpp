@@ -53,8 +53,9 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   auto& st = state_table();
   columns_.hand_force = st.add_column("hand_force", &hand_force_);
   columns_.servo_force = st.add_column("servo_force", &servo_force_);
-  columns_.command_timeout = st.add_column("command_timeout", &command_timeout_);
-  columns_.watchdog_trips = st.add_column("watchdog_trips", &watchdog_trips_);
+  watchdog_.set_timeout(config_.command_timeout);
+  columns_.command_timeout = watchdog_.holding_column();
+  columns_.watchdog_trips = watchdog_.trips_column();
   st.add_column("summary", &summary_, ColumnUse::summary);
   namespace arm_if = crtk::arm;
   auto& arm = provide(std::string(arm_if::interface_name));
@@ -80,9 +81,7 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
 }
 
 void SimHapticDevice::servo_cf(const Wrench& w) noexcept {
-  last_command_ = now();  // a refused command is fresh too: it zeroes the force itself
-  commanded_ = true;
-  command_timeout_ = false;
+  watchdog_.commanded(now());  // a refused command is fresh too: it zeroes the force itself
   const Eigen::Vector3d f(w.force[0], w.force[1], w.force[2]);
   if (!f.allFinite() || f.norm() > config_.max_force) {
     // Never let a bad command reach the motors, nor keep pushing with the last good one.
@@ -94,15 +93,10 @@ void SimHapticDevice::servo_cf(const Wrench& w) noexcept {
 }
 
 void SimHapticDevice::watch_commands() noexcept {
-  // Commands are handled before run(), stamped with this cycle's time: a commander that
-  // sends every period is never older than one period here.
-  if (!commanded_ || now() - last_command_ <= config_.command_timeout) return;
+  if (!watchdog_.expired(now())) return;
   force_.setZero();
-  commanded_ = false;
-  command_timeout_ = true;
-  ++watchdog_trips_;
   saw::log(LogLevel::warning, name().c_str(), "no servo_cf for {} ns: force dropped to zero",
-           now() - last_command_);
+           now() - watchdog_.last_command());
 }
 
 void SimHapticDevice::set_state(OperatingStateValue s) noexcept {
@@ -174,7 +168,7 @@ void SimHapticDevice::publish() noexcept {
     measured_js_.velocity[i] = qd_[k];
   }
   rejected_column_ = rejected_;
-  summary_ = {rejected_, watchdog_trips_, config_.command_timeout};
+  summary_ = {rejected_, watchdog_.trips(), config_.command_timeout};
 }
 
 void SimHapticDevice::run() {

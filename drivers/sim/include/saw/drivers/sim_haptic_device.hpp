@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string_view>
 
+#include "saw/command_watchdog.hpp"
 #include "saw/crtk_arm.hpp"
 #include "saw/drivers/arm_kinematics.hpp"
 #include "saw/drivers/hand_script.hpp"
@@ -66,7 +67,7 @@ class SimHapticDevice : public Task {
   const SimDeviceConfig& device_config() const noexcept { return config_; }
   std::uint64_t rejected_commands() const noexcept { return rejected_; }
   // Times the command watchdog dropped a force (each time commands stopped coming).
-  std::uint64_t watchdog_trips() const noexcept { return watchdog_trips_; }
+  std::uint64_t watchdog_trips() const noexcept { return watchdog_.trips(); }
   TimeNs command_timeout() const noexcept { return config_.command_timeout; }
 
   struct Columns {
@@ -96,9 +97,8 @@ class SimHapticDevice : public Task {
   TimeNs t0_ = -1;
   std::size_t hand_cursor_ = 0;
   bool hand_clutch_ = false;
-  std::uint64_t rejected_ = 0, watchdog_trips_ = 0;
-  TimeNs last_command_ = 0;
-  bool commanded_ = false;  // a servo_cf was received and has not timed out yet
+  std::uint64_t rejected_ = 0;
+  CommandWatchdog watchdog_{state_table()};  // servo_cf's
 
   // State-table sources.
   Pose measured_cp_{};
@@ -108,7 +108,6 @@ class SimHapticDevice : public Task {
   Vec3 hand_force_{}, servo_force_{};
   std::uint64_t rejected_column_ = 0;
   SimDeviceSummary summary_{};
-  bool command_timeout_ = false;
   Columns columns_;
 
   EventWrite<OperatingState>* state_event_ = nullptr;

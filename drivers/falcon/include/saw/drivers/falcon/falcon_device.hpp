@@ -6,6 +6,7 @@
 #include <memory>
 #include <string_view>
 
+#include "saw/command_watchdog.hpp"
 #include "saw/crtk_arm.hpp"
 #include "saw/drivers/falcon/delta_kinematics.hpp"
 #include "saw/drivers/falcon/transport.hpp"
@@ -89,8 +90,8 @@ class FalconDevice : public Task {
   Eigen::Vector3d x_ = Eigen::Vector3d::Zero(), origin_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d j_ = Eigen::Matrix3d::Zero();
   Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  // accepted servo_cf
-  bool measured_ = false, homing_ = false, commanded_ = false;
-  TimeNs homing_start_ = 0, last_command_ = 0, t0_ = -1;
+  bool measured_ = false, homing_ = false;
+  TimeNs homing_start_ = 0, t0_ = -1;
   int consecutive_missed_ = 0;
   std::uint8_t buttons_ = 0;
 
@@ -100,8 +101,7 @@ class FalconDevice : public Task {
   JointState measured_js_{};
   OperatingState state_{};
   Vec3 servo_force_{};
-  bool command_timeout_ = false;
-  std::uint64_t watchdog_trips_ = 0;
+  CommandWatchdog watchdog_{state_table()};  // servo_cf's
   std::uint8_t leds_ = 0;
   FaultInfo fault_{};
   FalconSummary summary_{};
