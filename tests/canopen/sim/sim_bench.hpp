@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "../ring_bus.hpp"
 #include "saw/can/bus.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/heartbeat.hpp"
@@ -23,55 +24,9 @@ namespace saw::canopen::sim::testing {
 inline constexpr TimeNs us = 1'000;
 inline constexpr TimeNs ms = 1'000'000;
 
-class MemoryNetwork;
-
-// One port of a MemoryNetwork: what one port sends, every other port receives (vcan's rule).
-class MemoryBus final : public can::Bus {
- public:
-  MemoryBus(MemoryNetwork& network, std::string name) : network_(network), name_(std::move(name)) {}
-  std::size_t receive(std::span<can::Received> out) noexcept override {
-    std::size_t n = 0;
-    for (; n < out.size() && !inbox_.empty(); ++n) {
-      out[n] = inbox_.front();
-      inbox_.pop_front();
-    }
-    counters_.received += n;
-    return n;
-  }
-  std::size_t send(std::span<const can::Frame> frames) noexcept override;
-  can::BusState state() const noexcept override { return can::BusState::error_active; }
-  can::BusCounters counters() const noexcept override { return counters_; }
-  const std::string& name() const noexcept override { return name_; }
-  TimeNs now = 0;  // stamped on what this port sends
-
- private:
-  friend class MemoryNetwork;
-  MemoryNetwork& network_;
-  std::string name_;
-  std::deque<can::Received> inbox_;
-  can::BusCounters counters_;
-};
-
-class MemoryNetwork {
- public:
-  MemoryBus& attach(std::string name) {
-    ports_.push_back(std::make_unique<MemoryBus>(*this, std::move(name)));
-    return *ports_.back();
-  }
-  void deliver(const MemoryBus& from, const can::Frame& f) {
-    for (auto& p : ports_)
-      if (p.get() != &from) p->inbox_.push_back({f, from.now});
-  }
-
- private:
-  std::vector<std::unique_ptr<MemoryBus>> ports_;
-};
-
-inline std::size_t MemoryBus::send(std::span<const can::Frame> frames) noexcept {
-  for (const auto& f : frames) network_.deliver(*this, f);
-  counters_.sent += frames.size();
-  return frames.size();
-}
+// The RT tests' in-memory network (vcan's rule: what one port sends, every other port receives).
+using MemoryNetwork = saw::canopen::test::RingNetwork;
+using MemoryBus = saw::canopen::test::RingPort;
 
 struct Seen {
   can::Frame frame;
