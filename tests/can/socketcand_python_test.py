@@ -10,7 +10,6 @@ Usage: socketcand_python_test.py <saw-socketcand> <saw-cansend> <saw-candump>
 
 import os
 import re
-import selectors
 import signal
 import socket
 import subprocess
@@ -20,40 +19,16 @@ import time
 
 import can
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from child_tools import check, fail, read_line, start_socketcand  # noqa: E402
+
 SERVER, CANSEND, CANDUMP = sys.argv[1:4]
 BUS = f"sawcanpy{os.getpid()}"
 LOG_LINE = re.compile(r"^\((\d+)\.(\d{6})\) (\S+) ([0-9A-F]{3}|[0-9A-F]{8})#([0-9A-F]*)$")
 
 
-def fail(message):
-    print(f"FAIL: {message}", file=sys.stderr)
-    sys.exit(1)
-
-
-def check(condition, message):
-    if not condition:
-        fail(message)
-
-
-def read_line(stream, timeout, what):
-    """One line from a child's pipe, or fail after `timeout` seconds."""
-    sel = selectors.DefaultSelector()
-    sel.register(stream, selectors.EVENT_READ)
-    if not sel.select(timeout):
-        fail(f"no {what} within {timeout} s")
-    return stream.readline().decode().strip()
-
-
 def start_server(log_path):
-    server = subprocess.Popen(
-        [SERVER, "--bus", BUS, "--port", "0", "--log", log_path],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-    line = read_line(server.stdout, 10, "'listening on' line from saw-socketcand")
-    match = re.match(r"saw-socketcand: listening on 127\.0\.0\.1:(\d+)$", line)
-    check(match is not None, f"unexpected first line: {line!r}")
-    return server, int(match.group(1))
+    return start_socketcand(SERVER, BUS, "--log", log_path)
 
 
 def client(port):

@@ -15,7 +15,6 @@ Exits 77 (skipped) when the tools venv has no `canopen`.
 
 import os
 import re
-import selectors
 import signal
 import subprocess
 import sys
@@ -28,27 +27,12 @@ except ImportError as e:
     print(f"SKIP: python canopen is not installed in this venv ({e}); tools/requirements.txt has it")
     sys.exit(77)
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "can"))
+from child_tools import check, fail, read_line, start_socketcand  # noqa: E402
+
 SIM, SERVER, EDS = sys.argv[1:4]
 BUS = f"sawcansim{os.getpid()}"
 DRIVE, OTHER = 3, 4
-
-
-def fail(message):
-    print(f"FAIL: {message}", file=sys.stderr)
-    sys.exit(1)
-
-
-def check(condition, message):
-    if not condition:
-        fail(message)
-
-
-def read_line(stream, timeout, what):
-    sel = selectors.DefaultSelector()
-    sel.register(stream, selectors.EVENT_READ)
-    if not sel.select(timeout):
-        fail(f"no {what} within {timeout} s")
-    return stream.readline().decode().strip()
 
 
 def wait_for(condition, timeout, what):
@@ -68,11 +52,8 @@ def start_processes():
     )
     line = read_line(sim.stdout, 10, "ready line from saw-can-sim")
     check(line.startswith(f"saw-can-sim: 2 drives on virtual:{BUS} (nodes 3, 4)"), f"saw-can-sim said {line!r}")
-    server = subprocess.Popen([SERVER, "--bus", BUS, "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    line = read_line(server.stdout, 10, "'listening on' line from saw-socketcand")
-    match = re.match(r"saw-socketcand: listening on 127\.0\.0\.1:(\d+)$", line)
-    check(match is not None, f"saw-socketcand said {line!r}")
-    return sim, server, int(match.group(1))
+    server, port = start_socketcand(SERVER, BUS)
+    return sim, server, port
 
 
 def sdo(network):

@@ -1,0 +1,36 @@
+"""What the CAN system tests share: failing with a message, reading a child's line with a
+deadline, and starting saw-socketcand on a free port of 127.0.0.1."""
+
+import re
+import selectors
+import subprocess
+import sys
+
+
+def fail(message):
+    print(f"FAIL: {message}", file=sys.stderr)
+    sys.exit(1)
+
+
+def check(condition, message):
+    if not condition:
+        fail(message)
+
+
+def read_line(stream, timeout, what):
+    """One line from a child's pipe, or fail after `timeout` seconds."""
+    sel = selectors.DefaultSelector()
+    sel.register(stream, selectors.EVENT_READ)
+    if not sel.select(timeout):
+        fail(f"no {what} within {timeout} s")
+    return stream.readline().decode().strip()
+
+
+def start_socketcand(server, bus, *extra):
+    """saw-socketcand serving `bus` on a port the kernel picks; returns (process, port)."""
+    process = subprocess.Popen([server, "--bus", bus, "--port", "0", *extra], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE)
+    line = read_line(process.stdout, 10, "'listening on' line from saw-socketcand")
+    match = re.match(r"saw-socketcand: listening on 127\.0\.0\.1:(\d+)$", line)
+    check(match is not None, f"saw-socketcand said {line!r}")
+    return process, int(match.group(1))
