@@ -13,6 +13,7 @@
 #include "saw/deploy/deployment.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/teleop/collaborative_control_force.hpp"
+#include "text.hpp"
 
 namespace {
 
@@ -225,18 +226,8 @@ TEST(Integration, PredictionReducesTheTrackingErrorOfADelayedMaster) {
 
 namespace {
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string replace_all(std::string s, const std::string& from, const std::string& to) {
-  for (auto at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
-    s.replace(at, from.size(), to);
-  return s;
-}
+using saw::testing::read_file;
+using saw::testing::replace_all;
 
 // The same teleoperation split over two saw-rt processes: only the deployment files differ.
 TEST(Integration, TwoProcessesTeleoperateThroughTheBridge) {

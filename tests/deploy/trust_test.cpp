@@ -23,6 +23,7 @@
 #include "saw/fault.hpp"
 #include "saw/gateway/type_map.hpp"
 #include "saw/type_info.hpp"
+#include "text.hpp"
 
 extern char** environ;
 
@@ -30,18 +31,8 @@ namespace {
 
 using namespace std::chrono_literals;
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string replace_all(std::string s, const std::string& from, const std::string& to) {
-  for (auto at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
-    s.replace(at, from.size(), to);
-  return s;
-}
+using saw::testing::read_file;
+using saw::testing::replace_all;
 
 // A saw-rt process, its output in `log`; SIGKILLed and reaped when the handle goes.
 struct SawRt {
