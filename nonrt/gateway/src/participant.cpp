@@ -43,6 +43,10 @@ fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
   // (a process restarting under the same participant index) finds us within that, not seconds later.
   qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod =
       eprosima::fastrtps::Duration_t(0, 250'000'000);
+  // A peer that vanishes without saying goodbye (killed, unplugged) is dropped by the others after
+  // this lease (default 20 s): GUIs and sawctl must show a vanished gateway within about a second.
+  // Four announcements fit in it, so one lost announcement does not drop a live peer.
+  qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(1, 0);
   const bool loopback_only = config.interfaces.size() == 1 && config.interfaces.front() == "127.0.0.1";
   if (loopback_only) {
     // Unicast discovery on loopback: our own metatraffic locator (its port is assigned from the
