@@ -14,6 +14,11 @@ apt_packages=(
   libgtest-dev libbenchmark-dev rt-tests stress-ng clang-format
   libzeroc-ice-dev zeroc-ice-compilers iproute2
   clang libclang-rt-14-dev ccache  # the fuzz preset (libFuzzer), faster rebuilds in CI
+  # sawgui's tests: real windows under Xvfb; what PySide6's xcb platform plugin links beyond libxcb1
+  # (found with ldd on plugins/platforms/libqxcb.so and lib/libQt6XcbQpa.so.6).
+  xvfb xauth libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0
+  libxcb-render-util0 libxcb-randr0 libxcb-shape0 libxcb-xkb1 libxcb-xfixes0 libxcb-sync1 libxcb-shm0
+  libegl1 libgl1 libfontconfig1 libdbus-1-3
 )
 
 # The package check runs once per package list (and with --check): builds call this script

@@ -25,6 +25,48 @@ from . import msgs  # noqa: E402
 
 XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 
+# The gateway latches operating states and refusals (TRANSIENT_LOCAL, keep last): a reader that
+# asks for TRANSIENT_LOCAL gets the current state the moment it matches. A TRANSIENT_LOCAL reader
+# does not match a VOLATILE writer, so this says whether the gateways we talk to latch.
+GATEWAY_LATCHES = False
+LATCHED_TYPES = ("crtk_msgs::msg::dds_::OperatingState_",)
+
+
+def latched(endpoint) -> bool:
+    """Whether the gateway latches `endpoint`'s topic (its readers are then TRANSIENT_LOCAL, keep last)."""
+    return GATEWAY_LATCHES and endpoint.dds_type in LATCHED_TYPES
+
+
+def interface_uri(interface: str = "lo", peers=("127.0.0.1",)) -> str:
+    """A CYCLONEDDS_URI restricting DDS to one network interface; `peers` for unicast discovery
+    (loopback has no multicast), none to discover by multicast on that interface."""
+    peer_xml = "".join(f"<Peer address='{p}'/>" for p in peers)
+    multicast = "false" if peers else "true"
+    discovery = (f"<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>31</MaxAutoParticipantIndex>"
+                 f"<Peers>{peer_xml}</Peers>") if peers else ""
+    return (f"<CycloneDDS><Domain Id='any'><General><Interfaces><NetworkInterface name='{interface}'/>"
+            f"</Interfaces><AllowMulticast>{multicast}</AllowMulticast></General>"
+            f"<Discovery>{discovery}</Discovery></Domain></CycloneDDS>")
+
+
+def reader_qos(endpoint, depth: int = 16):
+    """The QoS a reader of `endpoint` needs: reliable for events (and latched topics), best effort
+    for state; TRANSIENT_LOCAL + keep last 1 for what the gateway latches."""
+    if latched(endpoint):
+        return Qos(Policy.Reliability.Reliable(0), Policy.Durability.TransientLocal, Policy.History.KeepLast(1),
+                   XCDR1)
+    reliable = endpoint.kind.endswith("event")
+    return Qos(Policy.Reliability.Reliable(0) if reliable else Policy.Reliability.BestEffort,
+               Policy.History.KeepLast(depth), XCDR1)
+
+
+def error_qos(depth: int = 16):
+    """The QoS of a reader of rt/<component>/error (TRANSIENT_LOCAL, the last 16, once the gateway latches it)."""
+    if GATEWAY_LATCHES:
+        return Qos(Policy.Reliability.Reliable(0), Policy.Durability.TransientLocal, Policy.History.KeepLast(depth),
+                   XCDR1)
+    return Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(depth), XCDR1)
+
 
 class Client:
     def __init__(self, domain: int = 0):
@@ -37,6 +79,7 @@ class Client:
                     XCDR1),
         )
         self._manifests = {}
+        self._writer_of = {}  # gateway name -> publication handle of its manifest writer
 
     def _topic(self, name, cls):
         if name not in self._topics:
@@ -47,14 +90,31 @@ class Client:
         """Every gateway's newest manifest, by gateway name; waits up to `timeout` s (or until `until(m)`)."""
         deadline = time.monotonic() + timeout
         while True:
-            for m in self._registry.take(N=256):
-                self._manifests[m.gateway] = m
+            self.take_manifests()
             if until is not None and until(self._manifests):
                 break
             if time.monotonic() >= deadline:
                 break
             time.sleep(0.02)
         return dict(self._manifests)
+
+    def take_manifests(self) -> bool:
+        """Takes what the registry received (no wait); true if a manifest arrived."""
+        got = False
+        for m in self._registry.take(N=256):
+            if isinstance(m, msgs.Manifest):
+                self._manifests[m.gateway] = m
+                self._writer_of[m.gateway] = m.sample_info.publication_handle & 0xFFFFFFFFFFFFFFFF
+                got = True
+        return got
+
+    def alive(self) -> dict:
+        """Liveliness, by gateway name: a gateway is alive while its manifest writer is matched by
+        our registry reader. A gateway that exits or vanishes is unmatched (at once, or when its
+        participant's lease expires), however quiet its topics were."""
+        # The binding gives matched handles signed and SampleInfo's unsigned: compared as uint64.
+        matched = {h & 0xFFFFFFFFFFFFFFFF for h in self._registry.get_matched_publications()}
+        return {g: h in matched for g, h in self._writer_of.items()}
 
     def endpoints(self, timeout: float = 2.0):
         return [e for m in self.manifests(timeout).values() for e in m.endpoints]
@@ -69,17 +129,22 @@ class Client:
                     return e
         raise LookupError(f"no gateway serves {topic}")
 
-    def reader(self, topic: str, reliable: bool = False):
+    def reader(self, topic: str, reliable: bool = False, depth: int = 16):
         e = self.find(topic)
-        cls = msgs.BY_DDS_NAME[e.dds_type]
-        qos = Qos(Policy.Reliability.Reliable(0) if reliable or e.kind.endswith("event")
-                  else Policy.Reliability.BestEffort, Policy.History.KeepLast(16), XCDR1)
-        return DataReader(self.participant, self._topic(topic, cls), qos=qos)
+        return self.reader_for(e, reliable, depth)
 
-    def error_reader(self, component: str):
+    def reader_for(self, e, reliable: bool = False, depth: int = 16):
+        """A reader of endpoint `e`'s topic, with the QoS reader_qos() gives it."""
+        cls = msgs.BY_DDS_NAME[e.dds_type]
+        qos = reader_qos(e, depth)
+        if reliable and not latched(e):
+            qos = Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(depth), XCDR1)
+        return DataReader(self.participant, self._topic(e.topic, cls), qos=qos)
+
+    def error_reader(self, component: str, depth: int = 16):
         """Commands the gateway refused for `component` (crtk_msgs/StringStamped on rt/<component>/error)."""
         return DataReader(self.participant, self._topic(f"rt/{component}/error", msgs.StringStamped),
-                          qos=Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(16), XCDR1))
+                          qos=error_qos(depth))
 
     @staticmethod
     def wait_matched(reader, timeout: float = 5.0) -> bool:
@@ -102,7 +167,11 @@ class Client:
         raise TimeoutError(f"nothing on {topic} within {timeout} s")
 
     def writer(self, topic: str):
-        e = self.find(topic)
+        return self.writer_for(self.find(topic))
+
+    def writer_for(self, e):
+        """A writer of command endpoint `e` (write or void) and its message class."""
+        topic = e.topic
         if e.kind not in ("write", "void"):
             raise ValueError(f"{topic} is a {e.kind}, not a command")
         cls = msgs.BY_DDS_NAME[e.dds_type]

@@ -184,6 +184,23 @@ class Manifest(IdlStruct, typename="saw_msgs::msg::dds_::Manifest_"):
     endpoints: t.sequence[Endpoint] = field(default_factory=list)
 
 
+@final
+@dataclass
+class Query(IdlStruct, typename="saw_msgs::msg::dds_::Query_"):
+    client: t.uint64 = 0
+    number: t.uint64 = 0
+    data: t.sequence[t.byte, 256] = field(default_factory=list)
+
+
+@final
+@dataclass
+class QueryReply(IdlStruct, typename="saw_msgs::msg::dds_::QueryReply_"):
+    client: t.uint64 = 0
+    number: t.uint64 = 0
+    status: t.int32 = 0
+    data: t.sequence[t.byte, 256] = field(default_factory=list)
+
+
 BY_DDS_NAME = {cls.__idl_typename__: cls for cls in (
     Float64, Int64, Bool, Empty, PoseStamped, Vector3Stamped, TwistStamped, WrenchStamped, JointState, Joy,
-    OperatingState, StringStamped, Manifest)}
+    OperatingState, StringStamped, Manifest, Query, QueryReply)}

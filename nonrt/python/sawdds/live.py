@@ -1,0 +1,389 @@
+"""A live, thread-safe picture of a sawrt system over DDS, kept by background threads.
+
+`Live` reads the registry (every gateway's manifest and whether the gateway is alive), each
+component's operating state and refusals, and the topics a caller watches, in a thread of its own:
+a caller (a GUI's event loop) only ever copies what is there, under a lock, and never waits on the
+network. Commands and qualified reads go through a second thread, whose results the caller
+collects with `results()`. Every sample taken counts in the statistics; the window kept for
+drawing is the last `window` seconds.
+"""
+import collections
+import csv
+import os
+import queue
+import random
+import threading
+import time
+
+from cyclonedds.internal import InvalidSample
+
+from .client import Client, latched
+from . import msgs, values
+
+FAULT = "FAULT"
+
+
+class Series:
+    """One topic: its last sample, a time window of its numbers, statistics over every sample."""
+
+    def __init__(self, endpoint, window: float):
+        self.endpoint = endpoint
+        self.window = window
+        self.names = None  # the numeric leaves, from the first sample
+        self.times = collections.deque()
+        self.rows = collections.deque()
+        self.count = 0
+        self.stats = {}  # leaf -> [n, min, max, sum, sum of squares]
+        self.last = None
+        self.last_time = None  # the sample's source time (s, wall clock)
+        self.received_at = None  # when it was taken (s, monotonic)
+        self.log = collections.deque(maxlen=500)  # (time, text) for events
+
+    def add(self, sample, t: float):
+        self.count += 1
+        self.last, self.last_time, self.received_at = sample, t, time.monotonic()
+        if self.endpoint.kind.endswith("event") or isinstance(sample, (msgs.StringStamped, msgs.OperatingState)):
+            self.log.append((t, values.text(sample)))
+        nums = values.numbers(sample)
+        if not nums:
+            return
+        if self.names is None:
+            self.names = list(nums)
+        row = [nums.get(n, float("nan")) for n in self.names]
+        for n, x in zip(self.names, row):
+            s = self.stats.setdefault(n, [0, x, x, 0.0, 0.0])
+            s[0] += 1
+            s[1], s[2] = min(s[1], x), max(s[2], x)
+            s[3] += x
+            s[4] += x * x
+        self.times.append(t)
+        self.rows.append(row)
+        while self.times and self.times[0] < t - self.window:
+            self.times.popleft()
+            self.rows.popleft()
+
+
+class Live:
+    """The system as the registry and the watched topics show it, kept up to date off the caller's thread."""
+
+    def __init__(self, domain: int = 0, window: float = 10.0, period: float = 0.005):
+        self.client = Client(domain)
+        self.window, self.period = window, period
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._wanted = set()  # topics to watch once the registry names them
+        self._readers = {}  # topic -> (reader, Series)
+        self._errors = {}  # component -> (reader, deque of (time, text))
+        self._gateways = {}  # name -> dict
+        self._components = {}  # name -> dict
+        self._recording = None  # (directory, {topic: (file, csv.writer)})
+        self._jobs = queue.Queue()
+        self._results = queue.Queue()
+        self._writers = {}
+        self._query_id = random.getrandbits(63)
+        self._query_number = 0
+        self.loop_seconds = 0.0  # time spent in the reading loop (for the headless benchmark)
+        self._threads = [threading.Thread(target=self._read_loop, name="sawdds-live", daemon=True),
+                         threading.Thread(target=self._job_loop, name="sawdds-commands", daemon=True)]
+        for t in self._threads:
+            t.start()
+
+    def close(self):
+        self._stop.set()
+        self._jobs.put(None)
+        for t in self._threads:
+            t.join(timeout=2)
+        self.stop_recording()
+
+    # ---- what the caller reads (copies, under the lock) ----
+
+    def gateways(self) -> dict:
+        with self._lock:
+            return {k: dict(v) for k, v in self._gateways.items()}
+
+    def components(self) -> dict:
+        with self._lock:
+            return {k: dict(v) for k, v in self._components.items()}
+
+    def endpoints(self, component: str) -> list:
+        with self._lock:
+            c = self._components.get(component)
+            return list(c["endpoints"]) if c else []
+
+    def watch(self, topic: str):
+        """Starts taking `topic`'s samples (now, or when a gateway serves it)."""
+        with self._lock:
+            self._wanted.add(topic)
+
+    def watched(self) -> list:
+        with self._lock:
+            return sorted(self._readers)
+
+    def latest(self, topic: str):
+        """(sample, source time) of the newest sample of a watched topic, or (None, None)."""
+        with self._lock:
+            r = self._readers.get(topic)
+            return (r[1].last, r[1].last_time) if r else (None, None)
+
+    def series(self, topic: str, max_points: int = 2000):
+        """(names, times, rows) of the last `window` seconds, decimated to at most `max_points` for drawing."""
+        with self._lock:
+            r = self._readers.get(topic)
+            if not r or not r[1].names:
+                return [], [], []
+            s = r[1]
+            step = max(1, len(s.times) // max_points)
+            return list(s.names), list(s.times)[::step], list(s.rows)[::step]
+
+    def statistics(self, topic: str) -> dict:
+        """{leaf: (count, min, max, mean, rms)} over every sample taken since watching began."""
+        with self._lock:
+            r = self._readers.get(topic)
+            if not r:
+                return {}
+            return {n: (s[0], s[1], s[2], s[3] / s[0], (s[4] / s[0]) ** 0.5) for n, s in r[1].stats.items()}
+
+    def count(self, topic: str) -> int:
+        with self._lock:
+            r = self._readers.get(topic)
+            return r[1].count if r else 0
+
+    def log(self, topic: str) -> list:
+        with self._lock:
+            r = self._readers.get(topic)
+            return list(r[1].log) if r else []
+
+    def errors(self, component: str) -> list:
+        """(time, text) of the gateway's refusals and fault reasons for `component`, oldest first."""
+        with self._lock:
+            e = self._errors.get(component)
+            return list(e[1]) if e else []
+
+    # ---- commands (run in the command thread; results() hands back what happened) ----
+
+    def send(self, topic: str, sample, tag=None):
+        """Sends a command once its gateway has matched our writer; results() then holds (tag, ok, text)."""
+        self._jobs.put(("send", topic, sample, tag))
+
+    def query(self, topic: str, data: bytes, tag=None, timeout: float = 2.0):
+        """Asks a qualified read (rq/ topic) with the qualifier's bytes; results() then holds (tag, ok, bytes or text)."""
+        self._jobs.put(("query", topic, data, tag, timeout))
+
+    def results(self) -> list:
+        out = []
+        while True:
+            try:
+                out.append(self._results.get_nowait())
+            except queue.Empty:
+                return out
+
+    # ---- recording ----
+
+    def record(self, topics, directory: str):
+        """Writes every sample of `topics` (watched from now on) to <directory>/<topic>.csv until stop_recording()."""
+        os.makedirs(directory, exist_ok=True)
+        for t in topics:
+            self.watch(t)
+        with self._lock:
+            self._recording = (directory, {t: None for t in topics})
+
+    def stop_recording(self) -> list:
+        with self._lock:
+            rec, self._recording = self._recording, None
+        files = []
+        for entry in (rec[1].values() if rec else []):
+            if entry:
+                entry[0].close()
+                files.append(entry[0].name)
+        return files
+
+    # ---- the reading thread ----
+
+    def _endpoint(self, topic):
+        """The live endpoint of `topic`; a read before an event of the same topic (an operating state is
+        both): a best-effort reader matches the state writer and the reliable event writer alike."""
+        found = [e for c in self._components.values() if c["gone_at"] is None for e in c["endpoints"]
+                 if e.topic == topic]
+        found.sort(key=lambda e: e.kind != "read")
+        return found[0] if found else None
+
+    def _update_registry(self):
+        self.client.take_manifests()
+        manifests = dict(self.client._manifests)
+        alive = self.client.alive()
+        now = time.time()
+        with self._lock:
+            for g, m in manifests.items():
+                was = self._gateways.get(g)
+                live = alive.get(g, False)
+                comps = sorted({e.component_name for e in m.endpoints})
+                gone_at = None if live else (was["gone_at"] if was and was["gone_at"] else now)
+                self._gateways[g] = {"host": m.host, "pid": m.pid, "state": m.state, "alive": live,
+                                     "components": comps, "gone_at": gone_at}
+                for c in comps:
+                    eps = [e for e in m.endpoints if e.component_name == c]
+                    old = self._components.get(c, {})
+                    self._components[c] = {
+                        "gateway": g, "host": m.host, "endpoints": eps,
+                        "interfaces": sorted({e.interface_name for e in eps}),
+                        "state": old.get("state", ""), "state_time": old.get("state_time"),
+                        "fault_reason": old.get("fault_reason", ""), "fault_time": old.get("fault_time"),
+                        "gone_at": None if live else (old.get("gone_at") or now),
+                    }
+                # A component a live gateway no longer lists has gone (detached).
+                for name, c in self._components.items():
+                    if c["gateway"] == g and name not in comps and c["gone_at"] is None:
+                        c["gone_at"] = now
+            for name, c in self._components.items():
+                if c["gone_at"] is None:
+                    for e in c["endpoints"]:
+                        if e.name == "operating_state" and e.topic and e.kind == "read":
+                            self._wanted.add(e.topic)
+                if name not in self._errors:
+                    self._errors[name] = (self.client.error_reader(name),
+                                          collections.deque(maxlen=200))
+
+    def _open_readers(self):
+        with self._lock:
+            pending = [t for t in self._wanted if t not in self._readers]
+            found = [(t, self._endpoint(t)) for t in pending]
+        for t, e in found:
+            if e is None or not e.topic or e.dds_type not in msgs.BY_DDS_NAME:
+                continue
+            # Deep enough that nothing is lost between two passes of the loop at 1 kHz.
+            reader = self.client.reader_for(e, depth=1 if latched(e) else 1024)
+            with self._lock:
+                self._readers[t] = (reader, Series(e, self.window))
+
+    def _take(self):
+        with self._lock:
+            items = list(self._readers.items())
+            errs = list(self._errors.items())
+        for topic, (reader, series) in items:
+            samples = [s for s in reader.take(N=1024) if not isinstance(s, InvalidSample)]
+            if not samples:
+                continue
+            with self._lock:
+                for s in samples:
+                    series.add(s, s.sample_info.source_timestamp * 1e-9)
+                    if isinstance(s, msgs.OperatingState):
+                        self._state_changed(series.endpoint.component_name, s)
+                rec = self._recording
+            if rec and topic in rec[1]:
+                self._write_rows(rec, topic, series, samples)
+        for comp, (reader, log) in errs:
+            got = [s for s in reader.take(N=64) if isinstance(s, msgs.StringStamped)]
+            if got:
+                with self._lock:
+                    for s in got:
+                        log.append((s.sample_info.source_timestamp * 1e-9, s.string))
+                        c = self._components.get(comp)
+                        if c is not None and s.string.startswith(FAULT):
+                            c["fault_reason"] = s.string
+
+    def _state_changed(self, component, s):
+        c = self._components.get(component)
+        if c is None or c["state"] == s.state:
+            return
+        c["state"], c["state_time"] = s.state, s.sample_info.source_timestamp * 1e-9
+        if s.state == FAULT:
+            c["fault_time"] = c["state_time"]
+            if not c["fault_reason"]:
+                errs = self._errors.get(component)
+                c["fault_reason"] = errs[1][-1][1] if errs and errs[1] else "(no reason received)"
+        else:
+            c["fault_reason"] = ""
+
+    def _write_rows(self, rec, topic, series, samples):
+        entry = rec[1].get(topic)
+        if entry is None and series.names is not None:
+            f = open(os.path.join(rec[0], topic.replace("/", "_") + ".csv"), "w", newline="")
+            w = csv.writer(f)
+            w.writerow(["source_time_s"] + series.names)
+            entry = rec[1][topic] = (f, w)
+        if entry is None:
+            return
+        for s in samples:
+            nums = values.numbers(s)
+            entry[1].writerow([f"{s.sample_info.source_timestamp * 1e-9:.6f}"] +
+                              [nums.get(n, "") for n in series.names])
+
+    def _read_loop(self):
+        last_registry = 0.0
+        while not self._stop.is_set():
+            t0 = time.perf_counter()
+            if t0 - last_registry > 0.05:
+                self._update_registry()
+                self._open_readers()
+                last_registry = t0
+            self._take()
+            self.loop_seconds += time.perf_counter() - t0
+            self._stop.wait(self.period)
+
+    # ---- the command thread ----
+
+    def _job_loop(self):
+        while True:
+            job = self._jobs.get()
+            if job is None or self._stop.is_set():
+                return
+            try:
+                if job[0] == "send":
+                    self._results.put((job[3], *self._send(job[1], job[2])))
+                else:
+                    self._results.put((job[3], *self._query(*job[1:3], job[4])))
+            except Exception as e:  # a bad endpoint or type: said, not raised in a thread nobody watches
+                self._results.put((job[3], False, f"{type(e).__name__}: {e}"))
+
+    def _send(self, topic, sample, wait: float = 3.0):
+        with self._lock:
+            e = self._endpoint(topic)
+        if e is None:
+            return False, f"no live gateway serves {topic}"
+        if topic not in self._writers:
+            self._writers[topic] = self.client.writer_for(e)[0]
+        w = self._writers[topic]
+        deadline = time.monotonic() + wait
+        while not w.get_matched_subscriptions():
+            if time.monotonic() > deadline:
+                return False, f"the gateway did not match a writer of {topic} within {wait:g} s"
+            time.sleep(0.01)
+        w.write(sample)
+        return True, "delivered"
+
+    def _query(self, topic, data, timeout):
+        with self._lock:
+            e = self._endpoint(topic)
+        if e is None:
+            return False, f"no live gateway serves {topic}"
+        reply_topic = topic.replace("rq/", "rr/", 1)[: -len("Request")] + "Reply"
+        if topic not in self._writers:
+            from cyclonedds.core import Policy, Qos
+            from cyclonedds.pub import DataWriter
+            from cyclonedds.sub import DataReader
+            from .client import XCDR1
+            qos = Qos(Policy.Reliability.Reliable(10**9), Policy.History.KeepLast(16), XCDR1)
+            self._writers[topic] = (
+                DataWriter(self.client.participant, self.client._topic(topic, msgs.Query), qos=qos),
+                DataReader(self.client.participant, self.client._topic(reply_topic, msgs.QueryReply), qos=qos))
+        w, r = self._writers[topic]
+        self._query_number += 1
+        q = msgs.Query(client=self._query_id, number=self._query_number, data=list(data))
+        deadline = time.monotonic() + timeout
+        while not (w.get_matched_subscriptions() and r.get_matched_publications()):
+            if time.monotonic() > deadline:
+                return False, f"no gateway answers {topic}"
+            time.sleep(0.01)
+        next_ask = 0.0
+        while time.monotonic() < deadline:
+            # Asked again until answered: the reply writer may not know our reader yet (a query is const).
+            if time.monotonic() >= next_ask:
+                w.write(q)
+                next_ask = time.monotonic() + 0.2
+            for rep in r.take(N=64):
+                if isinstance(rep, msgs.QueryReply) and rep.client == q.client and rep.number == q.number:
+                    if rep.status != 0:
+                        return False, f"refused (status {rep.status})"
+                    return True, values.unpack(e.result_type, bytes(rep.data))
+            time.sleep(0.005)
+        return False, f"no reply within {timeout:g} s"

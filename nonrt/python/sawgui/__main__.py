@@ -1,0 +1,83 @@
+"""sawgui: a desktop GUI for a sawrt system over DDS.
+
+usage: sawgui [--domain N] [--interface NAME] [--peer ADDRESS ...] [--headless SECONDS]
+"""
+import argparse
+import json
+import os
+import sys
+import time
+
+
+def parse(argv):
+    p = argparse.ArgumentParser(prog="sawgui", description="A desktop GUI for sawrt over DDS (Cyclone DDS): "
+                                "the system's components and states, each component's values, events and "
+                                "commands, the teleoperation and the tasks' health.")
+    p.add_argument("--domain", type=int, default=0, help="DDS domain of the gateways (default 0)")
+    p.add_argument("--interface", default="lo",
+                   help="network interface DDS uses (default lo, this machine only; a remote GUI names the "
+                        "interface that reaches the gateway's host)")
+    p.add_argument("--peer", action="append", default=None, metavar="ADDRESS",
+                   help="a host to discover by unicast (default 127.0.0.1 on lo; none elsewhere: multicast)")
+    p.add_argument("--headless", type=float, metavar="SECONDS",
+                   help="no window: read what the window reads for SECONDS, then print what arrived as JSON")
+    p.add_argument("--all-reads", action="store_true", help="with --headless: read every mapped topic")
+    return p.parse_args(argv)
+
+
+def configure_dds(args):
+    """CYCLONEDDS_URI from the options, before cyclonedds is imported (unless the user set it)."""
+    if "CYCLONEDDS_URI" in os.environ and args.interface == "lo" and args.peer is None:
+        return
+    from sawdds.client import interface_uri
+    peers = args.peer if args.peer is not None else (["127.0.0.1"] if args.interface == "lo" else [])
+    os.environ["CYCLONEDDS_URI"] = interface_uri(args.interface, peers)
+
+
+def headless(args) -> int:
+    """The window's DDS readers without a window (the smoke test and the scale benchmark)."""
+    from sawdds.live import Live
+    from . import model
+    live = Live(args.domain)
+    deadline = time.monotonic() + args.headless
+    cpu0 = time.process_time()
+    while time.monotonic() < deadline:
+        topics = model.default_topics(live)
+        if args.all_reads:
+            topics += [t for c in live.components() for t in model.component_topics(live, c)]
+        for t in topics:
+            live.watch(t)
+        time.sleep(0.1)
+    out = {"gateways": {g: {"alive": v["alive"], "components": v["components"]} for g, v in live.gateways().items()},
+           "states": {c: model.shown_state(v) for c, v in live.components().items()},
+           "samples": {t: live.count(t) for t in live.watched()},
+           "cpu_s": round(time.process_time() - cpu0, 3), "seconds": args.headless}
+    live.close()
+    print(json.dumps(out, sort_keys=True))
+    return 0
+
+
+def main(argv=None) -> int:
+    args = parse(sys.argv[1:] if argv is None else argv)
+    configure_dds(args)
+    if args.headless is not None:
+        return headless(args)
+    try:
+        from PySide6 import QtWidgets
+    except ImportError:
+        print("sawgui: PySide6 is missing: pip install 'sawdds[gui]' (or the repository's nonrt/python[gui])",
+              file=sys.stderr)
+        return 2
+    from sawdds.live import Live
+    from .app import MainWindow
+    app = QtWidgets.QApplication(sys.argv[:1])
+    live = Live(args.domain)
+    w = MainWindow(live, args.domain, args.interface)
+    w.show()
+    rc = app.exec()
+    live.close()
+    return rc
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,110 @@
+"""The main window: system view, teleoperation, components and task health in tabs, refreshed
+from sawdds.Live (whose threads do every DDS read and write) by a Qt timer."""
+import os
+import time
+
+from PySide6 import QtCore, QtWidgets
+
+from . import model
+from .component_view import ComponentView
+from .system_view import SystemView
+from .task_health import TaskHealth
+from .teleop_panel import TeleopPanel
+
+REFRESH_MS = 50
+
+
+class MainWindow(QtWidgets.QMainWindow):
+    def __init__(self, live, domain: int, interface: str):
+        super().__init__()
+        self.live = live
+        self.setWindowTitle(f"sawgui — DDS domain {domain} on {interface}")
+        self.resize(1200, 820)
+        self.tabs = QtWidgets.QTabWidget()
+        self.setCentralWidget(self.tabs)
+        self.system = SystemView(live)
+        self.tabs.addTab(self.system, "System")
+        self.teleop = None  # made when the registry shows a teleoperation
+        self.components = QtWidgets.QWidget()
+        cl = QtWidgets.QVBoxLayout(self.components)
+        self.picker = QtWidgets.QComboBox()
+        self.stack = QtWidgets.QStackedWidget()
+        cl.addWidget(self.picker)
+        cl.addWidget(self.stack, 1)
+        self.views = {}
+        self.picker.currentTextChanged.connect(self.show_component)
+        self.tabs.addTab(self.components, "Components")
+        self.tasks = TaskHealth(live)
+        self.tabs.addTab(self.tasks, "Task health")
+        self.status = QtWidgets.QLabel("")
+        self.statusBar().addWidget(self.status, 1)
+        self.recording = None
+        tb = self.addToolBar("tools")
+        self.record_action = tb.addAction("Record CSV", self.toggle_recording)
+        tb.addAction("Save plots as PNG", self.save_plots)
+        self.timer = QtCore.QTimer(self)
+        self.timer.timeout.connect(self.refresh)
+        self.timer.start(REFRESH_MS)
+
+    def show_component(self, name: str):
+        if not name:
+            return
+        if name not in self.views:
+            self.views[name] = ComponentView(self.live, name)
+            self.stack.addWidget(self.views[name])
+        self.stack.setCurrentWidget(self.views[name])
+
+    def refresh(self):
+        for tag, ok, text in self.live.results():
+            if callable(tag):
+                tag(ok, text)
+        comps = self.live.components()
+        names = sorted(comps)
+        if names != [self.picker.itemText(i) for i in range(self.picker.count())]:
+            current = self.picker.currentText()
+            self.picker.blockSignals(True)
+            self.picker.clear()
+            self.picker.addItems(names)
+            self.picker.blockSignals(False)
+            self.picker.setCurrentText(current if current in names else names[0])
+            self.show_component(self.picker.currentText())
+        if self.teleop is None:
+            t = model.teleop_components(self.live)
+            if t:
+                self.teleop = TeleopPanel(self.live, t[0])
+                self.tabs.insertTab(1, self.teleop, "Teleoperation")
+        current = self.tabs.currentWidget()
+        self.system.refresh()  # cheap, and FAULT must show whatever tab is open
+        if current is self.components and self.stack.currentWidget() is not None:
+            self.stack.currentWidget().refresh()
+        elif current is not self.system and hasattr(current, "refresh"):
+            current.refresh()
+        gws = self.live.gateways()
+        self.status.setText(f"{sum(g['alive'] for g in gws.values())} gateway(s) alive, {len(comps)} component(s)"
+                            + (f"; recording to {self.recording}" if self.recording else ""))
+
+    def toggle_recording(self, directory: str = ""):
+        """Starts recording the topics the window reads to CSV files (one per topic), or stops it."""
+        if self.recording:
+            files = self.live.stop_recording()
+            self.statusBar().showMessage(f"recorded {len(files)} file(s) in {self.recording}", 8000)
+            self.recording = None
+            self.record_action.setText("Record CSV")
+            return files
+        directory = directory or QtWidgets.QFileDialog.getExistingDirectory(self, "Record CSV files into")
+        if not directory:
+            return []
+        topics = self.live.watched()
+        self.live.record(topics, directory)
+        self.recording = directory
+        self.record_action.setText("Stop recording")
+        return []
+
+    def save_plots(self, path: str = ""):
+        """Saves the open tab (its plots) as a PNG."""
+        if not path:
+            path, _ = QtWidgets.QFileDialog.getSaveFileName(
+                self, "Save as PNG", os.path.join(os.getcwd(), f"sawgui-{time.strftime('%H%M%S')}.png"), "PNG (*.png)")
+        if path:
+            self.tabs.currentWidget().grab().save(path, "PNG")
+        return path

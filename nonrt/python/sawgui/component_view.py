@@ -1,0 +1,164 @@
+"""A component's view, generated from its manifest entries: read commands as live values and
+plots, events as a log, write/void commands as forms, qualified reads as a query box."""
+from PySide6 import QtWidgets
+
+from sawdds import msgs, values
+
+from . import model
+from .widgets import Outcome, Plot, clock
+
+
+class CommandForm(QtWidgets.QGroupBox):
+    """A form for one write or void command: a field per number of its message."""
+
+    def __init__(self, view, endpoint):
+        super().__init__(f"{endpoint.name}  ({endpoint.saw_type or 'void'})")
+        self.view, self.endpoint = view, endpoint
+        self.cls = msgs.BY_DDS_NAME.get(endpoint.dds_type)
+        form = QtWidgets.QFormLayout(self)
+        self.fields = {}
+        if self.cls is None or not endpoint.topic:
+            form.addRow(QtWidgets.QLabel(f"not mapped to DDS by the gateway ({endpoint.saw_type} has no DDS type)"))
+            return
+        for name, kind in values.form_fields(self.cls):
+            if endpoint.saw_type == "saw::StateCommand":
+                w = QtWidgets.QComboBox()
+                w.addItems(values.STATE_COMMANDS)
+            else:
+                w = QtWidgets.QLineEdit("0" if kind in (int, float) else "")
+            self.fields[name] = w
+            form.addRow(name, w)
+        self.button = QtWidgets.QPushButton("Send")
+        self.button.clicked.connect(self.submit)
+        self.outcome = Outcome()
+        form.addRow(self.button, self.outcome)
+
+    def submit(self):
+        raw = {n: (w.currentText() if isinstance(w, QtWidgets.QComboBox) else w.text()) for n, w in self.fields.items()}
+        try:
+            sample = values.build(self.cls, raw, "state" if self.endpoint.saw_type == "saw::StateCommand" else None)
+        except values.Invalid as e:
+            self.outcome.refused(str(e))
+            return
+        self.view.send(self.endpoint, sample, self.outcome)
+
+
+class QueryBox(QtWidgets.QGroupBox):
+    """A qualified read: the qualifier typed in, the reply shown."""
+
+    def __init__(self, view, endpoint):
+        super().__init__(f"{endpoint.name}  ({endpoint.saw_type} → {endpoint.result_type})")
+        self.view, self.endpoint = view, endpoint
+        lay = QtWidgets.QHBoxLayout(self)
+        self.arg = QtWidgets.QLineEdit()
+        self.arg.setPlaceholderText(endpoint.saw_type)
+        self.button = QtWidgets.QPushButton("Ask")
+        self.result = QtWidgets.QLabel("")
+        lay.addWidget(self.arg)
+        lay.addWidget(self.button)
+        lay.addWidget(self.result, 1)
+        self.button.clicked.connect(self.ask)
+
+    def ask(self):
+        try:
+            data = values.pack(self.endpoint.saw_type, self.arg.text())
+        except values.Invalid as e:
+            self.result.setText(str(e))
+            return
+        self.result.setText("asking…")
+        self.view.live.query(self.endpoint.topic, data, tag=lambda ok, text: self.result.setText(
+            text if ok else "failed: " + text))
+
+
+class ComponentView(QtWidgets.QWidget):
+    def __init__(self, live, component: str, parent=None):
+        super().__init__(parent)
+        self.live, self.component = live, component
+        eps = live.endpoints(component)
+        self.reads = [e for e in eps if e.kind == "read"]
+        self.events = [e for e in eps if e.kind in ("write_event", "void_event") and e.topic]
+        for t in model.component_topics(live, component):
+            live.watch(t)
+
+        split = QtWidgets.QSplitter()
+        left = QtWidgets.QWidget()
+        ll = QtWidgets.QVBoxLayout(left)
+        self.table = QtWidgets.QTableWidget(len(self.reads), 4)
+        self.table.setHorizontalHeaderLabels(["read", "value", "samples", "statistics (all samples)"])
+        self.table.verticalHeader().hide()
+        for i, e in enumerate(self.reads):
+            self.table.setItem(i, 0, QtWidgets.QTableWidgetItem(e.name))
+            for j in (1, 2, 3):
+                self.table.setItem(i, j, QtWidgets.QTableWidgetItem("" if e.topic else "(not mapped)"))
+        self.table.itemSelectionChanged.connect(self._select)
+        ll.addWidget(self.table, 2)
+        self.plot = Plot("")
+        ll.addWidget(self.plot, 3)
+        ll.addWidget(QtWidgets.QLabel("events and refusals"))
+        self.log = QtWidgets.QPlainTextEdit()
+        self.log.setReadOnly(True)
+        self.log.setMaximumBlockCount(2000)
+        ll.addWidget(self.log, 1)
+        split.addWidget(left)
+
+        right = QtWidgets.QScrollArea()
+        right.setWidgetResizable(True)
+        inner = QtWidgets.QWidget()
+        rl = QtWidgets.QVBoxLayout(inner)
+        self.forms = {e.name: CommandForm(self, e) for e in eps if e.kind in ("write", "void")}
+        for f in self.forms.values():
+            rl.addWidget(f)
+        self.queries = {e.name: QueryBox(self, e) for e in eps if e.kind == "qualified_read"}
+        for q in self.queries.values():
+            rl.addWidget(q)
+        rl.addStretch(1)
+        right.setWidget(inner)
+        split.addWidget(right)
+        split.setSizes([700, 420])
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.addWidget(split)
+        self.selected = next((e for e in self.reads if e.name == "measured_cp"),
+                             next((e for e in self.reads if e.topic), None))
+        self._logged = {}
+
+    def send(self, endpoint, sample, outcome):
+        outcome.sending(endpoint.name, len(self.live.errors(self.component)))
+        self.live.send(endpoint.topic, sample, tag=outcome.delivered)
+
+    def _select(self):
+        rows = {i.row() for i in self.table.selectedItems()}
+        if rows:
+            self.selected = self.reads[min(rows)]
+            self.plot.clear()
+            self.plot.curves = {}
+
+    def refresh(self):
+        for i, e in enumerate(self.reads):
+            if not e.topic:
+                continue
+            sample, _ = self.live.latest(e.topic)
+            if sample is not None:
+                self.table.item(i, 1).setText(values.text(sample)[:90])
+            self.table.item(i, 2).setText(str(self.live.count(e.topic)))
+            st = self.live.statistics(e.topic)
+            self.table.item(i, 3).setText("; ".join(f"{k.split('.')[-1]} mean {v[3]:.4g} [{v[1]:.4g}, {v[2]:.4g}]"
+                                                    for k, v in list(st.items())[:3]))
+        self.table.resizeColumnsToContents()
+        if self.selected is not None and self.selected.topic:
+            self.plot.setTitle(f"{self.component}.{self.selected.name} (last 10 s)", color="k")
+            self.plot.show_series(*self.live.series(self.selected.topic))
+        lines = []
+        for e in self.events:
+            entries = self.live.log(e.topic)
+            seen = self._logged.get(e.topic, 0)
+            lines += [(t, f"{clock(t)}  {e.name}: {text}") for t, text in entries[seen:]] if len(entries) >= seen else []
+            self._logged[e.topic] = len(entries)
+        errors = self.live.errors(self.component)
+        seen = self._logged.get("error", 0)
+        lines += [(t, f"{clock(t)}  error: {text}") for t, text in errors[seen:]]
+        self._logged["error"] = len(errors)
+        for _, line in sorted(lines):
+            self.log.appendPlainText(line)
+        for f in self.forms.values():
+            if hasattr(f, "outcome"):
+                f.outcome.check_errors(errors)

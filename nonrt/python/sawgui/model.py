@@ -1,0 +1,77 @@
+"""What the GUI shows, without Qt: which topics its views read (the headless mode and the scale
+benchmark subscribe to the same), the teleoperation's settings and their limits, and the
+words a person reads for a state."""
+from sawdds import values
+
+# The teleoperation component's settings and the bounds it accepts (rt/teleop's teleop_law.hpp);
+# the manifest carries no limits, so the panel checks these before sending and the component
+# refuses the same ones.
+SCALE_LIMITS = (1e-3, 1e3)
+GAIN_LIMITS = (0.0, 1e4)  # N/m
+FORCE_LIMIT_LIMITS = (0.0, 100.0)  # N
+STATE_COLORS = {"ENABLED": "#1f9d3a", "DISABLED": "#6b6b6b", "PAUSED": "#c98a00", "FAULT": "#d01010",
+                "GONE": "#404040", "": "#909090"}
+
+
+def teleop_components(live) -> list:
+    """Components that look like a teleoperation (a scale setting and a tracking error)."""
+    out = []
+    for name, c in sorted(live.components().items()):
+        names = {e.name for e in c["endpoints"]}
+        if {"set_scale", "tracking_error"} <= names:
+            out.append(name)
+    return out
+
+
+def endpoint(live, component: str, name: str, kinds=("read", "write", "void", "write_event", "void_event")):
+    for e in live.endpoints(component):
+        if e.name == name and e.kind in kinds:
+            return e
+    return None
+
+
+def teleop_sides(live, teleop: str):
+    """(master, slave) component names of a teleoperation: the arms of the same gateway, by name."""
+    comps = live.components()
+    gw = comps.get(teleop, {}).get("gateway")
+    arms = [n for n, c in sorted(comps.items()) if c["gateway"] == gw and n != teleop and
+            any(e.name == "measured_cp" for e in c["endpoints"])]
+    master = next((a for a in arms if "master" in a), arms[0] if arms else None)
+    slave = next((a for a in arms if "slave" in a), arms[-1] if arms else None)
+    return master, slave
+
+
+def teleop_topics(live, teleop: str) -> list:
+    """What the teleoperation panel reads."""
+    master, slave = teleop_sides(live, teleop)
+    wanted = [(teleop, "tracking_error"), (teleop, "fault"), (teleop, "slave_force"), (slave, "measured_cp"),
+              (master, "measured_cp"), (master, "clutch")]
+    return [e.topic for c, n in wanted if c for e in [endpoint(live, c, n)] if e is not None and e.topic]
+
+
+def component_topics(live, component: str) -> list:
+    """What a component view reads: every mapped read command and event."""
+    return sorted({e.topic for e in live.endpoints(component)
+                   if e.topic and e.kind in ("read", "write_event", "void_event")})
+
+
+def task_topics(live) -> list:
+    """Every mapped period_statistics read (a task's cycles, overruns and wake-up latencies)."""
+    return [e.topic for c in live.components() for e in live.endpoints(c)
+            if e.name == "period_statistics" and e.kind == "read" and e.topic]
+
+
+def default_topics(live) -> list:
+    """What the window reads when it opens: the system view (operating states and refusals, which
+    Live reads anyway), the teleoperation panel and the task health."""
+    out = []
+    for t in teleop_components(live):
+        out += teleop_topics(live, t)
+    return out + task_topics(live)
+
+
+def shown_state(component: dict) -> str:
+    return "GONE" if component.get("gone_at") else (component.get("state") or "")
+
+
+__all__ = ["values"]

@@ -1,0 +1,88 @@
+"""The system view: every gateway and component the registry lists, their interfaces and
+operating states, live; FAULT in red with its reason and time; what vanished shown as gone."""
+from PySide6 import QtCore, QtGui, QtWidgets
+
+from .model import STATE_COLORS, shown_state
+from .widgets import clock
+
+COLUMNS = ["name", "host", "interfaces", "state", "since", "reason"]
+
+
+class SystemView(QtWidgets.QWidget):
+    def __init__(self, live, parent=None):
+        super().__init__(parent)
+        self.live = live
+        self.banner = QtWidgets.QLabel("")
+        self.banner.setWordWrap(True)
+        self.banner.hide()
+        self.tree = QtWidgets.QTreeWidget()
+        self.tree.setHeaderLabels(COLUMNS)
+        self.tree.setRootIsDecorated(True)
+        self.tree.setAlternatingRowColors(False)
+        self.empty = QtWidgets.QLabel("Looking for gateways on the DDS domain…")
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.addWidget(self.banner)
+        lay.addWidget(self.empty)
+        lay.addWidget(self.tree)
+        self._items = {}
+
+    def _item(self, key, parent):
+        it = self._items.get(key)
+        if it is None:
+            it = QtWidgets.QTreeWidgetItem()
+            (parent.addChild if isinstance(parent, QtWidgets.QTreeWidgetItem) else self.tree.addTopLevelItem)(it)
+            it.setExpanded(True)
+            self._items[key] = it
+            if isinstance(parent, QtWidgets.QTreeWidgetItem):
+                parent.setExpanded(True)
+        return it
+
+    def refresh(self):
+        gws, comps = self.live.gateways(), self.live.components()
+        self.empty.setVisible(not gws)
+        faults = []
+        for g, gw in sorted(gws.items()):
+            gi = self._item(("g", g), None)
+            state = "GONE" if not gw["alive"] else gw["state"]
+            self._fill(gi, [g, f"{gw['host']} (pid {gw['pid']})", "gateway", state,
+                            clock(gw["gone_at"]) if gw["gone_at"] else "", "left the DDS domain" if not gw["alive"]
+                            else ""], state)
+            for c in gw["components"]:
+                comp = comps.get(c)
+                if comp is None or comp["gateway"] != g:
+                    continue
+                ci = self._item(("c", c), gi)
+                st = shown_state(comp)
+                since = clock(comp["gone_at"]) if comp["gone_at"] else clock(comp["fault_time"] if st == "FAULT"
+                                                                            else comp["state_time"])
+                reason = comp["fault_reason"] if st == "FAULT" else ("gone with its gateway" if st == "GONE" else "")
+                self._fill(ci, [c, comp["host"], ", ".join(comp["interfaces"]), st, since, reason], st)
+                if st == "FAULT":
+                    faults.append(f"{c} FAULT at {since}: {reason}")
+        for i in range(len(COLUMNS) - 1):
+            self.tree.resizeColumnToContents(i)
+        self.banner.setVisible(bool(faults))
+        if faults:
+            self.banner.setText("\n".join(faults))
+            self.banner.setStyleSheet("QLabel { background: #d01010; color: white; font-size: 16px;"
+                                      " font-weight: bold; padding: 8px; }")
+
+    def _fill(self, item, texts, state):
+        for i, t in enumerate(texts):
+            item.setText(i, t)
+        color = STATE_COLORS.get(state)
+        bg = QtGui.QColor("#ffd6d6") if state == "FAULT" else (QtGui.QColor("#e4e4e4") if state == "GONE" else None)
+        for i in range(len(COLUMNS)):
+            item.setBackground(i, QtGui.QBrush(bg) if bg else QtGui.QBrush())
+            f = item.font(i)
+            f.setBold(state == "FAULT")
+            f.setItalic(state == "GONE")
+            item.setFont(i, f)
+        if color:
+            item.setForeground(3, QtGui.QBrush(QtGui.QColor(color)))
+        item.setData(0, QtCore.Qt.ItemDataRole.UserRole, state)
+
+    def state_of(self, name: str) -> str:
+        """What the view shows as `name`'s state (for tests)."""
+        it = self._items.get(("c", name)) or self._items.get(("g", name))
+        return it.text(3) if it else ""

@@ -1,0 +1,131 @@
+"""The teleoperation panel: enable/disable, clutch, scale, gains and force limits (checked against
+the bounds the component accepts), the tracking error and both arms' positions, state and last fault."""
+from PySide6 import QtWidgets
+
+from sawdds import msgs, values
+
+from . import model
+from .widgets import Outcome, Plot, StateBadge, clock
+
+
+class TeleopPanel(QtWidgets.QWidget):
+    def __init__(self, live, teleop: str, parent=None):
+        super().__init__(parent)
+        self.live, self.teleop = live, teleop
+        self.master, self.slave = model.teleop_sides(live, teleop)
+        for t in model.teleop_topics(live, teleop):
+            live.watch(t)
+
+        top = QtWidgets.QHBoxLayout()
+        self.badge = StateBadge()
+        top.addWidget(QtWidgets.QLabel(f"<b>{teleop}</b> ({self.master} → {self.slave})"))
+        top.addWidget(self.badge)
+        self.enable = QtWidgets.QPushButton("Enable")
+        self.disable = QtWidgets.QPushButton("Disable")
+        self.clutch = QtWidgets.QPushButton("Clutch (hold)")
+        self.clutch.setToolTip("While held, the teleoperation pauses (the master moves alone); on release it "
+                               "resumes from the new pose, as a clutch pedal does.")
+        for b in (self.enable, self.disable, self.clutch):
+            b.setMinimumHeight(34)
+            top.addWidget(b)
+        top.addStretch(1)
+        self.enable.clicked.connect(lambda: self.state_command("enable"))
+        self.disable.clicked.connect(lambda: self.state_command("disable"))
+        self.clutch.pressed.connect(lambda: self.state_command("pause"))
+        self.clutch.released.connect(lambda: self.state_command("resume"))
+
+        settings = QtWidgets.QGroupBox("settings")
+        form = QtWidgets.QGridLayout(settings)
+        self.scale = QtWidgets.QLineEdit("1.0")
+        self.gain_m, self.gain_s = QtWidgets.QLineEdit("300"), QtWidgets.QLineEdit("300")
+        self.lim_m, self.lim_s = QtWidgets.QLineEdit("3.0"), QtWidgets.QLineEdit("3.0")
+        self.apply_scale = QtWidgets.QPushButton("Apply scale")
+        self.apply_gains = QtWidgets.QPushButton("Apply gains")
+        self.apply_limits = QtWidgets.QPushButton("Apply force limits")
+        rows = [("scale (slave/master)", [self.scale], self.apply_scale, model.SCALE_LIMITS),
+                ("gains master, slave (N/m)", [self.gain_m, self.gain_s], self.apply_gains, model.GAIN_LIMITS),
+                ("force limits master, slave (N)", [self.lim_m, self.lim_s], self.apply_limits,
+                 model.FORCE_LIMIT_LIMITS)]
+        for r, (label, edits, button, lim) in enumerate(rows):
+            form.addWidget(QtWidgets.QLabel(label), r, 0)
+            for j, e in enumerate(edits):
+                e.setToolTip(f"within [{lim[0]:g}, {lim[1]:g}]")
+                form.addWidget(e, r, 1 + j)
+            form.addWidget(button, r, 3)
+        self.outcome = Outcome()
+        form.addWidget(self.outcome, len(rows), 0, 1, 4)
+        self.apply_scale.clicked.connect(self.send_scale)
+        self.apply_gains.clicked.connect(lambda: self.send_pair("set_gains", [self.gain_m, self.gain_s],
+                                                                model.GAIN_LIMITS))
+        self.apply_limits.clicked.connect(lambda: self.send_pair("set_force_limits", [self.lim_m, self.lim_s],
+                                                                 model.FORCE_LIMIT_LIMITS))
+
+        self.fault = QtWidgets.QLabel("last fault: none")
+        self.fault.setWordWrap(True)
+        self.error_plot = Plot("tracking error |e_s|", "m")
+        self.slave_plot = Plot(f"{self.slave}.measured_cp position", "m")
+        self.master_plot = Plot(f"{self.master}.measured_cp position", "m")
+        plots = QtWidgets.QGridLayout()
+        plots.addWidget(self.error_plot, 0, 0, 1, 2)
+        plots.addWidget(self.master_plot, 1, 0)
+        plots.addWidget(self.slave_plot, 1, 1)
+
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.addLayout(top)
+        lay.addWidget(settings)
+        lay.addWidget(self.fault)
+        lay.addLayout(plots, 1)
+
+    def _topic(self, component, name):
+        e = model.endpoint(self.live, component, name)
+        return e.topic if e is not None else ""
+
+    def _send(self, name, sample):
+        e = model.endpoint(self.live, self.teleop, name, kinds=("write", "void"))
+        if e is None or not e.topic:
+            self.outcome.refused(f"{name}: the gateway does not map it to DDS "
+                                 f"({e.saw_type if e else 'not in the manifest'}); it can be set in the deployment")
+            return
+        self.outcome.sending(name, len(self.live.errors(self.teleop)))
+        self.live.send(e.topic, sample, tag=self.outcome.delivered)
+
+    def state_command(self, command: str):
+        self._send("state_command", msgs.StringStamped(string=command))
+
+    def send_scale(self):
+        try:
+            s = values.parse_number("scale", self.scale.text(), float, model.SCALE_LIMITS)
+        except values.Invalid as e:
+            self.outcome.refused(str(e))
+            return
+        self._send("set_scale", msgs.Float64(data=s))
+
+    def send_pair(self, name, edits, limits):
+        try:
+            vals = [values.parse_number(f"{name} {side}", e.text(), float, limits)
+                    for side, e in zip(("master", "slave"), edits)]
+        except values.Invalid as e:
+            self.outcome.refused(str(e))
+            return
+        # No DDS type carries a (master, slave) pair yet: said by _send when the manifest has no topic.
+        e = model.endpoint(self.live, self.teleop, name, kinds=("write",))
+        cls = msgs.BY_DDS_NAME.get(e.dds_type) if e is not None else None
+        if cls is msgs.Vector3Stamped:
+            self._send(name, msgs.Vector3Stamped(vector=msgs.Vector3(x=vals[0], y=vals[1])))
+        else:
+            self._send(name, None)
+
+    def refresh(self):
+        comp = self.live.components().get(self.teleop, {})
+        state = model.shown_state(comp)
+        if state != self.badge.state:
+            self.badge.set_state(state)
+        if state == "FAULT" or comp.get("fault_reason"):
+            self.fault.setText(f"last fault at {clock(comp.get('fault_time'))}: {comp.get('fault_reason')}")
+            self.fault.setStyleSheet("QLabel { color: #d01010; font-weight: bold; font-size: 14px; }")
+        elif state == "GONE":
+            self.fault.setText(f"the gateway serving {self.teleop} left at {clock(comp.get('gone_at'))}")
+        self.error_plot.show_series(*self.live.series(self._topic(self.teleop, "tracking_error")))
+        self.slave_plot.show_series(*self.live.series(self._topic(self.slave, "measured_cp")))
+        self.master_plot.show_series(*self.live.series(self._topic(self.master, "measured_cp")))
+        self.outcome.check_errors(self.live.errors(self.teleop))
