@@ -48,7 +48,8 @@ class Client:
         deadline = time.monotonic() + timeout
         while True:
             for m in self._registry.take(N=256):
-                self._manifests[m.gateway] = m
+                if isinstance(m, msgs.Manifest):  # not a writer's unregistration (a gateway gone)
+                    self._manifests[m.gateway] = m
             if until is not None and until(self._manifests):
                 break
             if time.monotonic() >= deadline:
