@@ -1,15 +1,21 @@
 """sawctl against a real saw-rt whose deployment starts its gateway (a `gateway:` section): list
 shows the component, echo prints its state, call sends valid commands (delivered, and they run)
-and refuses invalid ones before sending.
+and refuses invalid ones before sending. The operating state is latched: an echo started after
+the last change prints it. A gateway killed with -9 is told from a quiet one (echo exits 3, "gone",
+after the 1 s participant lease), and a killed RT process is seen as FAULT (its gateway says so
+before it leaves).
 
 usage: sawctl_test.py SAW_RT SAW_GATEWAY SAWCTL
 """
 import os
+import queue
 import re
 import signal
 import subprocess
 import sys
 import tempfile
+import threading
+import time
 from harness import check, exit_code  # noqa: E402
 
 
@@ -17,24 +23,17 @@ def main(saw_rt, saw_gateway, sawctl):
     name = f"ctl{os.getpid()}"
     domain = str(100 + (os.getpid() + 71) % 100)
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
-        f.write(f"""deployment:
-  name: sawctl-{name}
-components:
-  - name: {name}
-    type: sim_haptic_device
-    task: {{period: 1ms, priority: 80}}
-    params: {{model: omni}}
-exports:
-  - {{component: {name}, provided: arm}}
-gateway:
-  domain: {domain}
-""")
+        f.write(deployment(name, domain))
     rt = subprocess.Popen([saw_rt, f.name], stdout=subprocess.PIPE, text=True)
 
     def ctl(*args):
         p = subprocess.run([sawctl, *args, "--domain", domain, "--timeout", "10"], capture_output=True, text=True,
                            timeout=60)
         return p.returncode, p.stdout + p.stderr
+
+    def ctl_background(*args):
+        return subprocess.Popen([sawctl, *args, "--domain", domain, "--timeout", "30"], stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
 
     try:
         rc, out = ctl("list")
@@ -51,11 +50,23 @@ gateway:
         check(rc == 0 and "delivered" in out, f"a valid force is delivered: {out.strip()}")
         rc, out = ctl("call", f"rt/{name}/state_command", "disable")
         check(rc == 0 and "delivered" in out, f"a state command is delivered: {out.strip()}")
-        # kill -9 of the gateway while the 1 kHz deployment runs: the RT process runs on.
+        rc, out = ctl("echo", f"rt/{name}/operating_state")
+        check(rc == 0 and "DISABLED" in out, f"an echo started after the change prints the latched state: {out.strip()}")
+        # kill -9 of the gateway while the 1 kHz deployment runs: the RT process runs on, and a
+        # running echo says the gateway is gone.
+        echo = ctl_background("echo", f"rt/{name}/measured_cp", "-n", "100000000")
+        lines = Lines(echo)
+        check(lines.wait_for("p [", 10) is not None, "a long echo prints poses")
         gws = subprocess.run(["pgrep", "-P", str(rt.pid), "saw-gateway"], capture_output=True, text=True).stdout.split()
         check(len(gws) == 1, f"the deployment started one gateway: {gws}")
+        killed = time.monotonic()
         for g in gws:
             os.kill(int(g), signal.SIGKILL)
+        gone = lines.wait_for("is gone", 10)
+        echo.wait(timeout=5)
+        check(gone is not None and echo.returncode == 3, f"the echo says the killed gateway is gone: {gone}")
+        if gone is not None:
+            print(f"figure: the killed gateway seen gone after {gone - killed:.2f} s (participant lease 1 s)")
         try:
             rt.wait(timeout=1.0)  # a bound: the RT process must still be running after it
         except subprocess.TimeoutExpired:
@@ -70,7 +81,73 @@ gateway:
         check(rt.returncode == 0 and m is not None, "saw-rt ended normally and printed its task summary")
         if m:
             print(f"figure: {m.group(2)} overruns in {m.group(1)} cycles, the gateway killed with -9 meanwhile")
+    rt_killed(saw_rt, sawctl, f"{name}k", domain)
     return exit_code()
+
+
+def deployment(name, domain):
+    return f"""deployment:
+  name: sawctl-{name}
+components:
+  - name: {name}
+    type: sim_haptic_device
+    task: {{period: 1ms, priority: 80}}
+    params: {{model: omni}}
+exports:
+  - {{component: {name}, provided: arm}}
+gateway:
+  domain: {domain}
+"""
+
+
+class Lines:
+    """A child's output lines, read by a thread as they come, each with its arrival time."""
+
+    def __init__(self, proc):
+        self.queue = queue.Queue()
+        threading.Thread(target=self._read, args=(proc.stdout,), daemon=True).start()
+
+    def _read(self, stream):
+        for line in stream:
+            self.queue.put((time.monotonic(), line))
+        self.queue.put((time.monotonic(), None))
+
+    def wait_for(self, text, timeout):
+        """The time at which a line containing `text` arrived, or None (end of output or timeout)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                t, line = self.queue.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                return None
+            if line is None:
+                return None
+            if text in line:
+                return t
+
+
+def rt_killed(saw_rt, sawctl, name, domain):
+    """kill -9 of the RT process: its gateway (started with it, exiting with it) publishes FAULT first."""
+    with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
+        f.write(deployment(name, domain))
+    rt = subprocess.Popen([saw_rt, f.name], stdout=subprocess.DEVNULL)
+    echo = subprocess.Popen([sawctl, "echo", f"rt/{name}/operating_state", "-n", "2", "--domain", domain,
+                             "--timeout", "30"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines = Lines(echo)
+    try:
+        check(lines.wait_for("", 20) is not None, "the echo prints the current operating state at once (latched)")
+        killed = time.monotonic()
+        rt.kill()
+        seen = lines.wait_for("FAULT", 10)
+        check(seen is not None, "an echo of the operating state prints FAULT when the RT process is killed")
+        if seen is not None:
+            print(f"figure: FAULT seen {1000 * (seen - killed):.0f} ms after kill -9 of the RT process")
+    finally:
+        rt.kill()
+        rt.wait()
+        echo.kill()
+        echo.wait()
+        os.unlink(f.name)
 
 
 if __name__ == "__main__":

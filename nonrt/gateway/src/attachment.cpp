@@ -89,7 +89,8 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
   const std::string prefix = "rt/" + name_ + "/";
   const Mapping* string_stamped = find_mapping(type_info_of<StateCommand>().name);
   error_writer_ = dds_.publisher->create_datawriter(dds_.topic(prefix + "error", *string_stamped),
-                                                    DdsContext::writer_qos(Flow::event));
+                                                    DdsContext::writer_qos(Flow::log));
+  const Mapping* operating_state = find_mapping(type_info_of<OperatingState>().name);
   for (const auto& e : p.events()) {
     const Signature& sig = e->signature();
     const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : find_mapping(sig.arg.name);
@@ -98,9 +99,17 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
     if (m != nullptr) {
       info.dds_type = m->dds_type();
       info.topic = prefix + e->name();
-      out->writer =
-          dds_.publisher->create_datawriter(dds_.topic(info.topic, *m), DdsContext::writer_qos(Flow::event));
-      if (m == find_mapping(type_info_of<OperatingState>().name)) fault_writer_ = out->writer;
+      const bool latched = m == operating_state;
+      out->writer = dds_.publisher->create_datawriter(
+          dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::event));
+      if (latched) {
+        fault_writer_ = out->writer;
+        // Its read of the same name gives the state at attach time: a late joiner sees it at
+        // once, not only after the next change.
+        if (const Command* now = p.find_command(e->name());
+            now != nullptr && now->signature.kind == CommandKind::read)
+          initial_states_.push_back({now, m, out->writer, std::vector<std::byte>(m->size())});
+      }
       // CRTK clients watch `error` for why an arm faulted; the fault event says it.
       out->fault_text = m == find_mapping(type_info_of<FaultInfo>().name);
     }
@@ -154,11 +163,12 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
         const bool event_too = std::any_of(p.events().begin(), p.events().end(),
                                            [&](const auto& e) { return e->name() == c->name; });
         if (!event_too) {
-          auto* w = dds_.publisher->create_datawriter(dds_.topic(info.topic, *m),
-                                                      DdsContext::writer_qos(Flow::state));
-          states_.push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
-          if (m == find_mapping(type_info_of<OperatingState>().name) && fault_writer_ == nullptr)
-            fault_writer_ = w;
+          // An operating state without an event is latched and published on change.
+          const bool latched = m == operating_state;
+          auto* w = dds_.publisher->create_datawriter(
+              dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::state));
+          (latched ? changed_states_ : states_).push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
+          if (latched && fault_writer_ == nullptr) fault_writer_ = w;
         }
       } else {
         auto* r = dds_.subscriber->create_datareader(dds_.topic(info.topic, *m),
@@ -251,13 +261,21 @@ void Attachment::publish_error(const std::string& text) {
   if (error_writer_ != nullptr) error_writer_->write(&m);
 }
 
-void Attachment::publish_fault() {
-  const std::string why = proxy_->last_error();
-  publish_error("FAULT: the RT process serving it stopped answering" + (why.empty() ? "" : " (" + why + ")"));
+void Attachment::publish_fault(const std::string& why) {
+  publish_error("FAULT: " + why);
   if (fault_writer_ == nullptr) return;
   const OperatingState fault{OperatingStateValue::fault, false, false};
   find_mapping(type_info_of<OperatingState>().name)
       ->write(*fault_writer_, &fault, wall_from_monotonic(monotonic_now()), name_);
+}
+
+void Attachment::wait_for_acknowledgments(TimeNs deadline) {
+  for (fdds::DataWriter* w : {error_writer_, fault_writer_}) {
+    const TimeNs left = std::max<TimeNs>(deadline - monotonic_now(), 0);
+    if (w != nullptr)
+      w->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+          static_cast<std::int32_t>(left / 1'000'000'000), static_cast<std::uint32_t>(left % 1'000'000'000)));
+  }
 }
 
 bool Attachment::within_limits(CommandIn& c, std::string& why) {
@@ -275,10 +293,21 @@ bool Attachment::within_limits(CommandIn& c, std::string& why) {
   return true;
 }
 
+bool Attachment::publish_state(StateOut& s, bool only_if_changed) {
+  RowStamp stamp;
+  if (only_if_changed) s.previous = s.value;
+  if (detail::Access::read_stamped(*s.command)(s.value.data(), stamp) != Status::ok) return false;
+  if (only_if_changed && s.value == s.previous) return false;
+  if (!s.mapping->write(*s.writer, s.value.data(), wall_from_monotonic(stamp.time), name_)) return false;
+  published_.fetch_add(1, std::memory_order_relaxed);
+  return true;
+}
+
 void Attachment::run() {
   std::uint32_t seen = 0;
   unsigned rows = 0;
   bool was_alive = true;
+  bool announce = true;  // the latched states, once the mirror has a row (again)
   std::string why;
   while (!stop_.load(std::memory_order_acquire)) {
     const bool row = proxy_->wait_for_update(seen, poll);
@@ -286,17 +315,24 @@ void Attachment::run() {
     if (alive != was_alive) {
       was_alive = alive;
       alive_.store(alive, std::memory_order_release);
-      if (!alive) publish_fault();
+      if (!alive) {
+        const std::string last = proxy_->last_error();
+        publish_fault("the RT process serving it stopped answering" +
+                      (last.empty() ? "" : " (" + last + ")"));
+      }
+      announce = alive;
       liveness_changed_();
+    }
+    if (row && alive && announce) {
+      announce = false;
+      for (auto& s : initial_states_) publish_state(s, false);
+      for (auto& s : changed_states_) publish_state(s, false);
+    } else if (row && alive) {
+      for (auto& s : changed_states_) publish_state(s, true);
     }
     if (row && alive && ++rows >= decimation_) {
       rows = 0;
-      for (auto& s : states_) {
-        RowStamp stamp;
-        if (detail::Access::read_stamped(*s.command)(s.value.data(), stamp) != Status::ok) continue;
-        if (s.mapping->write(*s.writer, s.value.data(), wall_from_monotonic(stamp.time), name_))
-          published_.fetch_add(1, std::memory_order_relaxed);
-      }
+      for (auto& s : states_) publish_state(s, false);
     }
     detail::Access::remote_events(*proxy_)->drain();
     for (auto& c : commands_) {

@@ -28,6 +28,10 @@ class Attachment {
   void add_stats(GatewayStats& s) const;
   // Starts the thread (after the gateway has published its first manifest).
   void start();
+  // FAULT on the operating state and "FAULT: <why>" on the error topic.
+  void publish_fault(const std::string& why);
+  // Until the readers have acknowledged the fault and error samples, or `deadline` (monotonic).
+  void wait_for_acknowledgments(TimeNs deadline);
 
  private:
   struct StateOut {
@@ -35,6 +39,7 @@ class Attachment {
     const Mapping* mapping;
     fdds::DataWriter* writer;
     std::vector<std::byte> value;
+    std::vector<std::byte> previous = {};  // for states published on change
   };
   struct EventOut {
     Attachment* self;
@@ -57,13 +62,15 @@ class Attachment {
   };
 
   void run();
+  // Reads a state from the mirror and writes it; with `only_if_changed`, only when it differs
+  // from the last read. True if a sample went out.
+  bool publish_state(StateOut& s, bool only_if_changed);
   void serve_queries();
   // A command value against the limits its component declares; the reason in `why` if outside.
   static bool within_limits(CommandIn& c, std::string& why);
   void reject(const std::string& command, const std::string& why);
   // A line on rt/<component>/error (crtk_msgs/StringStamped), CRTK's topic for errors.
   void publish_error(const std::string& text);
-  void publish_fault();
 
   DdsContext& dds_;
   std::string name_;
@@ -72,7 +79,9 @@ class Attachment {
   std::unique_ptr<Component> component_;
   bridge::Proxy* proxy_ = nullptr;
   std::vector<EndpointInfo> endpoints_;
-  std::vector<StateOut> states_;
+  std::vector<StateOut> states_;          // every decimated row
+  std::vector<StateOut> changed_states_;  // latched, on change (an operating state without event)
+  std::vector<StateOut> initial_states_;  // latched events' values at attach and reconnection
   std::vector<std::unique_ptr<EventOut>> events_;
   std::vector<CommandIn> commands_;
   // Qualified reads block for the server's answer: their own proxy (slot) and thread.

@@ -18,7 +18,15 @@ namespace saw::gateway {
 
 namespace fdds = eprosima::fastdds::dds;
 
-enum class Flow { state, event, command, registry };
+// How a topic's samples flow, which fixes its QoS on both sides:
+// - state: periodic values, newest only (best effort, keep last 1);
+// - event, command: every sample matters (reliable, keep last 16);
+// - latched: a state a late joiner must see at once, published on change (operating states):
+//   reliable, transient local, keep last 1, as ROS 2 latches a topic;
+// - log: the error topic, reliable and transient local, keep last 16: a late joiner sees the
+//   recent faults and refusals (and their times), a volatile reader only new ones;
+// - registry: every gateway's manifest, transient local.
+enum class Flow { state, event, command, latched, log, registry };
 
 struct DdsContext {
   fdds::DomainParticipant* participant = nullptr;
@@ -56,10 +64,16 @@ struct DdsContext {
         q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
         q.history().depth = 16;
         break;
+      case Flow::latched:
       case Flow::registry:  // late joiners (sawctl) get every gateway's last manifest
         q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
         q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
         q.history().depth = 1;
+        break;
+      case Flow::log:
+        q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+        q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+        q.history().depth = 16;
         break;
     }
     // No data-sharing: its /dev/shm files outlive a killed process; the SHM transport (loopback
@@ -74,10 +88,11 @@ struct DdsContext {
     fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
     q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
     // The registry is unkeyed: one instance for all gateways, so keep enough for each's newest.
-    q.history().depth = f == Flow::state ? 1 : f == Flow::registry ? 256 : 16;
+    q.history().depth = f == Flow::state || f == Flow::latched ? 1 : f == Flow::registry ? 256 : 16;
     q.reliability().kind =
         f == Flow::state ? fdds::BEST_EFFORT_RELIABILITY_QOS : fdds::RELIABLE_RELIABILITY_QOS;
-    if (f == Flow::registry) q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+    if (f == Flow::registry || f == Flow::latched || f == Flow::log)
+      q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
     q.data_sharing().off();
     return q;
   }

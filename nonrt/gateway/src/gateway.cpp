@@ -96,6 +96,12 @@ Gateway::~Gateway() {
   delete_participant(dds_->context.participant);
 }
 
+void Gateway::announce_exit(const std::string& why, TimeNs wait) {
+  for (auto& a : attachments_) a->publish_fault(why);
+  const TimeNs deadline = monotonic_now() + wait;
+  for (auto& a : attachments_) a->wait_for_acknowledgments(deadline);
+}
+
 GatewayStats Gateway::stats() const {
   GatewayStats s;
   for (const auto& a : attachments_) a->add_stats(s);

@@ -48,9 +48,10 @@ int main(int argc, char** argv) {
   bool exit_with_parent = false;
   app.add_flag("--exit-with-parent", exit_with_parent, "stop when the parent process (saw-rt) is gone");
   CLI11_PARSE(app, argc, argv);
+  const pid_t parent = getppid();
   if (exit_with_parent) {
-    prctl(PR_SET_PDEATHSIG, SIGTERM);  // the RT process died (even kill -9): go too
-    if (getppid() == 1) return 0;      // it died before we asked
+    prctl(PR_SET_PDEATHSIG, SIGTERM);                  // the RT process died (even kill -9): go too
+    if (getppid() != parent || parent == 1) return 0;  // it died before we asked
   }
   if (config.attach.empty() && imports.empty() && config.mirrors.empty()) {
     std::fprintf(stderr, "saw-gateway: nothing to do: give --attach, --import or --mirror\n");
@@ -78,6 +79,10 @@ int main(int argc, char** argv) {
     while (!stop_requested.load() && (duration <= 0 || std::chrono::steady_clock::now() - started <
                                                            std::chrono::duration<double>(duration)))
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    // Orphaned: the RT process died. Say so before leaving: peers then see FAULT and why, where
+    // they would otherwise see only this participant gone.
+    if (exit_with_parent && getppid() != parent)
+      gateway.announce_exit("the RT process (pid " + std::to_string(parent) + ") exited");
     const auto s = gateway.stats();
     const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf(

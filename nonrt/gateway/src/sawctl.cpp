@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "dds_context.hpp"
+#include "saw/crtk_arm.hpp"
 #include "saw/gateway/participant.hpp"
 #include "saw_msgs/msg/ManifestPubSubTypes.h"
 
@@ -99,16 +100,31 @@ int echo(Session& s, const std::string& topic, int count, double timeout) {
                  e->dds_type().c_str());
     return 1;
   }
-  // Best effort: matches both the state writers (best effort) and the event writers (reliable).
-  auto* r = s.ctx.subscriber->create_datareader(s.ctx.topic(topic, *m), DdsContext::reader_qos(Flow::state));
+  // Latched topics (operating states): the newest sample at once, however long ago it was
+  // written. Others best effort: that matches both the state writers (best effort) and the event
+  // writers (reliable).
+  const bool latched = m == find_mapping(saw::type_info_of<saw::OperatingState>().name);
+  auto* r = s.ctx.subscriber->create_datareader(
+      s.ctx.topic(topic, *m), DdsContext::reader_qos(latched ? Flow::latched : Flow::state));
   std::vector<std::byte> value(std::max<std::size_t>(m->size(), 1));
   std::string why;
   const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
+  bool had_writer = false;
   for (int n = 0; n < count;) {
     const auto t = m->take(*r, value.data(), why);
     if (t == Mapping::Take::none) {
+      // A writer that was matched and is no longer: its gateway left, or its lease ran out
+      // (killed, unplugged). Silence from a matched writer is only a quiet topic.
+      fdds::SubscriptionMatchedStatus st;
+      r->get_subscription_matched_status(st);
+      if (st.current_count > 0) had_writer = true;
+      if (had_writer && st.current_count == 0) {
+        std::fprintf(stderr, "sawctl: %s: the gateway serving it is gone\n", topic.c_str());
+        return 3;
+      }
       if (Clock::now() >= deadline) {
-        std::fprintf(stderr, "sawctl: nothing on %s within %.1f s\n", topic.c_str(), timeout);
+        std::fprintf(stderr, "sawctl: nothing on %s within %.1f s (%s)\n", topic.c_str(), timeout,
+                     had_writer ? "its gateway is there and quiet" : "no gateway's writer matched");
         return 1;
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -116,6 +132,7 @@ int echo(Session& s, const std::string& topic, int count, double timeout) {
     }
     std::printf("%s\n", t == Mapping::Take::ok ? m->to_text(value.data()).c_str()
                                                : ("(invalid: " + why + ")").c_str());
+    std::fflush(stdout);  // a line as it comes, also into a pipe
     ++n;
   }
   return 0;
@@ -175,7 +192,8 @@ int main(int argc, char** argv) {
   auto* list_cmd = app.add_subcommand("list", "every gateway, its components, commands, events and topics");
   std::string topic;
   int count = 1;
-  auto* echo_cmd = app.add_subcommand("echo", "print values published on a topic");
+  auto* echo_cmd = app.add_subcommand(
+      "echo", "print values published on a topic (exit 3 when the gateway serving it goes away)");
   echo_cmd->add_option("topic", topic, "e.g. rt/master/measured_cp")->required();
   echo_cmd->add_option("--count,-n", count, "samples to print")->check(CLI::PositiveNumber);
   std::vector<std::string> words;

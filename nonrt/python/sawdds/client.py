@@ -28,7 +28,7 @@ XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 # The gateway latches operating states and refusals (TRANSIENT_LOCAL, keep last): a reader that
 # asks for TRANSIENT_LOCAL gets the current state the moment it matches. A TRANSIENT_LOCAL reader
 # does not match a VOLATILE writer, so this says whether the gateways we talk to latch.
-GATEWAY_LATCHES = False
+GATEWAY_LATCHES = True
 LATCHED_TYPES = ("crtk_msgs::msg::dds_::OperatingState_",)
 
 

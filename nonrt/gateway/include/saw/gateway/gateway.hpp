@@ -67,8 +67,10 @@ class ImportedArm;
 // An ordinary (non-RT) process's object. Per attached component, one thread: it sleeps on the
 // bridge's update bell, publishes the read commands' values (best effort, keep last 1) every
 // `decimation` rows, publishes events (reliable), and passes commands arriving from DDS —
-// validated first — into the bridge. Each gateway publishes its manifest on `rt/saw/manifest`
-// (reliable, transient local), and republishes it with state FAULT when a server stops.
+// validated first — into the bridge. Operating states are latched (transient local, keep last
+// 1) and published at attach time, so a late joiner sees them at once. Each gateway publishes its
+// manifest on `rt/saw/manifest` (reliable, transient local), and republishes it with state FAULT
+// when a server stops.
 class Gateway {
  public:
   explicit Gateway(GatewayConfig config);  // throws std::runtime_error naming what failed
@@ -82,6 +84,10 @@ class Gateway {
 
   // Called by attachments when a server's liveness changes.
   void publish_manifest();
+  // Before a gateway leaves because its RT process died: FAULT with `why` on every attached
+  // component's operating state and error topic, acknowledged by the readers (at most `wait`),
+  // so peers see FAULT and its reason rather than only a participant gone.
+  void announce_exit(const std::string& why, TimeNs wait = 200'000'000);
 
  private:
   GatewayConfig config_;
