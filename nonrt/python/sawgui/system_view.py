@@ -55,10 +55,14 @@ class SystemView(QtWidgets.QWidget):
                 st = shown_state(comp)
                 since = clock(comp["gone_at"]) if comp["gone_at"] else clock(comp["fault_time"] if st == "FAULT"
                                                                             else comp["state_time"])
-                reason = comp["fault_reason"] if st == "FAULT" else ("gone with its gateway" if st == "GONE" else "")
+                reason = comp["fault_reason"] if comp["state"] == "FAULT" else ""
+                if st == "GONE":
+                    reason = "gone with its gateway" + (f", after FAULT: {reason}" if reason else "")
                 self._fill(ci, [c, comp["host"], ", ".join(comp["interfaces"]), st, since, reason], st)
-                if st == "FAULT":
-                    faults.append(f"{c} FAULT at {since}: {reason}")
+                if comp["state"] == "FAULT":  # still said once its gateway has gone: the last word it had
+                    why = comp["fault_reason"].removeprefix("FAULT: ")
+                    faults.append(f"{c}: FAULT at {clock(comp['fault_time'])}: {why}"
+                                  + (f" (gateway gone at {clock(comp['gone_at'])})" if comp["gone_at"] else ""))
         for i in range(len(COLUMNS) - 1):
             self.tree.resizeColumnToContents(i)
         self.banner.setVisible(bool(faults))

@@ -1,0 +1,110 @@
+"""What sawgui's window tests share: the source tree's packages, a running teleoperation
+deployment (saw-rt with its gateway) on a DDS domain of its own, and where screenshots go."""
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import pytest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+# The source tree's sawdds and sawgui, not installed ones: the venv is shared by every checkout.
+sys.path.insert(0, os.path.join(ROOT, "nonrt", "python"))
+os.environ.setdefault("PYTHONDONTWRITEBYTECODE", "1")
+
+DEPLOYMENT = """deployment:
+  name: gui-{tag}
+components:
+  - name: master_{tag}
+    type: sim_haptic_device
+    task: {{period: 1ms, priority: 80}}
+    params:
+      model: omni
+      hand: {{type: sinusoid, amplitude: [0.03, 0.0, 0.0], frequency: 0.5, stiffness: 200, damping: 2}}
+  - name: slave_{tag}
+    type: sim_haptic_device
+    task: {{period: 1ms, priority: 80}}
+    params: {{model: omni}}
+  - name: teleop_{tag}
+    type: teleop
+    task: {{period: 1ms, priority: 79, offset: 300us}}
+    params:
+      scale: 1.0
+      gains: {{master: 300, slave: 300}}
+      force_limits: {{master: 3.0, slave: 3.0}}
+      # A shared test machine stalls for tens of ms now and then: the shipped 20 ms would fault.
+      stale_timeout: 500ms
+connections:
+  - {{client: teleop_{tag}, required: master, server: master_{tag}, provided: arm}}
+  - {{client: teleop_{tag}, required: slave, server: slave_{tag}, provided: arm}}
+exports:
+  - {{component: master_{tag}, provided: arm}}
+  - {{component: slave_{tag}, provided: arm}}
+  - {{component: teleop_{tag}, provided: teleop}}
+gateway:
+  domain: {domain}
+"""
+
+
+class Deployment:
+    """saw-rt running the simulated teleoperation, its gateway started by the deployment."""
+
+    def __init__(self, saw_rt: str):
+        self.tag = f"g{os.getpid()}"
+        self.domain = 200 + os.getpid() % 30
+        self.master, self.slave, self.teleop = (f"{n}_{self.tag}" for n in ("master", "slave", "teleop"))
+        fd, self.yaml = tempfile.mkstemp(suffix=".yaml", prefix="sawgui-")
+        with os.fdopen(fd, "w") as f:
+            f.write(DEPLOYMENT.format(tag=self.tag, domain=self.domain))
+        self.rt = subprocess.Popen([saw_rt, self.yaml], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def kill_rt(self):
+        self.rt.send_signal(signal.SIGKILL)
+
+    def gateway_pids(self):
+        out = subprocess.run(["pgrep", "-P", str(self.rt.pid), "saw-gateway"], capture_output=True, text=True)
+        return [int(p) for p in out.stdout.split()]
+
+    def close(self):
+        gateways = self.gateway_pids() if self.rt.poll() is None else []
+        if self.rt.poll() is None:
+            self.rt.send_signal(signal.SIGTERM)
+        try:
+            out, _ = self.rt.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.rt.kill()
+            out, _ = self.rt.communicate()
+        print(out[-3000:] if out else "(no saw-rt output)")
+        deadline = time.monotonic() + 5
+        for g in gateways:  # the gateway exits with its RT process
+            while os.path.exists(f"/proc/{g}") and time.monotonic() < deadline:
+                time.sleep(0.05)
+        os.unlink(self.yaml)
+        for n in (self.master, self.slave, self.teleop):  # kill -9 leaves segments behind
+            if os.path.exists(f"/dev/shm/saw.{n}"):
+                os.unlink(f"/dev/shm/saw.{n}")
+
+
+@pytest.fixture
+def deployment():
+    saw_rt = os.environ.get("SAW_RT")
+    if not saw_rt:
+        pytest.skip("SAW_RT (the saw-rt executable) not set: run through run_under_xvfb.py")
+    d = Deployment(saw_rt)
+    yield d
+    d.close()
+
+
+@pytest.fixture
+def shots():
+    """Where screenshots go: $SAW_GUI_SHOTS, or a directory in the system's temp."""
+    d = os.environ.get("SAW_GUI_SHOTS") or os.path.join(tempfile.gettempdir(), f"sawgui-shots-{os.getpid()}")
+    os.makedirs(d, exist_ok=True)
+    return d
+
+
+def figure(text: str):
+    print("figure: " + re.sub(r"\s+", " ", text), flush=True)

@@ -1,0 +1,120 @@
+"""sawgui in a real window, operated as a person would, against a running saw-rt deployment and
+its gateway: the window (a late joiner) shows the system at once; Disable and Enable are clicked
+and the state follows; a new scale is applied and the slave's plot moves twice as far; an
+out-of-range gain is refused by the form, an out-of-range force by the gateway (its reason
+shown); the RT process is killed with -9 and the window shows FAULT, then the gateway gone.
+Screenshots of each view are saved (PNG)."""
+import os
+import subprocess
+import sys
+import time
+
+from PySide6 import QtCore
+
+from conftest import figure
+from sawdds.live import Live
+from sawgui.app import MainWindow
+
+LONG = 20_000  # ms: bounds for what depends on the machine (process start, discovery)
+
+
+def peak_to_peak_x(plot, seconds: float) -> float:
+    """The slave's x excursion over the last `seconds` of what its plot draws."""
+    curve = next(c for n, c in plot.curves.items() if n.endswith("position.x"))
+    xs, ys = curve.getData()
+    recent = [y for x, y in zip(xs, ys) if x >= -seconds]
+    return max(recent) - min(recent) if recent else 0.0
+
+
+def ratio(panel) -> float:
+    """The slave's x excursion over the master's, over the last 2 s (one cycle of the scripted hand)."""
+    m = peak_to_peak_x(panel.master_plot, 2.0)
+    return peak_to_peak_x(panel.slave_plot, 2.0) / m if m > 0.01 else 0.0
+
+
+def save(window, shots, name):
+    path = os.path.join(shots, f"gui-{name}.png")
+    assert window.grab().save(path, "PNG"), path
+    print(f"screenshot: {path}", flush=True)
+
+
+def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
+    d = deployment
+    live = Live(d.domain)
+    w = MainWindow(live, d.domain, "lo")
+    qtbot.addWidget(w)
+    w.resize(1200, 820)
+    w.show()
+    try:
+        # The window joins late (the deployment is starting or running): the latched states come at once.
+        qtbot.waitUntil(lambda: w.teleop is not None, timeout=LONG)
+        qtbot.waitUntil(lambda: w.system.state_of(d.teleop) == "ENABLED", timeout=LONG)
+        assert w.system.state_of(d.slave) == "ENABLED"
+        save(w, shots, "system")
+
+        w.tabs.setCurrentWidget(w.teleop)
+        panel = w.teleop
+        assert (panel.master, panel.slave) == (d.master, d.slave)
+        qtbot.mouseClick(panel.disable, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)
+        qtbot.mouseClick(panel.enable, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: panel.badge.state == "ENABLED", timeout=LONG)
+        # The slave follows the master one to one: over the master's 2 s cycle, as far as it.
+        qtbot.waitUntil(lambda: 0.8 < ratio(panel) < 1.25, timeout=LONG)
+        before = ratio(panel)
+
+        panel.scale.setText("2.0")
+        qtbot.mouseClick(panel.apply_scale, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: "delivered" in panel.outcome.text(), timeout=LONG)
+        # The master's 2 s sinusoid, scaled twice: the slave's excursion doubles (once a cycle has passed).
+        qtbot.waitUntil(lambda: ratio(panel) > 1.7, timeout=LONG)
+        after = ratio(panel)
+        figure(f"slave/master x excursion over 2 s: {before:.2f} at scale 1, {after:.2f} at scale 2 "
+               f"(slave {peak_to_peak_x(panel.slave_plot, 2.0) * 1e3:.1f} mm)")
+        save(w, shots, "teleop")
+
+        panel.gain_m.setText("20000")
+        qtbot.mouseClick(panel.apply_gains, QtCore.Qt.MouseButton.LeftButton)
+        assert "outside [0, 10000]" in panel.outcome.text(), panel.outcome.text()
+        panel.scale.setText("nan")
+        qtbot.mouseClick(panel.apply_scale, QtCore.Qt.MouseButton.LeftButton)
+        assert "not finite" in panel.outcome.text(), panel.outcome.text()
+
+        # A force beyond the slave's declared range: the form sends it, the gateway refuses it and says why.
+        w.tabs.setCurrentWidget(w.components)
+        w.picker.setCurrentText(d.slave)
+        view = w.views[d.slave]
+        form = view.forms["servo_cf"]
+        form.fields["wrench.force.x"].setText("1000")
+        qtbot.mouseClick(form.button, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: "refused by the gateway" in form.outcome.text(), timeout=LONG)
+        assert "1000 is outside" in form.outcome.text(), form.outcome.text()
+        qtbot.waitUntil(lambda: "servo_cf rejected" in view.log.toPlainText(), timeout=LONG)
+        save(w, shots, "component")
+
+        # A headless sawgui, started now, sees what the window sees (states latched for late joiners).
+        r = subprocess.run([sys.executable, "-m", "sawgui", "--domain", str(d.domain), "--headless", "2"],
+                           capture_output=True, text=True, timeout=60,
+                           env=dict(os.environ, PYTHONPATH=os.path.join(os.path.dirname(__file__), "..", "..",
+                                                                        "nonrt", "python")))
+        assert r.returncode == 0, r.stderr
+        assert f'"{d.teleop}": "ENABLED"' in r.stdout, r.stdout
+
+        w.tabs.setCurrentWidget(w.system)
+        t0 = time.monotonic()
+        d.kill_rt()
+        qtbot.waitUntil(lambda: w.system.state_of(d.teleop) in ("FAULT", "GONE"), timeout=LONG)
+        seen = w.system.state_of(d.teleop)
+        fault_ms = (time.monotonic() - t0) * 1e3
+        save(w, shots, "fault")
+        qtbot.waitUntil(lambda: not any(g["alive"] for g in live.gateways().values()), timeout=LONG)
+        gone_ms = (time.monotonic() - t0) * 1e3
+        qtbot.waitUntil(lambda: w.system.state_of(d.teleop) == "GONE", timeout=LONG)
+        figure(f"after kill -9 of saw-rt the window showed {seen} in {fault_ms:.0f} ms "
+               f"(goal 200 ms) and the gateway gone in {gone_ms:.0f} ms")
+        assert seen == "FAULT", "the gateway said FAULT before it left"
+        assert w.system.banner.isVisible() and d.teleop in w.system.banner.text()
+        save(w, shots, "gone")
+    finally:
+        w.timer.stop()
+        live.close()
