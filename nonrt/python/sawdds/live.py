@@ -312,11 +312,12 @@ class Live:
         last_registry = 0.0
         while not self._stop.is_set():
             t0 = time.perf_counter()
+            # Samples first: what a gateway said before it left (its FAULT) is taken before its leaving.
+            self._take()
             if t0 - last_registry > 0.05:
                 self._update_registry()
                 self._open_readers()
                 last_registry = t0
-            self._take()
             self.loop_seconds += time.perf_counter() - t0
             self._stop.wait(self.period)
 

@@ -71,7 +71,15 @@ def default_topics(live) -> list:
 
 
 def shown_state(component: dict) -> str:
-    return "GONE" if component.get("gone_at") else (component.get("state") or "")
+    """The state a person reads: a FAULT stays said once the component has gone ("FAULT (gone)")."""
+    state = component.get("state") or ""
+    if component.get("gone_at"):
+        return "FAULT (gone)" if state == "FAULT" else "GONE"
+    return state
+
+
+def state_color(state: str) -> str:
+    return STATE_COLORS.get(state.split(" ")[0] if state else "", "#909090")
 
 
 __all__ = ["values"]

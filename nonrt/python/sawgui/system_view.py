@@ -2,7 +2,7 @@
 operating states, live; FAULT in red with its reason and time; what vanished shown as gone."""
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from .model import STATE_COLORS, shown_state
+from .model import shown_state, state_color
 from .widgets import clock
 
 COLUMNS = ["name", "host", "interfaces", "state", "since", "reason"]
@@ -56,7 +56,7 @@ class SystemView(QtWidgets.QWidget):
                 since = clock(comp["gone_at"]) if comp["gone_at"] else clock(comp["fault_time"] if st == "FAULT"
                                                                             else comp["state_time"])
                 reason = comp["fault_reason"] if comp["state"] == "FAULT" else ""
-                if st == "GONE":
+                if comp["gone_at"]:
                     reason = "gone with its gateway" + (f", after FAULT: {reason}" if reason else "")
                 self._fill(ci, [c, comp["host"], ", ".join(comp["interfaces"]), st, since, reason], st)
                 if comp["state"] == "FAULT":  # still said once its gateway has gone: the last word it had
@@ -74,13 +74,14 @@ class SystemView(QtWidgets.QWidget):
     def _fill(self, item, texts, state):
         for i, t in enumerate(texts):
             item.setText(i, t)
-        color = STATE_COLORS.get(state)
-        bg = QtGui.QColor("#ffd6d6") if state == "FAULT" else (QtGui.QColor("#e4e4e4") if state == "GONE" else None)
+        color = state_color(state)
+        fault, gone = state.startswith("FAULT"), state.endswith("GONE") or state.endswith("(gone)")
+        bg = QtGui.QColor("#ffd6d6") if fault else (QtGui.QColor("#e4e4e4") if gone else None)
         for i in range(len(COLUMNS)):
             item.setBackground(i, QtGui.QBrush(bg) if bg else QtGui.QBrush())
             f = item.font(i)
-            f.setBold(state == "FAULT")
-            f.setItalic(state == "GONE")
+            f.setBold(fault)
+            f.setItalic(gone)
             item.setFont(i, f)
         if color:
             item.setForeground(3, QtGui.QBrush(QtGui.QColor(color)))

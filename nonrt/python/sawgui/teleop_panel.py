@@ -120,7 +120,7 @@ class TeleopPanel(QtWidgets.QWidget):
         state = model.shown_state(comp)
         if state != self.badge.state:
             self.badge.set_state(state)
-        if state == "FAULT" or comp.get("fault_reason"):
+        if state.startswith("FAULT") or comp.get("fault_reason"):
             self.fault.setText(f"last fault at {clock(comp.get('fault_time'))}: {comp.get('fault_reason')}")
             self.fault.setStyleSheet("QLabel { color: #d01010; font-weight: bold; font-size: 14px; }")
         elif state == "GONE":

@@ -4,7 +4,7 @@ import time
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from .model import STATE_COLORS
+from .model import state_color
 
 PALETTE = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"]
 
@@ -52,7 +52,7 @@ class StateBadge(QtWidgets.QLabel):
         self.set_state("")
 
     def set_state(self, state: str):
-        color = STATE_COLORS.get(state, "#909090")
+        color = state_color(state)
         self.setText(state or "(no state yet)")
         self.setStyleSheet(f"QLabel {{ background: {color}; color: white; font-weight: bold; font-size: 18px;"
                            f" padding: 6px 14px; border-radius: 6px; }}")
