@@ -1,10 +1,13 @@
 """sawdds (nonrt/python) is an installable pure-Python package: a wheel built from it offline is
-py3-none-any with no compiled file, carries every module of the source package, the console
-script and the cyclonedds pin of tools/requirements.txt, and installs with pip into a fresh venv,
-where `import sawdds` finds the installed copy and `sawdds --help` runs.
+py3-none-any with no compiled file, carries every module of the source packages (sawdds and
+sawgui), the console scripts, the cyclonedds pin of tools/requirements.txt and the GUI's pins as
+the extra "gui", and installs with pip into a fresh venv, where `import sawdds` and `import sawgui`
+find the installed copies, `sawdds --help` and `sawgui --help` run, and `sawgui --headless` runs
+(reads the DDS domain for a second, with no gateway on it, and says so as JSON).
 
 usage: wheel_installs.py   (the tools venv's python, which has setuptools from tools/requirements.txt)
 """
+import json
 import os
 import re
 import shutil
@@ -19,6 +22,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / "nonrt" / "python"
+PACKAGES = ("sawdds", "sawgui")
 COMPILED = (".so", ".pyd", ".dylib", ".dll", ".c", ".cpp", ".pyx")
 # Nothing from the caller's PYTHONPATH: what the fresh venv imports must be what it has.
 ENV = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
@@ -83,25 +87,32 @@ class TheWheelIsPureAndInstalls(unittest.TestCase):
         with zipfile.ZipFile(self.wheels[0]) as z:
             names = z.namelist()
         self.assertEqual([n for n in names if n.endswith(COMPILED)], [])
-        source = sorted(f"sawdds/{p.name}" for p in (SOURCE / "sawdds").glob("*.py"))
-        self.assertEqual(sorted(n for n in names if n.startswith("sawdds/")), source)
+        for package in PACKAGES:
+            source = sorted(f"{package}/{p.name}" for p in (SOURCE / package).glob("*.py"))
+            self.assertEqual(sorted(n for n in names if n.startswith(f"{package}/")), source)
 
-    def test_metadata_pins_cyclonedds_as_the_tools_venv_does(self):
+    def test_metadata_pins_cyclonedds_and_the_gui_as_the_tools_venv_does(self):
         pins = [line.split("#")[0].strip() for line in (ROOT / "tools" / "requirements.txt").read_text().splitlines()]
         pin = next(p for p in pins if p.startswith("cyclonedds=="))
-        self.assertEqual(re.findall(r"^Requires-Dist: (.+)$", self.wheel_file("METADATA"), re.M), [pin])
+        requires = re.findall(r"^Requires-Dist: (.+)$", self.wheel_file("METADATA"), re.M)
+        self.assertEqual([r for r in requires if ";" not in r], [pin])
+        gui = sorted(r.split(";")[0].strip() for r in requires if re.search(r"extra\s*==\s*[\"']gui[\"']", r))
+        self.assertEqual(gui, sorted(p for p in pins if p.startswith(("PySide6-Essentials==", "pyqtgraph=="))))
 
     def test_the_console_script_is_declared(self):
-        self.assertRegex(self.wheel_file("entry_points.txt"), r"\[console_scripts\]\s*\nsawdds = sawdds\.__main__:main")
+        entry_points = self.wheel_file("entry_points.txt")
+        self.assertRegex(entry_points, r"\[console_scripts\]\s*\n(.+\n)*sawdds = sawdds\.__main__:main")
+        self.assertRegex(entry_points, r"\[console_scripts\]\s*\n(.+\n)*sawgui = sawgui\.__main__:main")
 
     def test_pip_installs_it_into_a_fresh_venv(self):
         self.assertIsNotNone(self.install, "no single wheel to install")
         self.assertEqual(self.install.returncode, 0, self.install.stdout + self.install.stderr)
         # -I: no PYTHONPATH, no current directory, no user site: only what the venv has.
-        r = run(self.python, "-I", "-c", "import sawdds, sawdds.msgs; print(sawdds.__file__)", cwd=self.tmp.name)
-        self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertTrue(Path(r.stdout.strip()).resolve().is_relative_to(self.venv.resolve()),
-                        f"sawdds imported from {r.stdout.strip()}, not from the fresh venv")
+        for package in PACKAGES:
+            r = run(self.python, "-I", "-c", f"import {package}; print({package}.__file__)", cwd=self.tmp.name)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertTrue(Path(r.stdout.strip()).resolve().is_relative_to(self.venv.resolve()),
+                            f"{package} imported from {r.stdout.strip()}, not from the fresh venv")
 
     def test_the_installed_command_runs(self):
         self.assertIsNotNone(self.install, "no single wheel to install")
@@ -110,6 +121,25 @@ class TheWheelIsPureAndInstalls(unittest.TestCase):
                 r = run(*command, cwd=self.tmp.name)
                 self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
                 self.assertIn("usage: sawdds list", r.stdout)
+        gui = self.venv / ("Scripts" if os.name == "nt" else "bin") / ("sawgui.exe" if os.name == "nt" else "sawgui")
+        for command in ([gui, "--help"], [self.python, "-I", "-m", "sawgui", "--help"]):
+            with self.subTest(command=command):
+                r = run(*command, cwd=self.tmp.name)
+                self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+                self.assertIn("usage: sawgui", r.stdout)
+
+    def test_a_headless_sawgui_runs_from_the_install(self):
+        """The window's readers without a window, on a DDS domain no test starts a gateway on (229,
+        loopback): it ends when asked and reports no gateway; the window's modules all import (PySide6
+        and pyqtgraph from the tools venv, as the extra "gui" would install them)."""
+        self.assertIsNotNone(self.install, "no single wheel to install")
+        r = run(self.python, "-I", "-m", "sawgui", "--domain", "229", "--headless", "1", cwd=self.tmp.name)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        report = json.loads(r.stdout.strip().splitlines()[-1])
+        self.assertEqual(report["gateways"], {})
+        self.assertEqual(report["seconds"], 1)
+        r = run(self.python, "-I", "-c", "import sawgui.app, sawgui.__main__", cwd=self.tmp.name)
+        self.assertEqual(r.returncode, 0, r.stderr)
 
 
 if __name__ == "__main__":
