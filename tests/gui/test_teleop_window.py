@@ -1,9 +1,11 @@
 """sawgui in a real window, operated as a person would, against a running saw-rt deployment and
 its gateway: the window (a late joiner) shows the system at once; Disable and Enable are clicked
-and the state follows; a new scale is applied and the slave's plot moves twice as far; an
+and the state follows; a new scale is applied and the slave's plot moves twice as far; the clutch
+pauses and resumes; topics are recorded to CSV and plots saved as PNG; an
 out-of-range gain is refused by the form, an out-of-range force by the gateway (its reason
 shown); the RT process is killed with -9 and the window shows FAULT, then the gateway gone.
 Screenshots of each view are saved (PNG)."""
+import csv
 import os
 import subprocess
 import sys
@@ -72,6 +74,31 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         figure(f"slave/master x excursion over 2 s: {before:.2f} at scale 1, {after:.2f} at scale 2 "
                f"(slave {peak_to_peak_x(panel.slave_plot, 2.0) * 1e3:.1f} mm)")
         save(w, shots, "teleop")
+
+        # Clutch, held: the teleoperation pauses; released: it resumes.
+        qtbot.mousePress(panel.clutch, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: panel.badge.state == "PAUSED", timeout=LONG)
+        qtbot.mouseRelease(panel.clutch, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: panel.badge.state == "ENABLED", timeout=LONG)
+
+        # Recording what the window reads to CSV: every sample, in order.
+        record = os.path.join(shots, "record")
+        slave_cp = f"rt/{d.slave}/measured_cp"
+        w.toggle_recording(record)
+        start = live.count(slave_cp)
+        qtbot.waitUntil(lambda: live.count(slave_cp) > start + 500, timeout=LONG)
+        files = w.toggle_recording()
+        csv_path = os.path.join(record, slave_cp.replace("/", "_") + ".csv")
+        assert csv_path in files, files
+        with open(csv_path) as f:
+            rows = list(csv.reader(f))
+        assert rows[0] == ["source_time_s", "pose.position.x", "pose.position.y", "pose.position.z"], rows[0]
+        times = [float(r[0]) for r in rows[1:]]
+        assert len(times) >= 500 and all(b > a for a, b in zip(times, times[1:])), len(times)
+        figure(f"recorded {len(times)} samples of {slave_cp} over {times[-1] - times[0]:.2f} s")
+        png = w.save_plots(os.path.join(shots, "plots.png"))
+        with open(png, "rb") as f:
+            assert f.read(8) == b"\x89PNG\r\n\x1a\n"
 
         panel.gain_m.setText("20000")
         qtbot.mouseClick(panel.apply_gains, QtCore.Qt.MouseButton.LeftButton)
