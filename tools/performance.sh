@@ -2,13 +2,15 @@
 # One command: runs every benchmark of sawrt on this machine and rewrites docs/performance.md
 # (machine, kernel, date, commands, tables, goals) and the plots in docs/img/. Takes about 8
 # minutes; --quick (about 3) shortens the jitter runs and the benchmark loops for a first look;
-# --can runs only the CANopen benchmark (about 15 s) and rewrites only its section.
+# --can runs only the CANopen benchmark (about 15 s) and rewrites only its section; --gui runs only
+# the remote GUIs' benchmark (about 80 s) and rewrites only its section.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
-quick=0 can_only=0
+quick=0 can_only=0 gui_only=0
 [[ "${1:-}" == "--quick" ]] && quick=1
 [[ "${1:-}" == "--can" ]] && can_only=1
+[[ "${1:-}" == "--gui" ]] && gui_only=1
 bin=build/release/tools/bench
 run() {  # name, command...: the command line and its output into $out/name.{cmd,md}
   local name=$1; shift
@@ -20,6 +22,22 @@ run() {  # name, command...: the command line and its output into $out/name.{cmd
 # 4 s of teleoperation, about 15 s in all.
 can_rounds=2 can_e2e=4
 if ((quick)); then can_rounds=1 can_e2e=2; fi
+# Remote GUIs: 0, 1 and 10 headless sawgui subscribers beside the 1 kHz teleoperation, 20 s each.
+gui_seconds=20
+if ((quick)); then gui_seconds=8; fi
+gui_run() {
+  run gui .venv/bin/python tools/gui_scale.py build/release/bin/saw-rt build/release/bin/saw-gateway \
+    --seconds $gui_seconds --json $out/gui.json
+}
+if ((gui_only)); then
+  tools/build.sh saw-rt saw-gateway
+  out=build/perf-gui
+  rm -rf "$out" && mkdir -p "$out"
+  gui_run
+  .venv/bin/python tools/write_performance.py $out docs/performance.md --only gui
+  echo "rewrote the remote GUIs section of docs/performance.md" >&2
+  exit 0
+fi
 if ((can_only)); then
   tools/build.sh saw-bench-can saw-can-sim
   out=build/perf-can
@@ -42,6 +60,7 @@ run latency $bin/saw-latency --calls $calls --csv $out/latency.csv
 run jitter $bin/saw-jitter --load --markdown --duration $jitter --out $out/jitter
 run gateway_kill $bin/saw-gateway-kill --rounds $rounds
 run can $bin/saw-bench-can --rounds $can_rounds --e2e-seconds $can_e2e --json $out/can.json
+gui_run
 run e2e_one build/release/bin/saw-rt config/teleop-sim.yaml --duration $e2e
 # Two processes: the operator's side (master) and the patient's side (slave + teleoperation).
 echo "build/release/bin/saw-rt config/teleop-sim-hosts.yaml --host operator & ... --host patient" >$out/e2e_two.cmd

@@ -22,6 +22,8 @@ def parse(argv):
     p.add_argument("--headless", type=float, metavar="SECONDS",
                    help="no window: read what the window reads for SECONDS, then print what arrived as JSON")
     p.add_argument("--all-reads", action="store_true", help="with --headless: read every mapped topic")
+    p.add_argument("--settle", type=float, default=0.0, metavar="SECONDS",
+                   help="with --headless: also count what arrives after the first SECONDS (discovery done)")
     return p.parse_args(argv)
 
 
@@ -41,7 +43,11 @@ def headless(args) -> int:
     live = Live(args.domain)
     deadline = time.monotonic() + args.headless
     cpu0 = time.process_time()
+    settle_at, settled = time.monotonic() + args.settle, None
     while time.monotonic() < deadline:
+        if settled is None and args.settle and time.monotonic() >= settle_at:
+            settled = {t: live.count(t) for t in live.watched()}
+            cpu_settled = time.process_time()
         topics = model.default_topics(live)
         if args.all_reads:
             topics += [t for c in live.components() for t in model.component_topics(live, c)]
@@ -52,6 +58,10 @@ def headless(args) -> int:
            "states": {c: model.shown_state(v) for c, v in live.components().items()},
            "samples": {t: live.count(t) for t in live.watched()},
            "cpu_s": round(time.process_time() - cpu0, 3), "seconds": args.headless}
+    if settled is not None:
+        out["settled"] = {"seconds": round(args.headless - args.settle, 3),
+                          "samples": {t: live.count(t) - settled.get(t, 0) for t in live.watched()},
+                          "cpu_s": round(time.process_time() - cpu_settled, 3)}
     live.close()
     print(json.dumps(out, sort_keys=True))
     return 0

@@ -55,7 +55,7 @@ class SystemView(QtWidgets.QWidget):
                 st = shown_state(comp)
                 since = clock(comp["gone_at"]) if comp["gone_at"] else clock(comp["fault_time"] if st == "FAULT"
                                                                             else comp["state_time"])
-                reason = comp["fault_reason"] if comp["state"] == "FAULT" else ""
+                reason = comp["fault_reason"].removeprefix("FAULT: ") if comp["state"] == "FAULT" else ""
                 if comp["gone_at"]:
                     reason = "gone with its gateway" + (f", after FAULT: {reason}" if reason else "")
                 self._fill(ci, [c, comp["host"], ", ".join(comp["interfaces"]), st, since, reason], st)

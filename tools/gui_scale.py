@@ -1,0 +1,145 @@
+"""What remote GUIs cost the RT loop: the 1 kHz simulated teleoperation (config/teleop-sim.yaml's
+components, their tasks on one CPU) and its gateway (on another CPU, as docs/deploy.md says),
+beside 0, 1 and 10 GUI-equivalent subscribers: `sawgui --headless`, the window's own DDS readers
+(sawdds.Live, what the window reads when it opens on the teleoperation), each a process of its own
+on the gateway's CPU. One run, the configurations one after the other; prints a Markdown table
+and writes JSON (figures, no assertion).
+
+usage: gui_scale.py SAW_RT SAW_GATEWAY [--seconds S] [--counts 0,1,10] [--json OUT]
+"""
+import argparse
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+TICK = os.sysconf("SC_CLK_TCK")
+DEPLOYMENT = """deployment:
+  name: gui-scale-{tag}
+components:
+  - name: master_{tag}
+    type: sim_haptic_device
+    task: {{period: 1ms, priority: 80, cpu: {cpu}}}
+    params:
+      model: omni
+      hand: {{type: sinusoid, amplitude: [0.03, 0.0, 0.0], frequency: 0.5, stiffness: 200, damping: 2}}
+  - name: slave_{tag}
+    type: sim_haptic_device
+    task: {{period: 1ms, priority: 80, cpu: {cpu}}}
+    params: {{model: omni}}
+  - name: teleop_{tag}
+    type: teleop
+    task: {{period: 1ms, priority: 79, offset: 300us, cpu: {cpu}}}
+    params:
+      scale: 1.0
+      gains: {{master: 300, slave: 300}}
+      force_limits: {{master: 3.0, slave: 3.0}}
+      stale_timeout: 200ms
+connections:
+  - {{client: teleop_{tag}, required: master, server: master_{tag}, provided: arm}}
+  - {{client: teleop_{tag}, required: slave, server: slave_{tag}, provided: arm}}
+exports:
+  - {{component: master_{tag}, provided: arm}}
+  - {{component: slave_{tag}, provided: arm}}
+  - {{component: teleop_{tag}, provided: teleop}}
+"""
+ROW = re.compile(r"^\s+(\S+)\s+1\.00ms\s+(\d+)\s+(\d+)\s+(\d+)\s+([\d.]+)us\s+([\d.]+)us\s+([\d.]+)us\s+([\d.]+)us",
+                 re.M)
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a live process."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def one(args, n: int, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> dict:
+    fd, yaml = tempfile.mkstemp(suffix=".yaml", prefix="gui-scale-")
+    with os.fdopen(fd, "w") as f:
+        f.write(DEPLOYMENT.format(tag=tag, cpu=rt_cpu))
+    names = [f"{c}_{tag}" for c in ("master", "slave", "teleop")]
+    warmup = 3.0
+    rt = subprocess.Popen([args.saw_rt, yaml, "--duration", str(args.seconds + warmup + 1)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    on_other = ["taskset", "-c", str(other_cpu)]
+    attach = [a for c in names for a in ("--attach", c)]
+    gw = subprocess.Popen(on_other + [args.saw_gateway, *attach, "--domain", str(domain), "--wait", "10"],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "nonrt", "python"), PYTHONDONTWRITEBYTECODE="1")
+    subs = [subprocess.Popen(on_other + [sys.executable, "-m", "sawgui", "--domain", str(domain), "--headless",
+                                         str(args.seconds + warmup), "--settle", str(warmup)], stdout=subprocess.PIPE, text=True, env=env)
+            for _ in range(n)]
+    try:
+        time.sleep(warmup)  # the gateway attaches, subscribers discover it (their reports say if they did)
+        gw_cpu0 = cpu_seconds(gw.pid)
+        time.sleep(args.seconds)
+        gw_cpu = cpu_seconds(gw.pid) - gw_cpu0
+        reports = []
+        for s in subs:
+            out, _ = s.communicate(timeout=60)
+            reports.append(json.loads(out.strip().splitlines()[-1]) if out.strip() else {})
+        rt_out, _ = rt.communicate(timeout=60)
+    finally:
+        for p in [*subs, rt]:
+            if p.poll() is None:
+                p.kill()
+        gw.send_signal(signal.SIGTERM)
+        gw_out, _ = gw.communicate(timeout=20)
+        os.unlink(yaml)
+    tasks = {m.group(1): {"cycles": int(m.group(2)), "overruns": int(m.group(3)), "missed": int(m.group(4)),
+                          "p99_us": float(m.group(7)), "max_us": float(m.group(8))}
+             for m in ROW.finditer(rt_out) if m.group(1) in names}
+    published = re.search(r"published (\d+) state samples", gw_out)
+    samples = [sum(r.get("settled", {}).get("samples", {}).values()) for r in reports]
+    return {"subscribers": n, "tasks": tasks, "overruns": sum(t["overruns"] for t in tasks.values()),
+            "p99_us": max((t["p99_us"] for t in tasks.values()), default=None),
+            "gateway_cpu_percent": 100 * gw_cpu / args.seconds,
+            "gateway_published": int(published.group(1)) if published else None,
+            "samples_per_subscriber": samples, "topics_per_subscriber": [len(r.get("samples", {})) for r in reports],
+            "subscriber_cpu_percent": [100 * r.get("settled", {}).get("cpu_s", 0) / args.seconds for r in reports],
+            # State topics the subscribers read at the 1 kHz rate (the others are events and states on change).
+            "state_topics_1khz": 4,
+            "seconds": args.seconds, "rt_summary": [l for l in rt_out.splitlines() if "1.00ms" in l]}
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("saw_rt")
+    p.add_argument("saw_gateway")
+    p.add_argument("--seconds", type=float, default=20)
+    p.add_argument("--counts", default="0,1,10")
+    p.add_argument("--json")
+    args = p.parse_args()
+    cpus = sorted(os.sched_getaffinity(0))
+    rt_cpu, other_cpu = cpus[-1], cpus[0]
+    domain = 200 + os.getpid() % 29
+    runs = [one(args, int(n), f"s{os.getpid()}_{i}", domain, rt_cpu, other_cpu)
+            for i, n in enumerate(args.counts.split(","))]
+    base = runs[0]["p99_us"] or 0
+    print(f"# RT tasks on CPU {rt_cpu}; saw-gateway and the subscribers on CPU {other_cpu}; {args.seconds:g} s measured "
+          f"per configuration (RT figures over the whole run of each)")
+    print("| subscribers | RT overruns | wake-up p99, worst task (µs) | × none | gateway CPU | "
+          "samples each subscriber received (min–max) | subscriber CPU |")
+    print("|---|---|---|---|---|---|---|")
+    for r in runs:
+        s = r["samples_per_subscriber"]
+        ratio = f"{r['p99_us'] / base:.2f}" if base and r["p99_us"] else "–"
+        cpu = r["subscriber_cpu_percent"]
+        print(f"| {r['subscribers']} | {r['overruns']} | {r['p99_us']} | {ratio} | {r['gateway_cpu_percent']:.1f} % | "
+              + (f"{min(s)}–{max(s)} in {r['seconds']:g} s, {min(s) / (4000 * r['seconds']):.1%}–"
+                 f"{max(s) / (4000 * r['seconds']):.1%} of 4 × 1 kHz" if s else "–")
+              + " | " + (f"{sum(cpu) / len(cpu):.1f} % each" if cpu else "–") + " |")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"rt_cpu": rt_cpu, "other_cpu": other_cpu, "seconds": args.seconds, "runs": runs}, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
