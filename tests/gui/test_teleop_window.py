@@ -88,6 +88,8 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         start = live.count(slave_cp)
         qtbot.waitUntil(lambda: live.count(slave_cp) > start + 500, timeout=LONG)
         files = w.toggle_recording()
+        assert "recorded" in w.statusBar().currentMessage()
+        w.statusBar().clearMessage()  # (it names a local path: not for the screenshots)
         csv_path = os.path.join(record, slave_cp.replace("/", "_") + ".csv")
         assert csv_path in files, files
         with open(csv_path) as f:
