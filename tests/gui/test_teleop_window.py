@@ -130,6 +130,10 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         assert f'"{d.teleop}": "ENABLED"' in r.stdout, r.stdout
 
         w.tabs.setCurrentWidget(w.system)
+        ticks = []  # the Qt event loop's pace while the gateway goes: a window waiting on DDS would stall it
+        pace = QtCore.QTimer()
+        pace.timeout.connect(lambda: ticks.append(time.monotonic()))
+        pace.start(10)
         t0 = time.monotonic()
         d.kill_rt()
         qtbot.waitUntil(lambda: w.system.state_of(d.teleop) in ("FAULT", "FAULT (gone)", "GONE"), timeout=LONG)
@@ -144,6 +148,14 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         assert seen.startswith("FAULT"), "the gateway said FAULT before it left"
         assert w.system.banner.isVisible() and d.teleop in w.system.banner.text()
         save(w, shots, "gone")
+        # A command to the vanished gateway: said at once, the window still answering.
+        w.tabs.setCurrentWidget(panel)
+        qtbot.mouseClick(panel.enable, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: "no live gateway" in panel.outcome.text(), timeout=LONG)
+        pace.stop()
+        gap = max(b - a for a, b in zip(ticks, ticks[1:])) * 1e3
+        figure(f"the event loop's longest gap from the kill to the refused command: {gap:.0f} ms (timer 10 ms)")
+        assert gap < 1000, "the window stalled while its gateway went away"
     finally:
         w.timer.stop()
         live.close()
