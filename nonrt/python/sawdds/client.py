@@ -38,13 +38,20 @@ def latched(endpoint) -> bool:
 
 
 def interface_uri(interface: str = "lo", peers=("127.0.0.1",)) -> str:
-    """A CYCLONEDDS_URI restricting DDS to one network interface; `peers` for unicast discovery
-    (loopback has no multicast), none to discover by multicast on that interface."""
+    """A CYCLONEDDS_URI restricting DDS to one network interface, by name ("eth1") or by one of its
+    addresses ("192.168.1.20", "127.0.0.1" on any OS); `peers` for unicast discovery (loopback has
+    no multicast), none to discover by multicast on that interface."""
     peer_xml = "".join(f"<Peer address='{p}'/>" for p in peers)
     multicast = "false" if peers else "true"
     discovery = (f"<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>31</MaxAutoParticipantIndex>"
                  f"<Peers>{peer_xml}</Peers>") if peers else ""
-    return (f"<CycloneDDS><Domain Id='any'><General><Interfaces><NetworkInterface name='{interface}'/>"
+    import ipaddress
+    try:
+        ipaddress.ip_address(interface)
+        nic = f"<NetworkInterface address='{interface}'/>"
+    except ValueError:
+        nic = f"<NetworkInterface name='{interface}'/>"
+    return (f"<CycloneDDS><Domain Id='any'><General><Interfaces>{nic}"
             f"</Interfaces><AllowMulticast>{multicast}</AllowMulticast></General>"
             f"<Discovery>{discovery}</Discovery></Domain></CycloneDDS>")
 

@@ -279,6 +279,10 @@ class Live:
                         log.append((s.sample_info.source_timestamp * 1e-9, s.string))
                         c = self._components.get(comp)
                         if c is not None and s.string.startswith(FAULT):
+                            # The gateway says FAULT on both topics; whichever comes first counts.
+                            if c["state"] != FAULT:
+                                c["state"] = FAULT
+                                c["state_time"] = c["fault_time"] = s.sample_info.source_timestamp * 1e-9
                             c["fault_reason"] = s.string
 
     def _state_changed(self, component, s):

@@ -9,14 +9,18 @@ import sys
 import time
 
 
+# Loopback's name is Linux's; elsewhere (lo0, "Loopback Pseudo-Interface 1") its address names it.
+LOOPBACK = "lo" if sys.platform.startswith("linux") else "127.0.0.1"
+
+
 def parse(argv):
     p = argparse.ArgumentParser(prog="sawgui", description="A desktop GUI for sawrt over DDS (Cyclone DDS): "
                                 "the system's components and states, each component's values, events and "
                                 "commands, the teleoperation and the tasks' health.")
     p.add_argument("--domain", type=int, default=0, help="DDS domain of the gateways (default 0)")
-    p.add_argument("--interface", default="lo",
-                   help="network interface DDS uses (default lo, this machine only; a remote GUI names the "
-                        "interface that reaches the gateway's host)")
+    p.add_argument("--interface", default=LOOPBACK,
+                   help=f"network interface DDS uses, by name or address (default {LOOPBACK}: this machine only; "
+                        "a remote GUI names the interface that reaches the gateway's host)")
     p.add_argument("--peer", action="append", default=None, metavar="ADDRESS",
                    help="a host to discover by unicast (default 127.0.0.1 on lo; none elsewhere: multicast)")
     p.add_argument("--headless", type=float, metavar="SECONDS",
@@ -29,10 +33,11 @@ def parse(argv):
 
 def configure_dds(args):
     """CYCLONEDDS_URI from the options, before cyclonedds is imported (unless the user set it)."""
-    if "CYCLONEDDS_URI" in os.environ and args.interface == "lo" and args.peer is None:
+    if "CYCLONEDDS_URI" in os.environ and args.interface == LOOPBACK and args.peer is None:
         return
     from sawdds.client import interface_uri
-    peers = args.peer if args.peer is not None else (["127.0.0.1"] if args.interface == "lo" else [])
+    loopback = args.interface in ("lo", "lo0", "127.0.0.1")
+    peers = args.peer if args.peer is not None else (["127.0.0.1"] if loopback else [])
     os.environ["CYCLONEDDS_URI"] = interface_uri(args.interface, peers)
 
 

@@ -40,7 +40,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.statusBar().addWidget(self.status, 1)
         self.recording = None
         tb = self.addToolBar("tools")
-        self.record_action = tb.addAction("Record CSV", self.toggle_recording)
+        self.record_action = tb.addAction("Record CSV", lambda: self.toggle_recording())
         tb.addAction("Save plots as PNG", self.save_plots)
         self.timer = QtCore.QTimer(self)
         self.timer.timeout.connect(self.refresh)
@@ -83,18 +83,43 @@ class MainWindow(QtWidgets.QMainWindow):
         self.status.setText(f"{sum(g['alive'] for g in gws.values())} gateway(s) alive, {len(comps)} component(s)"
                             + (f"; recording to {self.recording}" if self.recording else ""))
 
-    def toggle_recording(self, directory: str = ""):
-        """Starts recording the topics the window reads to CSV files (one per topic), or stops it."""
+    def choose_topics(self) -> list:
+        """Asks which of the topics the window reads to record (all checked to begin with)."""
+        dialog = QtWidgets.QDialog(self)
+        dialog.setWindowTitle("Record which topics?")
+        lay = QtWidgets.QVBoxLayout(dialog)
+        listing = QtWidgets.QListWidget()
+        for t in self.live.watched():
+            item = QtWidgets.QListWidgetItem(t)
+            item.setFlags(item.flags() | QtCore.Qt.ItemFlag.ItemIsUserCheckable)
+            item.setCheckState(QtCore.Qt.CheckState.Checked)
+            listing.addItem(item)
+        lay.addWidget(listing)
+        buttons = QtWidgets.QDialogButtonBox(QtWidgets.QDialogButtonBox.StandardButton.Ok
+                                             | QtWidgets.QDialogButtonBox.StandardButton.Cancel)
+        buttons.accepted.connect(dialog.accept)
+        buttons.rejected.connect(dialog.reject)
+        lay.addWidget(buttons)
+        if dialog.exec() != QtWidgets.QDialog.DialogCode.Accepted:
+            return []
+        return [listing.item(i).text() for i in range(listing.count())
+                if listing.item(i).checkState() == QtCore.Qt.CheckState.Checked]
+
+    def toggle_recording(self, directory: str = "", topics=None):
+        """Starts recording `topics` (by default those chosen in a dialog, among what the window reads)
+        to CSV files (one per topic), or stops it and returns the files written."""
         if self.recording:
             files = self.live.stop_recording()
             self.statusBar().showMessage(f"recorded {len(files)} file(s) in {self.recording}", 8000)
             self.recording = None
             self.record_action.setText("Record CSV")
             return files
+        topics = self.choose_topics() if topics is None else topics
+        if not topics:
+            return []
         directory = directory or QtWidgets.QFileDialog.getExistingDirectory(self, "Record CSV files into")
         if not directory:
             return []
-        topics = self.live.watched()
         self.live.record(topics, directory)
         self.recording = directory
         self.record_action.setText("Stop recording")

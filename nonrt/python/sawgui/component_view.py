@@ -92,8 +92,14 @@ class ComponentView(QtWidgets.QWidget):
                 self.table.setItem(i, j, QtWidgets.QTableWidgetItem("" if e.topic else "(not mapped)"))
         self.table.itemSelectionChanged.connect(self._select)
         ll.addWidget(self.table, 2)
-        self.plot = Plot("")
-        ll.addWidget(self.plot, 3)
+        # Position, velocity and force when the component has them; a row selected replaces the first.
+        self.plotted = self._default_plots()
+        self.plots = [Plot("") for _ in self.plotted or [None]]
+        row = QtWidgets.QHBoxLayout()
+        for p in self.plots:
+            row.addWidget(p)
+        ll.addLayout(row, 3)
+        self.plot = self.plots[0]
         ll.addWidget(QtWidgets.QLabel("events and refusals"))
         self.log = QtWidgets.QPlainTextEdit()
         self.log.setReadOnly(True)
@@ -117,9 +123,15 @@ class ComponentView(QtWidgets.QWidget):
         split.setSizes([700, 420])
         lay = QtWidgets.QVBoxLayout(self)
         lay.addWidget(split)
-        self.selected = next((e for e in self.reads if e.name == "measured_cp"),
-                             next((e for e in self.reads if e.topic), None))
         self._logged = {}
+
+    def _default_plots(self) -> list:
+        numeric = [e for e in self.reads if e.topic and e.dds_type not in (
+            "crtk_msgs::msg::dds_::OperatingState_", "crtk_msgs::msg::dds_::StringStamped_")]
+        picks = [next((e for e in numeric if e.name == n), None) for n in ("measured_cp", "measured_cv")]
+        picks.append(next((e for e in numeric if "force" in e.name), None))
+        picks = [e for e in picks if e is not None]
+        return picks or numeric[:1]
 
     def send(self, endpoint, sample, outcome):
         outcome.sending(endpoint.name, len(self.live.errors(self.component)))
@@ -127,8 +139,8 @@ class ComponentView(QtWidgets.QWidget):
 
     def _select(self):
         rows = {i.row() for i in self.table.selectedItems()}
-        if rows:
-            self.selected = self.reads[min(rows)]
+        if rows and self.reads[min(rows)].topic:
+            self.plotted[0:1] = [self.reads[min(rows)]]
             self.plot.clear()
             self.plot.curves = {}
 
@@ -144,9 +156,9 @@ class ComponentView(QtWidgets.QWidget):
             self.table.item(i, 3).setText("; ".join(f"{k.split('.')[-1]} mean {v[3]:.4g} [{v[1]:.4g}, {v[2]:.4g}]"
                                                     for k, v in list(st.items())[:3]))
         self.table.resizeColumnsToContents()
-        if self.selected is not None and self.selected.topic:
-            self.plot.setTitle(f"{self.component}.{self.selected.name} (last 10 s)", color="k")
-            self.plot.show_series(*self.live.series(self.selected.topic))
+        for plot, e in zip(self.plots, self.plotted):
+            plot.setTitle(f"{self.component}.{e.name} (last 10 s)", color="k")
+            plot.show_series(*self.live.series(e.topic))
         lines = []
         for e in self.events:
             entries = self.live.log(e.topic)

@@ -40,7 +40,7 @@ class SystemView(QtWidgets.QWidget):
     def refresh(self):
         gws, comps = self.live.gateways(), self.live.components()
         self.empty.setVisible(not gws)
-        faults = []
+        faults, gone = [], []
         for g, gw in sorted(gws.items()):
             gi = self._item(("g", g), None)
             state = "GONE" if not gw["alive"] else gw["state"]
@@ -59,17 +59,22 @@ class SystemView(QtWidgets.QWidget):
                 if comp["gone_at"]:
                     reason = "gone with its gateway" + (f", after FAULT: {reason}" if reason else "")
                 self._fill(ci, [c, comp["host"], ", ".join(comp["interfaces"]), st, since, reason], st)
+                if comp["gone_at"] and comp["state"] != "FAULT":
+                    gone.append(f"{c}: gone with its gateway at {clock(comp['gone_at'])} "
+                                f"(last state {comp['state'] or 'unknown'})")
                 if comp["state"] == "FAULT":  # still said once its gateway has gone: the last word it had
                     why = comp["fault_reason"].removeprefix("FAULT: ")
                     faults.append(f"{c}: FAULT at {clock(comp['fault_time'])}: {why}"
                                   + (f" (gateway gone at {clock(comp['gone_at'])})" if comp["gone_at"] else ""))
         for i in range(len(COLUMNS) - 1):
             self.tree.resizeColumnToContents(i)
-        self.banner.setVisible(bool(faults))
-        if faults:
-            self.banner.setText("\n".join(faults))
-            self.banner.setStyleSheet("QLabel { background: #d01010; color: white; font-size: 16px;"
-                                      " font-weight: bold; padding: 8px; }")
+        # FAULT in red; a component gone without a FAULT (its gateway vanished) in dark grey: both said
+        # above everything, neither shown as its last state frozen.
+        self.banner.setVisible(bool(faults or gone))
+        if faults or gone:
+            self.banner.setText("\n".join(faults + gone))
+            self.banner.setStyleSheet(f"QLabel {{ background: {'#d01010' if faults else '#404040'}; color: white;"
+                                      " font-size: 16px; font-weight: bold; padding: 8px; }")
 
     def _fill(self, item, texts, state):
         for i, t in enumerate(texts):

@@ -69,6 +69,7 @@ class Outcome(QtWidgets.QLabel):
         self.command = None
         self.errors_seen = 0
         self.sent_at = 0.0
+        self.refusal = None
 
     def refused(self, why: str):
         self._show(why, "#d01010")
@@ -76,10 +77,13 @@ class Outcome(QtWidgets.QLabel):
 
     def sending(self, command: str, errors_now: int):
         self.command, self.errors_seen, self.sent_at = command, errors_now, time.monotonic()
+        self.refusal = None
         self._show(f"{command}: sending…", "#555")
 
     def delivered(self, ok: bool, text: str):
-        self._show(f"{self.command or ''}: {text}", "#1f9d3a" if ok else "#d01010")
+        # The gateway's refusal can arrive before word that the command left: it is kept.
+        if self.refusal is None:
+            self._show(f"{self.command or ''}: {text}", "#1f9d3a" if ok else "#d01010")
 
     def check_errors(self, errors: list):
         """Shows the gateway's refusal of our command when one arrives."""
@@ -90,7 +94,7 @@ class Outcome(QtWidgets.QLabel):
         for _, text in new:
             if text.startswith(self.command):
                 self._show("refused by the gateway: " + text, "#d01010")
-                self.setProperty("refusal", text)
+                self.refusal = text
 
     def _show(self, text, color):
         self.setText(text)
