@@ -89,6 +89,11 @@ void CollaborativeControlForce::add_settings(ProvidedInterface& p) {
     settings_change();
     config_.prediction = pr;
   });
+  // Declared bounds: checked by the bridge and the gateway before a remote value gets here, and
+  // published in the registry so that clients (sawctl, GUIs) refuse the same values at once.
+  p.limit("set_scale", min_scale, max_scale);
+  p.limit("set_gains", 0.0, max_gain);
+  p.limit("set_force_limits", 0.0, max_force_limit);
   p.add_command_write<Vec3>("set_slave_offset", [this](const Vec3& o) {
     if (!finite(o[0]) || !finite(o[1]) || !finite(o[2])) return void(++rejected_);
     config_.slave_offset = o;
