@@ -27,7 +27,7 @@ class ArmKinematics {
   ArmModel model() const noexcept { return model_; }
   // The joints' names, base to tip (measured_js carries them).
   std::array<std::string_view, 3> joint_names() const noexcept;
-  // The Falcon's q where its three arms cannot meet: the last pose that could be computed.
+  // For a Falcon q where the three arms cannot meet (outside the stops): the last pose computed.
   Eigen::Vector3d fk(const Eigen::Vector3d& q) noexcept;
   // Joints for a position (Omni: elbow bent downwards, q₂ > 0; Falcon: knees outwards);
   // false when out of reach.
