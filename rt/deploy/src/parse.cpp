@@ -173,7 +173,7 @@ std::string relative_to(const std::string& directory, const std::string& path) {
 void check_enclave(const std::string& dir, const Location& at) {
   for (const char* f : {"cert.pem", "key.pem", "identity_ca.cert.pem", "permissions_ca.cert.pem",
                         "governance.p7s", "permissions.p7s"})
-    if (!std::filesystem::exists(std::filesystem::path(dir) / f))
+    if (std::error_code ec; !std::filesystem::exists(std::filesystem::path(dir) / f, ec))  // (a bad path: no)
       throw ConfigError(at, "enclave " + dir + " has no " + f +
                                 " (make one with: sawctl security enroll KEYSTORE NAME --role gateway)");
 }
