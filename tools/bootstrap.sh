@@ -14,6 +14,7 @@ apt_packages=(
   libgtest-dev libbenchmark-dev rt-tests stress-ng clang-format
   libzeroc-ice-dev zeroc-ice-compilers iproute2
   clang libclang-rt-14-dev ccache  # the fuzz preset (libFuzzer), faster rebuilds in CI
+  cyclonedds-dev cyclonedds-tools  # an independent secure DDS peer (Debian's build has the security plugins)
 )
 
 # The package check runs once per package list (and with --check): builds call this script
