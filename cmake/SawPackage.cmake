@@ -20,7 +20,7 @@ install(FILES ${PROJECT_BINARY_DIR}/sawrtConfig.cmake ${PROJECT_BINARY_DIR}/sawr
 
 set(SAW_DATA_DIR ${CMAKE_INSTALL_DATADIR}/sawrt)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/ DESTINATION ${SAW_DATA_DIR}/config COMPONENT runtime
-        FILES_MATCHING PATTERN "*.yaml" PATTERN "*.csv" PATTERN "README.md")
+        FILES_MATCHING PATTERN "*.yaml" PATTERN "*.csv" PATTERN "README.md" PATTERN "udev" EXCLUDE)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${SAW_DATA_DIR}/examples COMPONENT dev
         PATTERN "build" EXCLUDE)
 # The units name saw-rt by its installed path, known only when installing (CPack installs to /usr).

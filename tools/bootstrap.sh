@@ -14,6 +14,7 @@ apt_packages=(
   libgtest-dev libbenchmark-dev rt-tests stress-ng clang-format
   libzeroc-ice-dev zeroc-ice-compilers iproute2
   clang libclang-rt-14-dev ccache  # the fuzz preset (libFuzzer), faster rebuilds in CI
+  cyclonedds-dev cyclonedds-tools  # an independent secure DDS peer (Debian's build has the security plugins)
   # sawgui's tests: real windows under Xvfb; what PySide6's xcb platform plugin links beyond libxcb1
   # (found with ldd on plugins/platforms/libqxcb.so and lib/libQt6XcbQpa.so.6).
   xvfb xauth libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <thread>
@@ -46,6 +47,7 @@ std::vector<std::string> arguments(const std::string& exe, const deploy::Gateway
   for (const auto& [component, arm] : spec.imports)
     args.insert(args.end(), {"--import", component + "=" + arm});
   if (!spec.ros_namespace.empty()) args.insert(args.end(), {"--ros-namespace", spec.ros_namespace});
+  if (!spec.enclave.empty()) args.insert(args.end(), {"--enclave", spec.enclave});
   args.insert(args.end(), {"--wait", "30"});  // our own exports go live when the manager starts
   return args;
 }
@@ -68,6 +70,15 @@ std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec,
   const std::string exe = own_directory() + "/saw-gateway";
   if (access(exe.c_str(), X_OK) != 0)
     throw std::runtime_error("gateway: " + exe + " not found (build the nonrt/ targets)");
+  for (const auto& i : spec.interfaces)
+    if (spec.insecure && !i.starts_with("127.")) {
+      std::fprintf(
+          stderr,
+          "saw-rt: warning: the gateway speaks DDS on %s without security (security: none): any host "
+          "on that network can read and command these components\n",
+          i.c_str());
+      break;
+    }
   auto args = arguments(exe, spec);
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -289,6 +290,37 @@ TEST(Deployment, AGatewaySectionIsCheckedLikeTheRest) {
   EXPECT_EQ(d.gateway()->attach, std::vector<std::string>{"master"});
   EXPECT_EQ(d.gateway()->domain, 3);
   EXPECT_EQ(d.gateway()->interfaces, std::vector<std::string>{"127.0.0.1"});
+}
+
+TEST(Deployment, AGatewayOffLoopbackNeedsAnEnclaveOrSaysSecurityNone) {
+  const std::string exported = "exports:\n  - {component: master, provided: arm}\n";
+  expect_error(exported + "gateway: {interfaces: [10.0.0.1]}\n",
+               R"(^cfg\.yaml:19:\d+: key 'gateway': the gateway's DDS leaves loopback and no security)");
+  expect_error(exported + "gateway: {interfaces: [10.0.0.1], security: plain}\n",
+               R"(^cfg\.yaml:19:\d+: key 'gateway\.security': 'plain': the only value is none)");
+  const std::string enclave = ::testing::TempDir() + "deploy-enclave-" + std::to_string(getpid());
+  std::filesystem::create_directories(enclave);
+  expect_error(exported + "gateway: {interfaces: [10.0.0.1], enclave: " + enclave + "}\n",
+               R"(^cfg\.yaml:19:\d+: key 'gateway\.enclave': enclave .* has no cert\.pem)");
+  for (const char* f : {"cert.pem", "key.pem", "identity_ca.cert.pem", "permissions_ca.cert.pem",
+                        "governance.p7s", "permissions.p7s"})
+    std::ofstream(enclave + "/" + f) << "x";
+  expect_error(exported + "gateway: {interfaces: [10.0.0.1], enclave: " + enclave + ", security: none}\n",
+               R"(key 'gateway\.security': security: none and an enclave: choose one)");
+  // Either one runs: the enclave is handed to the gateway, or no security is said out loud.
+  {  // (one at a time: each exports master's segment)
+    auto secure =
+        build(std::string(good) + exported + "gateway: {interfaces: [10.0.0.1], enclave: " + enclave + "}\n",
+              "cfg.yaml", registry());
+    EXPECT_EQ(secure.gateway()->enclave, enclave);
+  }
+  {
+    auto plain = build(std::string(good) + exported + "gateway: {interfaces: [10.0.0.1], security: none}\n",
+                       "cfg.yaml", registry());
+    EXPECT_TRUE(plain.gateway()->insecure);
+    EXPECT_TRUE(plain.gateway()->enclave.empty());
+  }
+  std::filesystem::remove_all(enclave);
 }
 
 }  // namespace

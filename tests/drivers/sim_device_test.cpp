@@ -1,6 +1,7 @@
 // The simulated haptic devices: kinematics, dynamics, command validation, buttons, the hand.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -31,9 +32,9 @@ TEST(ArmKinematics, OmniForwardKinematicsByHand) {
 }
 
 TEST(ArmKinematics, JacobianMatchesFiniteDifferences) {
-  for (auto model : {ArmModel::omni, ArmModel::falcon}) {
+  for (auto [model, q] : {std::pair{ArmModel::omni, Eigen::Vector3d(0.3, -0.2, 0.9)},
+                          std::pair{ArmModel::falcon, Eigen::Vector3d(0.4, 0.9, 0.6)}}) {
     ArmKinematics k(model);
-    const Eigen::Vector3d q(0.3, -0.2, 0.9);
     const Eigen::Matrix3d j = k.jacobian(q);
     for (int c = 0; c < 3; ++c) {
       Eigen::Vector3d dq = Eigen::Vector3d::Zero();
@@ -41,6 +42,42 @@ TEST(ArmKinematics, JacobianMatchesFiniteDifferences) {
       const Eigen::Vector3d column = (k.fk(q + dq) - k.fk(q - dq)) / 2e-7;
       EXPECT_TRUE(j.col(c).isApprox(column, 1e-6)) << "column " << c;
     }
+  }
+}
+
+// The Falcon model is the real delta, in the `falcon` component's frame: zero with the arms at
+// 35°, the grip further along +z as the arms go down, and ik() undoing fk() over the stops' range.
+TEST(ArmKinematics, FalconIsTheDeltaAndItsInverseUndoesItsForward) {
+  ArmKinematics k(ArmModel::falcon);
+  constexpr double at_zero = 0.6108652381980153;  // 35°
+  EXPECT_LT(k.fk(Eigen::Vector3d::Constant(at_zero)).norm(), 1e-12);
+  const Eigen::Vector3d down = k.fk(Eigen::Vector3d::Constant(0.9));
+  EXPECT_GT(down.z(), 0.01) << "all arms down: the grip moves along the axis, away from the motors";
+  EXPECT_LT(std::hypot(down.x(), down.y()), 1e-12) << "and stays on the axis";
+  EXPECT_GT(k.fk({0.9, at_zero, at_zero}).head<2>().norm(), 0.005) << "one arm alone moves it sideways";
+  int checked = 0;
+  for (double a = 0.25; a <= 1.05; a += 0.2)
+    for (double b = 0.25; b <= 1.05; b += 0.2)
+      for (double c = 0.25; c <= 1.05; c += 0.2) {
+        const Eigen::Vector3d q(a, b, c);
+        const Eigen::Vector3d x = k.fk(q);
+        Eigen::Vector3d back;
+        ASSERT_TRUE(k.ik(x, back)) << q.transpose();
+        EXPECT_LT((back - q).norm(), 1e-9) << q.transpose();
+        ++checked;
+      }
+  EXPECT_EQ(checked, 125);
+  Eigen::Vector3d q;
+  EXPECT_FALSE(k.ik({0, 0, 0.5}, q)) << "half a metre away is out of reach";
+}
+
+TEST(ArmKinematics, OmniInverseUndoesItsForward) {
+  ArmKinematics k(ArmModel::omni);
+  for (const Eigen::Vector3d& q :
+       {Eigen::Vector3d(0, 0, 1.2), Eigen::Vector3d(0.4, -0.3, 0.8), Eigen::Vector3d(-1.1, 0.5, 2.0)}) {
+    Eigen::Vector3d back;
+    ASSERT_TRUE(k.ik(k.fk(q), back));
+    EXPECT_LT((back - q).norm(), 1e-9) << q.transpose();
   }
 }
 
@@ -128,7 +165,7 @@ TEST(SimHapticDevice, ForceMovesTheTipAlongItAndDampingStopsIt) {
 // sensor_msgs/JointState pairs positions with joints by name: measured_js names every joint.
 TEST(SimHapticDevice, MeasuredJsNamesTheModelsJoints) {
   for (auto [model, names] : {std::pair{ArmModel::omni, std::array{"yaw", "shoulder_pitch", "elbow_pitch"}},
-                              std::pair{ArmModel::falcon, std::array{"x", "y", "z"}}}) {
+                              std::pair{ArmModel::falcon, std::array{"arm0", "arm1", "arm2"}}}) {
     SimDeviceConfig c;
     c.model = model;
     Rig rig(c);
@@ -170,9 +207,43 @@ TEST(SimHapticDevice, JointLimitsHold) {
   SimDeviceConfig c;
   c.model = ArmModel::falcon;
   Rig rig(c);
-  ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{5, 0, 0}, {}}), saw::Status::ok);
+  // Pushed along the axis, away from the motors: every arm goes down onto its stop.
+  ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{0, 0, 5}, {}}), saw::Status::ok);
   rig.steps(3000);
-  EXPECT_NEAR(rig.position().x(), 0.05, 1e-12);
+  saw::JointState js;
+  ASSERT_EQ(rig.client.measured_js(js), saw::Status::ok);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(js.position[i], 1.1, 1e-12) << i;
+  ArmKinematics k(ArmModel::falcon);
+  EXPECT_TRUE(rig.position().isApprox(k.fk(Eigen::Vector3d::Constant(1.1)), 1e-12));
+}
+
+// The delta's joint-space dynamics: a force at the grip accelerates it as its mass at the grip,
+// M = J⁻ᵀ·I·J⁻¹ (0.09–0.16 kg at the centre), says; then damping stops it.
+TEST(SimHapticDevice, FalconMovesUnderAForceAsItsMassAtTheGripSays) {
+  SimDeviceConfig c;
+  c.model = ArmModel::falcon;
+  Rig rig(c);
+  rig.steps(1);
+  const Eigen::Vector3d start = rig.position();
+  ArmKinematics k(ArmModel::falcon);
+  const Eigen::Matrix3d j = k.jacobian(Eigen::Vector3d::Constant(0.6108652381980153));
+  const Eigen::Matrix3d mass =
+      j.transpose().inverse() * rig.device.device_config().inertia.asDiagonal() * j.inverse();
+  for (const Eigen::Vector3d& f : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 0, -1)}) {
+    const Eigen::Vector3d predicted = 0.5 * (mass.inverse() * f) * 0.01 * 0.01;  // ½·a·t², 10 ms
+    Rig r(c);
+    r.steps(1);
+    const Eigen::Vector3d from = r.position();
+    ASSERT_EQ(r.client.servo_cf(saw::Wrench{{f.x(), f.y(), f.z()}, {}}), saw::Status::ok);
+    r.steps(10);
+    const Eigen::Vector3d moved = r.position() - from;
+    std::printf(
+        "falcon: %.0f N along (%g, %g, %g) for 10 ms moves it %.2f mm (rigid-body estimate %.2f mm)\n",
+        f.norm(), f.x(), f.y(), f.z(), moved.norm() * 1e3, predicted.norm() * 1e3);
+    EXPECT_GT(moved.normalized().dot(f.normalized()), 0.95) << "along the force";
+    EXPECT_NEAR(moved.norm(), predicted.norm(), 0.3 * predicted.norm());
+  }
+  EXPECT_TRUE(rig.position().isApprox(start, 1e-12)) << "no force, no motion";
 }
 
 TEST(SimHapticDevice, RejectsNonFiniteAndOversizedForcesBeforeTheDynamics) {

@@ -21,6 +21,8 @@ TEST(FalconDevice, HomesAtStartWithBlueThenGreenLeds) {
   EXPECT_TRUE(rig.device->homing());
   EXPECT_EQ(rig.sim->leds(), control::led_blue);
   EXPECT_TRUE(rig.sim->homing_mode());
+  // Busy (a teleoperation holds) while the counts are relative, from the first cycle.
+  EXPECT_TRUE(rig.device->operating_state().is_busy);
   const int cycles = rig.cycle_until([&] { return rig.homed(); });
   std::printf("homed in %d cycles\n", cycles);
   EXPECT_LT(cycles, 2000);
@@ -28,6 +30,7 @@ TEST(FalconDevice, HomesAtStartWithBlueThenGreenLeds) {
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
   EXPECT_EQ(rig.sim->leds(), control::led_green);
   EXPECT_FALSE(rig.sim->homing_mode());
+  EXPECT_FALSE(rig.device->operating_state().is_busy);
   // Homed: the measured pose is the firmware's true tip, relative to the encoder-zero pose.
   DeltaKinematics k;
   Eigen::Vector3d zero;

@@ -73,6 +73,12 @@ void check(double d) {
 }
 void check(std::int64_t) {}
 void check(bool) {}
+void check(const teleop::Gains& g) {
+  if (!std::isfinite(g.master) || !std::isfinite(g.slave)) defect("gains not finite");
+}
+void check(const teleop::ForceLimits& l) {
+  if (!std::isfinite(l.master) || !std::isfinite(l.slave)) defect("force limits not finite");
+}
 
 // A sample of message Msg from a peer, as Typed<...>::take converts it.
 template <class Rt, class Msg, class PubSub, class Conv>
@@ -122,7 +128,11 @@ using Samples = std::tuple<
     Entry<ButtonEvent, sensor_msgs::msg::Joy, sensor_msgs::msg::JoyPubSubType, ButtonConv>,
     Data<double, std_msgs::msg::Float64, std_msgs::msg::Float64PubSubType>,
     Data<std::int64_t, std_msgs::msg::Int64, std_msgs::msg::Int64PubSubType>,
-    Data<bool, std_msgs::msg::Bool, std_msgs::msg::BoolPubSubType>>;
+    Data<bool, std_msgs::msg::Bool, std_msgs::msg::BoolPubSubType>,
+    Entry<teleop::Gains, saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType,
+          MasterSlaveConv<teleop::Gains>>,
+    Entry<teleop::ForceLimits, saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType,
+          MasterSlaveConv<teleop::ForceLimits>>>;
 constexpr std::size_t sample_kinds = std::tuple_size_v<Samples>;
 
 void run_sample(std::size_t kind, const std::uint8_t* d, std::size_t n) {

@@ -82,7 +82,40 @@ def main(saw_rt, saw_gateway, sawctl):
         if m:
             print(f"figure: {m.group(2)} overruns in {m.group(1)} cycles, the gateway killed with -9 meanwhile")
     rt_killed(saw_rt, sawctl, f"{name}k", domain)
+    teleop_settings(saw_rt, sawctl, domain)
     return exit_code()
+
+
+def teleop_settings(saw_rt, sawctl, domain):
+    """The teleoperation's settings over DDS: their bounds are in the registry, sawctl refuses a
+    value outside them before sending, and a valid one is delivered."""
+    config = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "config", "teleop-sim.yaml")
+    with open(config) as src, tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
+        f.write(src.read().replace("name: teleop-sim", f"name: teleop-sim-{os.getpid()}", 1))
+        f.write(f"exports:\n  - {{component: teleop, provided: teleop}}\ngateway:\n  domain: {domain}\n")
+    rt = subprocess.Popen([saw_rt, f.name, "--duration", "30"], stdout=subprocess.DEVNULL)
+
+    def ctl(*args):
+        p = subprocess.run([sawctl, *args, "--domain", domain, "--timeout", "10"], capture_output=True, text=True,
+                           timeout=60)
+        return p.returncode, p.stdout + p.stderr
+    try:
+        rc, out = ctl("list")
+        gains = [line for line in out.splitlines() if "teleop.set_gains" in line]
+        check(rc == 0 and len(gains) == 1 and "in [0, 10000]" in gains[0],
+              f"the registry carries set_gains and its bounds: {gains}")
+        rc, out = ctl("call", "rt/teleop/set_gains", "1e6", "100")
+        check(rc == 2 and "outside [0, 10000]" in out, f"a gain out of bounds is refused before sending: {out.strip()}")
+        rc, out = ctl("call", "rt/teleop/set_gains", "250", "250")
+        check(rc == 0 and "delivered" in out, f"valid gains are delivered: {out.strip()}")
+        rc, out = ctl("call", "rt/teleop/set_force_limits", "2", "2.5")
+        check(rc == 0 and "delivered" in out, f"valid force limits are delivered: {out.strip()}")
+        rc, out = ctl("call", "rt/teleop/set_scale", "0.5")
+        check(rc == 0 and "delivered" in out, f"a scale is delivered: {out.strip()}")
+    finally:
+        rt.terminate()
+        rt.wait(timeout=20)
+        os.unlink(f.name)
 
 
 def deployment(name, domain):

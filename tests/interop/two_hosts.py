@@ -59,6 +59,7 @@ hosts:
   patient: {{address: {ip_b}}}
 gateway:
   domain: {domain}
+  security: none         # the plain variant; the secure one gives each host its enclave
 components:
   - name: master
     host: operator

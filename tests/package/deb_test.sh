@@ -24,7 +24,7 @@ dpkg-deb -f "$tmp"/debs/sawrt_*.deb Depends | grep -q libyaml-cpp ||
   { echo "FAIL: sawrt's Depends lacks the libraries it links" >&2; exit 1; }
 for f in usr/bin/saw-rt usr/bin/saw-gateway usr/bin/sawctl usr/lib/systemd/system/saw-rt@.service \
          usr/share/sawrt/config/teleop-sim.yaml usr/include/saw/component.hpp \
-         usr/share/sawrt/examples/lab_component/lab_spring.cpp; do
+         usr/share/sawrt/examples/lab_component/lab_spring.cpp usr/lib/udev/rules.d/70-novint-falcon.rules; do
   [ -e "$root/$f" ] || { echo "FAIL: $f is not installed" >&2; exit 1; }
 done
 find "$root/usr/lib" -path "*/cmake/sawrt/sawrtConfig.cmake" | grep -q . || { echo "FAIL: no sawrtConfig.cmake" >&2; exit 1; }

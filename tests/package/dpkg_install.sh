@@ -15,6 +15,9 @@ trap cleanup EXIT
 (cd "$build" && cpack -G DEB -B "$tmp/debs" >"$tmp/cpack.log") || { cat "$tmp/cpack.log"; exit 1; }
 dpkg -i "$tmp"/debs/sawrt_*.deb "$tmp"/debs/sawrt-dev_*.deb
 dpkg -s sawrt sawrt-dev | grep -E '^(Package|Status|Version):'
+# The Falcon's udev rule where udev reads it (/lib is /usr/lib on merged-/usr Debian).
+rule=/usr/lib/udev/rules.d/70-novint-falcon.rules
+[ -e "$rule" ] || { echo "FAIL: $rule is not installed" >&2; exit 1; }
 cd "$tmp"
 /usr/bin/saw-rt --list-types
 /usr/bin/saw-rt /usr/share/sawrt/config/teleop-sim.yaml --stepped --duration 2 --record "$tmp/t.csv" |
@@ -24,4 +27,5 @@ cmake -S "$tmp/lab" -B "$tmp/lab/build" -G Ninja >/dev/null && cmake --build "$t
 /usr/bin/saw-rt "$tmp/lab/deployment.yaml" --stepped --duration 2 | tee "$tmp/out" && grep -Eq "spring: 200[0-9] cycles" "$tmp/out"
 dpkg -P sawrt-dev sawrt
 [ ! -e /usr/bin/saw-rt ] || { echo "FAIL: dpkg -r left /usr/bin/saw-rt" >&2; exit 1; }
+[ ! -e "$rule" ] || { echo "FAIL: dpkg -P left $rule" >&2; exit 1; }
 echo "ok: dpkg -i, the example deployments from /usr, dpkg -P"

@@ -51,6 +51,33 @@ TEST(CollaborativeControlForce, ClutchTurnsForcesOffAndReleasesWithoutJump) {
   EXPECT_NEAR(rig.slave.force[1], 1.0, 1e-9);
 }
 
+// A homing device (a Falcon: its counts are relative until homed, then jump) holds the
+// teleoperation: no force either side while busy, none on the cycle its position jumps, and the
+// held cycles are not counted in the tracking figures.
+TEST(CollaborativeControlForce, ABusyDeviceHoldsTheTeleoperationAndItsJumpIsNotFollowed) {
+  Rig rig(basic());
+  rig.step(2);
+  const auto counted = rig.teleop.enabled_cycles();
+  rig.master.busy = true;
+  for (int i = 0; i < 20; ++i) {  // homing drives the master's (relative) position 4 cm
+    rig.master.position[2] += 0.002;
+    rig.step(1);
+    EXPECT_LT(norm(rig.slave.force), 1e-12);
+    EXPECT_LT(norm(rig.master.force), 1e-12);
+  }
+  EXPECT_EQ(rig.teleop.enabled_cycles(), counted) << "held cycles are not tracking";
+  rig.master.busy = false;
+  rig.master.position = {0.03, -0.02, 0.01};  // homed: absolute now, in the same row
+  rig.step(1);
+  EXPECT_LT(norm(rig.slave.force), 1e-9) << "the jump on leaving busy must not be followed";
+  EXPECT_LT(norm(rig.master.force), 1e-9);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  rig.master.position[0] += 0.01;  // and teleoperation resumes from there
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.force[0], 1.0, 1e-9);
+  EXPECT_GT(rig.teleop.enabled_cycles(), counted);
+}
+
 TEST(CollaborativeControlForce, RatchetSlipsAtTheLimitAndResumesBelowIt) {
   TeleopConfig c = basic();
   c.offset_limits = {0.5, 20, 1000};

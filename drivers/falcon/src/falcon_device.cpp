@@ -82,6 +82,9 @@ void FalconDevice::startup() {
   transport_->open();  // throws TransportError saying what is wrong: the deployment stops here
   homing_ = config_.home_on_start;
   homing_start_ = -1;
+  // Busy while homing, as after a `home` command: a teleoperation holds until the positions are
+  // absolute (before, they count from wherever the arms were at power-up).
+  state_.is_busy = homing_;
   if (config_.start_enabled) state_.state = OperatingStateValue::enabled;
 }
 

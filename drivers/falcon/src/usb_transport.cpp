@@ -152,10 +152,12 @@ void UsbTransport::open() {
   libusb_unref_device(found);
   const std::string where = "bus " + std::to_string(usb->bus) + " address " + std::to_string(usb->address);
   if (r == LIBUSB_ERROR_ACCESS)
-    throw TransportError("Falcon: permission denied opening the Falcon on " + where +
-                         ": install the udev rule " + config_.udev_rule +
-                         " (sudo cp it to /etc/udev/rules.d/, sudo udevadm control " +
-                         "--reload && sudo udevadm trigger, replug) and join its group");
+    throw TransportError("Falcon: permission denied opening the Falcon on " + where + ": the udev rule " +
+                         config_.udev_rule +
+                         " must be installed (the sawrt .deb puts it in /usr/lib/udev/rules.d; " +
+                         "from a source tree, sudo cp config/udev/" + config_.udev_rule +
+                         " /etc/udev/rules.d/ && sudo udevadm control --reload), the Falcon " +
+                         "replugged after it, and this user in the plugdev group (docs/devices.md)");
   if (r < 0) throw TransportError("Falcon: cannot open the Falcon on " + where + ": " + usb_error(r));
   // The kernel's ftdi_sio may have bound it as a serial port: take it back.
   if (libusb_kernel_driver_active(usb->handle, 0) == 1) libusb_detach_kernel_driver(usb->handle, 0);

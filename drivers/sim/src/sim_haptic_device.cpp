@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "saw/drivers/falcon/delta_dynamics.hpp"
+#include "saw/drivers/falcon/delta_kinematics.hpp"
 #include "saw/eigen.hpp"
 #include "saw/log.hpp"
 
@@ -12,21 +14,25 @@ namespace {
 // Fills the model's defaults where the configuration left zeros.
 SimDeviceConfig with_defaults(SimDeviceConfig c, const TaskConfig& task) {
   const bool omni = c.model == ArmModel::omni;
+  const falcon::DeltaArmDynamics delta;  // the Falcon's arms, as its simulated firmware has them
   if (c.inertia.isZero())
-    c.inertia = omni ? Eigen::Vector3d(2e-4, 2e-4, 1e-4) : Eigen::Vector3d(0.1, 0.1, 0.1);
+    c.inertia = omni ? Eigen::Vector3d(2e-4, 2e-4, 1e-4) : Eigen::Vector3d::Constant(delta.inertia);
   if (c.damping.isZero())
-    c.damping = omni ? Eigen::Vector3d(2e-2, 2e-2, 1e-2) : Eigen::Vector3d(1.0, 1.0, 1.0);
+    c.damping = omni ? Eigen::Vector3d(2e-2, 2e-2, 1e-2) : Eigen::Vector3d::Constant(delta.damping);
   if (c.joint_min == c.joint_max) {
-    c.joint_min = omni ? Eigen::Vector3d(-1.7, -1.2, -0.2) : Eigen::Vector3d(-0.05, -0.05, -0.05);
-    c.joint_max = omni ? Eigen::Vector3d(1.7, 1.75, 2.6) : Eigen::Vector3d(0.05, 0.05, 0.05);
+    c.joint_min = omni ? Eigen::Vector3d(-1.7, -1.2, -0.2) : Eigen::Vector3d::Constant(delta.angle_min);
+    c.joint_max = omni ? Eigen::Vector3d(1.7, 1.75, 2.6) : Eigen::Vector3d::Constant(delta.angle_max);
   }
   if (c.max_force <= 0) c.max_force = omni ? 3.3 : 9.0;
   if (c.substeps < 1) c.substeps = 1;
   if (c.command_timeout == 0) c.command_timeout = 3 * task.period.count();
   if (c.command_timeout < task.period.count())
     throw std::invalid_argument("command_timeout must be at least one period");
-  // The straight Omni arm is singular: by default start with the elbow bent.
+  // The straight Omni arm is singular: by default start with the elbow bent. The Falcon starts
+  // with its arms at 35°, where its measured_cp is zero.
   if (omni && c.initial_joints.isZero()) c.initial_joints = Eigen::Vector3d(0, 0, 1.2);
+  if (!omni && c.initial_joints.isZero())
+    c.initial_joints = Eigen::Vector3d::Constant(falcon::DeltaGeometry{}.angle_at_zero);
   if ((c.inertia.array() <= 0).any()) throw std::invalid_argument("inertia must be positive");
   if ((c.joint_min.array() > c.joint_max.array()).any()) throw std::invalid_argument("joint_min > joint_max");
   return c;

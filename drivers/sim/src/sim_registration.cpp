@@ -82,8 +82,9 @@ std::string summary_line(const SimDeviceSummary& s) {
 }  // namespace
 
 void register_components(deploy::ComponentRegistry& registry) {
-  registry.add("sim_haptic_device", "simulated 3-DOF haptic device (Omni- or Falcon-like), KDL",
-               parse_sim_device, [](const std::string& name, const SimDeviceSpec& s) {
+  registry.add("sim_haptic_device",
+               "simulated 3-DOF haptic device (Omni-like arm, KDL; or the Falcon's delta)", parse_sim_device,
+               [](const std::string& name, const SimDeviceSpec& s) {
                  return std::make_unique<SimHapticDevice>(name, s.task, s.config);
                });
   registry.add_summary_format<SimDeviceSummary>(summary_line);

@@ -132,6 +132,11 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
   for (const auto& c : p.commands()) {
     const Signature& sig = c->signature;
     EndpointInfo info = describe(name_, p.name(), c->name, sig);
+    if (c->limits) {
+      info.limited = true;
+      info.limit_min = c->limits->min;
+      info.limit_max = c->limits->max;
+    }
     if (sig.kind == CommandKind::qualified_read) {
       if (query_component_ == nullptr) query_component_ = resolve(component, timeout);
       const Command* q = query_component_->provided_interfaces().front()->find_command(c->name);

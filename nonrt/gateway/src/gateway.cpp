@@ -140,6 +140,9 @@ void Gateway::publish_manifest() {
     out.result_type(e.result_type);
     out.result_size(e.result_size);
     out.result_version(e.result_version);
+    out.limited(e.limited);
+    out.limit_min(e.limit_min);
+    out.limit_max(e.limit_max);
     out.dds_type(e.dds_type);
     out.topic(e.topic);
     m.endpoints().push_back(std::move(out));

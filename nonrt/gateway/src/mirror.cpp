@@ -1,5 +1,6 @@
 #include "mirror.hpp"
 
+#include <cmath>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <thread>
 
@@ -83,6 +84,10 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
       c.execute = [o = outs_.back().get()](const void* arg) {
         o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()), o->frame);
       };
+      // The remote component's bounds, declared here too: this host's clients are refused at
+      // the call, not by the remote gateway a network away.
+      if (e.limited && std::isfinite(e.limit_min) && std::isfinite(e.limit_max) && e.limit_min <= e.limit_max)
+        c.limits = Limits{e.limit_min, e.limit_max};
       detail::Access::add_command(p, std::move(c));
     }
   }
@@ -126,7 +131,7 @@ std::vector<EndpointInfo> find_remote(DdsContext& dds, const std::string& compon
             e.kind() != "mirror")
           mine.push_back({e.component_name(), e.interface_name(), e.name(), e.kind(), e.saw_type(),
                           e.saw_size(), e.saw_version(), e.dds_type(), e.topic(), e.result_type(),
-                          e.result_size(), e.result_version()});
+                          e.result_size(), e.result_version(), e.limited(), e.limit_min(), e.limit_max()});
       if (!mine.empty()) found = std::move(mine);
     }
     if (!found.empty()) break;

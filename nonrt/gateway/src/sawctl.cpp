@@ -81,9 +81,13 @@ int list(Session& s, double timeout) {
   }
   for (const auto& [name, m] : ms) {
     std::printf("%s on %s (pid %d): %s\n", name.c_str(), m.host().c_str(), m.pid(), m.state().c_str());
-    for (const auto& e : m.endpoints())
-      std::printf("  %-14s %-28s %-26s %s\n", e.kind().c_str(), (e.component_name() + "." + e.name()).c_str(),
-                  label(e).c_str(), e.topic().empty() ? "(not mapped)" : e.topic().c_str());
+    for (const auto& e : m.endpoints()) {
+      char bounds[64] = "";
+      if (e.limited()) std::snprintf(bounds, sizeof bounds, "  in [%g, %g]", e.limit_min(), e.limit_max());
+      std::printf("  %-14s %-28s %-26s %s%s\n", e.kind().c_str(),
+                  (e.component_name() + "." + e.name()).c_str(), label(e).c_str(),
+                  e.topic().empty() ? "(not mapped)" : e.topic().c_str(), bounds);
+    }
   }
   return 0;
 }
@@ -155,6 +159,16 @@ int call(Session& s, const std::string& topic, const std::vector<std::string>& w
   if (!m->from_text(text, value.data(), why)) {
     std::fprintf(stderr, "sawctl: %s takes %s: %s\n", topic.c_str(), label(*e).c_str(), why.c_str());
     return 2;
+  }
+  if (e->limited()) {  // the bounds the component declares, as the gateway checks them
+    std::vector<double> numbers;
+    m->numbers(value.data(), numbers);
+    for (const double x : numbers)
+      if (!(x >= e->limit_min() && x <= e->limit_max())) {
+        std::fprintf(stderr, "sawctl: %s: %g is outside [%g, %g], the range the component declares\n",
+                     topic.c_str(), x, e->limit_min(), e->limit_max());
+        return 2;
+      }
   }
   auto* w = s.ctx.publisher->create_datawriter(s.ctx.topic(topic, *m), DdsContext::writer_qos(Flow::command));
   // Wait for the gateway's reader, so the command is not sent into the void.

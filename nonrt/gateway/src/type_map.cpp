@@ -23,7 +23,9 @@
 #include "geometry_msgs/msg/WrenchStampedPubSubTypes.h"
 #include "saw/crtk.hpp"
 #include "saw/fault.hpp"
+#include "saw/teleop/teleop_law.hpp"
 #include "saw/type_info.hpp"
+#include "saw_msgs/msg/MasterSlavePubSubTypes.h"
 #include "sensor_msgs/msg/JointStatePubSubTypes.h"
 #include "sensor_msgs/msg/JoyPubSubTypes.h"
 #include "std_msgs/msg/BoolPubSubTypes.h"
@@ -524,6 +526,38 @@ class EmptyMapping final : public Mapping {
   std::string name_ = std_msgs::msg::EmptyPubSubType().getName();
 };
 
+// A teleoperation setting with one number per side (teleop::Gains, teleop::ForceLimits), as
+// saw_msgs/MasterSlave; text "MASTER SLAVE".
+template <class T>
+struct MasterSlaveConv {
+  static void each(const T& v, std::vector<double>& o) { o.insert(o.end(), {v.master, v.slave}); }
+  static void to_msg(const T& v, saw_msgs::msg::MasterSlave& m) {
+    m.master(v.master);
+    m.slave(v.slave);
+  }
+  static bool from_msg(const saw_msgs::msg::MasterSlave& m, T& v, std::string& why) {
+    if (!std::isfinite(m.master()) || !std::isfinite(m.slave())) {
+      why = "master or slave is not finite";
+      return false;
+    }
+    v.master = m.master();
+    v.slave = m.slave();
+    return true;
+  }
+  static std::string text(const T& v) {
+    char b[64];
+    std::snprintf(b, sizeof b, "master %.6g slave %.6g", v.master, v.slave);
+    return b;
+  }
+  static bool parse(std::string_view t, T& v, std::string& why) {
+    const auto n = numbers(t, why);
+    if (!count_is(n, {2}, why)) return false;
+    v.master = n[0];
+    v.slave = n[1];
+    return true;
+  }
+};
+
 const std::vector<std::unique_ptr<Mapping>>& mappings() {
   static const auto all = [] {
     std::vector<std::unique_ptr<Mapping>> v;
@@ -549,6 +583,13 @@ const std::vector<std::unique_ptr<Mapping>>& mappings() {
                                        DataConv<std::int64_t, std_msgs::msg::Int64>>>());
     v.push_back(std::make_unique<Typed<bool, std_msgs::msg::Bool, std_msgs::msg::BoolPubSubType,
                                        DataConv<bool, std_msgs::msg::Bool>>>());
+    // Both on one message type: a lookup by DDS type finds Gains, whose layout ForceLimits shares
+    // (two doubles, master then slave), so the bytes are the same either way.
+    using saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType;
+    v.push_back(std::make_unique<
+                Typed<teleop::Gains, MasterSlave, MasterSlavePubSubType, MasterSlaveConv<teleop::Gains>>>());
+    v.push_back(std::make_unique<Typed<teleop::ForceLimits, MasterSlave, MasterSlavePubSubType,
+                                       MasterSlaveConv<teleop::ForceLimits>>>());
     return v;
   }();
   return all;

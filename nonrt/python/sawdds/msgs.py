@@ -171,6 +171,17 @@ class Endpoint(IdlStruct, typename="saw_msgs::msg::dds_::Endpoint_"):
     result_type: str = ""
     result_size: t.uint32 = 0
     result_version: t.uint32 = 0
+    limited: bool = False
+    limit_min: t.float64 = 0.0
+    limit_max: t.float64 = 0.0
+
+
+@final
+@dataclass
+class MasterSlave(IdlStruct, typename="saw_msgs::msg::dds_::MasterSlave_"):
+    header: Header = field(default_factory=Header)
+    master: t.float64 = 0.0
+    slave: t.float64 = 0.0
 
 
 @final
@@ -203,4 +214,4 @@ class QueryReply(IdlStruct, typename="saw_msgs::msg::dds_::QueryReply_"):
 
 BY_DDS_NAME = {cls.__idl_typename__: cls for cls in (
     Float64, Int64, Bool, Empty, PoseStamped, Vector3Stamped, TwistStamped, WrenchStamped, JointState, Joy,
-    OperatingState, StringStamped, Manifest, Query, QueryReply)}
+    OperatingState, StringStamped, MasterSlave, Manifest, Query, QueryReply)}

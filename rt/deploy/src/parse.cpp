@@ -162,6 +162,33 @@ void implied_by_placement(const YAML::Node& root, const Placement& place, Deploy
   }
 }
 
+std::string relative_to(const std::string& directory, const std::string& path) {
+  std::filesystem::path p(path);
+  if (p.is_relative() && !directory.empty()) p = std::filesystem::path(directory) / p;
+  return p.lexically_normal().string();
+}
+
+// An enclave as `sawctl security enroll` makes it (SROS2's layout): checked here so that a wrong
+// path is a file:line error, not a gateway failing after the RT tasks started.
+void check_enclave(const std::string& dir, const Location& at) {
+  for (const char* f : {"cert.pem", "key.pem", "identity_ca.cert.pem", "permissions_ca.cert.pem",
+                        "governance.p7s", "permissions.p7s"})
+    if (std::error_code ec; !std::filesystem::exists(std::filesystem::path(dir) / f, ec))  // (a bad path: no)
+      throw ConfigError(at, "enclave " + dir + " has no " + f +
+                                " (make one with: sawctl security enroll KEYSTORE NAME --role gateway)");
+}
+
+// Off this machine's loopback, a gateway without DDS Security lets anyone on that network read
+// the robot and command it: refused unless the file says `security: none` (saw-rt then warns).
+void check_gateway_security(const GatewaySpec& gw) {
+  const bool off_loopback = std::any_of(gw.interfaces.begin(), gw.interfaces.end(),
+                                        [](const std::string& a) { return !a.starts_with("127."); });
+  if (off_loopback && gw.enclave.empty() && !gw.insecure)
+    throw ConfigError(gw.at,
+                      "the gateway's DDS leaves loopback and no security is configured: give its enclave "
+                      "(enclave: KEYSTORE/enclaves/NAME, see docs/security.md) or say security: none");
+}
+
 void parse_gateway(const YAML::Node& root, const Params& top, const Placement& place, DeploymentSpec& spec) {
   std::vector<std::string> remote_attach, mirrors, exported;
   implied_by_placement(root, place, spec, remote_attach, mirrors);
@@ -199,10 +226,26 @@ void parse_gateway(const YAML::Node& root, const Params& top, const Placement& p
     gw.interfaces = g.get_or<std::vector<std::string>>("interfaces", gw.interfaces);
     if (gw.interfaces.empty()) g.fail_at("interfaces", "at least one interface address");
     gw.decimation = static_cast<int>(g.get_in_range("decimation", 1, 1000, 1));
+    if (g.has("enclave")) {
+      gw.enclave = relative_to(spec.directory, g.get<std::string>("enclave"));
+      check_enclave(gw.enclave, location_of(root["gateway"]["enclave"], spec.file, "gateway.enclave"));
+    }
+    if (g.has("security")) {
+      const auto mode = g.get<std::string>("security");
+      if (mode != "none")
+        g.fail_at("security", "'" + mode +
+                                  "': the only value is none (to run without DDS Security); for "
+                                  "security give enclave:");
+      if (g.has("enclave")) g.fail_at("security", "security: none and an enclave: choose one");
+      gw.insecure = true;
+    }
     g.check_all_used();
     spec.gateway = gw;
   }
-  if (remote_attach.empty() && mirrors.empty()) return;
+  if (remote_attach.empty() && mirrors.empty()) {
+    if (spec.gateway) check_gateway_security(*spec.gateway);
+    return;
+  }
   if (!spec.gateway) {
     spec.gateway = GatewaySpec{};
     spec.gateway->attach.clear();
@@ -214,6 +257,16 @@ void parse_gateway(const YAML::Node& root, const Params& top, const Placement& p
   if (!interfaces_named && !place.address.at(place.self).empty())
     spec.gateway->interfaces = {place.address.at(place.self)};
   spec.gateway->mirrors = mirrors;
+  // A host's own enclave (each machine's gateway has its own certificate).
+  if (const auto e = place.enclave.find(place.self); e != place.enclave.end()) {
+    const std::string key = "hosts." + place.self + ".enclave";
+    const Location at = location_of(root["hosts"][place.self]["enclave"], spec.file, key);
+    if (spec.gateway->insecure)
+      throw ConfigError(at, "gateway: says security: none; a host's enclave contradicts it");
+    spec.gateway->enclave = relative_to(spec.directory, e->second);
+    check_enclave(spec.gateway->enclave, at);
+  }
+  check_gateway_security(*spec.gateway);
 }
 
 void parse_connections(const YAML::Node& root, const Params& top, const Placement& place,

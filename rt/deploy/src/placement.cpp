@@ -24,6 +24,7 @@ Placement parse_placement(const YAML::Node& root, const Params& top, const std::
     const auto name = h.first.as<std::string>();
     Params entry(h.second.IsNull() ? YAML::Node(YAML::NodeType::Map) : h.second, top.file(), "hosts." + name);
     p.address[name] = entry.get_or<std::string>("address", "");
+    if (entry.has("enclave")) p.enclave[name] = entry.get<std::string>("enclave");
     entry.check_all_used();
   }
   p.active = true;

@@ -89,6 +89,11 @@ void CollaborativeControlForce::add_settings(ProvidedInterface& p) {
     settings_change();
     config_.prediction = pr;
   });
+  // Declared bounds: checked by the bridge and the gateway before a remote value gets here, and
+  // published in the registry so that clients (sawctl, GUIs) refuse the same values at once.
+  p.limit("set_scale", min_scale, max_scale);
+  p.limit("set_gains", 0.0, max_gain);
+  p.limit("set_force_limits", 0.0, max_force_limit);
   p.add_command_write<Vec3>("set_slave_offset", [this](const Vec3& o) {
     if (!finite(o[0]) || !finite(o[1]) || !finite(o[2])) return void(++rejected_);
     config_.slave_offset = o;
@@ -198,9 +203,12 @@ bool CollaborativeControlForce::read_side(Side& s, Input& out, FaultInfo& why) n
   // A device in FAULT (a drive's emergency, a lost node) is not driven, however fresh its
   // position: the teleoperation faults too, and says which side.
   OperatingState device;
-  if (s.state.is_bound() && s.state(device) == Status::ok && device.state == OperatingStateValue::fault) {
-    why = fault_on(s.side, FaultCode::device_fault);
-    return false;
+  if (s.state.is_bound() && s.state(device) == Status::ok) {
+    if (device.state == OperatingStateValue::fault) {
+      why = fault_on(s.side, FaultCode::device_fault);
+      return false;
+    }
+    s.busy = device.is_busy;
   }
   // A read that fails (a writer pre-empted mid-row, a NaN, a peer gone) keeps the last good
   // value; only an input older than stale_timeout is a fault.
@@ -347,10 +355,14 @@ void CollaborativeControlForce::cycle_body() noexcept {
   if (!read_side(master_, master, why) || !read_side(slave_, slave, why)) return on_input_failure(why);
   inputs_seen_ = true;
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  if (state_.state != OperatingStateValue::enabled || clutched_) {
+  const bool busy = master_.busy || slave_.busy;
+  if (state_.state != OperatingStateValue::enabled || clutched_ || busy) {
     // Forces off; keep the offset cancelling so that enabling or releasing the clutch cannot jump.
     snap_offsets(master, slave);
-    snap_pending_ = reexpress_pending_ = false;
+    // A device's first position after it was busy may jump (a homed Falcon's counts become
+    // absolute in that very row): snap again on that cycle, from that position.
+    snap_pending_ = busy;
+    reexpress_pending_ = false;
     ratcheting_ = false;
     send_forces(zero, zero);
     return;

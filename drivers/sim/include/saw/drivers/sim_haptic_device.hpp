@@ -1,4 +1,4 @@
-// SimHapticDevice: a simulated 3-DOF force-feedback device (Omni- or Falcon-like) as a periodic task.
+// SimHapticDevice: a simulated 3-DOF force-feedback device (an Omni-like arm, a Falcon) as a periodic task.
 #pragma once
 
 #include <Eigen/Core>
@@ -16,8 +16,8 @@ namespace saw::drivers {
 
 struct SimDeviceConfig {
   ArmModel model = ArmModel::omni;
-  Eigen::Vector3d initial_joints =
-      Eigen::Vector3d::Zero();  // rad (omni) or m (falcon); omni zero: elbow bent 1.2 rad
+  // rad; zero: the model's default (Omni: elbow bent 1.2 rad; Falcon: every arm at 35°).
+  Eigen::Vector3d initial_joints = Eigen::Vector3d::Zero();
   Eigen::Vector3d inertia = Eigen::Vector3d::Zero();  // zero: the model's default
   Eigen::Vector3d damping = Eigen::Vector3d::Zero();  // zero: the model's default
   Eigen::Vector3d joint_min = Eigen::Vector3d::Zero(),

@@ -44,6 +44,8 @@ struct EndpointInfo {
   std::string dds_type, topic;  // "" when not mapped
   std::string result_type;      // a qualified read's result
   std::uint32_t result_size = 0, result_version = 0;
+  bool limited = false;  // a write command's declared bounds on each of its numbers
+  double limit_min = 0, limit_max = 0;
   std::string label() const {  // "Pose v1"
     return saw_type.empty() ? "" : saw_type + " v" + std::to_string(saw_version);
   }

@@ -51,6 +51,10 @@ struct GatewaySpec {
   // name → arm name; topics rt/[ros_namespace/]<arm>/... (started before connect).
   std::vector<std::pair<std::string, std::string>> imports;
   std::string ros_namespace;
+  // DDS Security: the gateway's enclave (a directory made by `sawctl security enroll`), absolute.
+  // Off loopback one is required unless the file says `security: none` (`insecure`).
+  std::string enclave;
+  bool insecure = false;
   Location at;
   // Mirrors or imports: connect() looks for them in this host's bridge, so the gateway starts
   // before the connections are made rather than with the tasks.

@@ -22,6 +22,7 @@ struct Placement {
   std::string self;                            // this process's host
   std::map<std::string, std::string> address;  // host → address ("" on this machine)
   std::map<std::string, std::string> host_of;  // component → host
+  std::map<std::string, std::string> enclave;  // host → its gateway's enclave, if the host names one
 
   bool here(const std::string& component) const { return !active || host_of.at(component) == self; }
   // Another machine: its address differs from ours (both given).

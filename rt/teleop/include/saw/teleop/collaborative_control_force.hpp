@@ -72,6 +72,9 @@ std::string to_string(const TeleopSummary& s);
 // Inputs are checked before use: a row that is not finite (or stamped in the future) is a failed
 // read, the last good value is held, and FAULT follows after stale_timeout. Every force is
 // checked finite before it is sent; every FAULT records why (fault(), the "fault" column).
+// A device whose operating_state says busy (homing: its positions mean nothing yet) holds the
+// teleoperation as the clutch does: zero force on both sides, the offset kept cancelling, and
+// the cycles are not counted as ENABLED (nor in the tracking figures).
 class CollaborativeControlForce : public Task {
  public:
   CollaborativeControlForce(std::string name, TaskConfig task, TeleopConfig config);
@@ -128,6 +131,7 @@ class CollaborativeControlForce : public Task {
     Input last{};
     TimeNs time = 0;  // of the last good input: its row's, or its source row's plus the delay
     bool valid = false, not_finite = false;
+    bool busy = false;           // the device said it is busy (homing): not driven meanwhile
     Status status = Status::ok;  // of the last read
   };
   // What the offset is expressed in: a change re-expresses it so that e_s does not jump.

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
+#include <tuple>
 
 #include "saw/crtk.hpp"
 
@@ -32,8 +33,9 @@ struct Scale {
 struct Gains {
   static constexpr std::string_view type_name = "saw::teleop::Gains";
   static constexpr std::uint32_t layout_version = 1;
-  double master = 100.0;  // k_m, N/m
-  double slave = 100.0;   // k_s, N/m
+  double master = 100.0;                                                     // k_m, N/m
+  double slave = 100.0;                                                      // k_s, N/m
+  static constexpr auto fields = std::tuple{&Gains::master, &Gains::slave};  // checked across processes
 
   bool valid() const;  // finite, within [0, max_gain]
 };
@@ -45,6 +47,7 @@ struct ForceLimits {
   static constexpr std::uint32_t layout_version = 1;
   double master = 3.0;  // lim_m, N (magnitude)
   double slave = 3.0;   // lim_s, N
+  static constexpr auto fields = std::tuple{&ForceLimits::master, &ForceLimits::slave};
 
   bool valid() const;  // finite, within [0, max_force_limit]
 };

@@ -30,12 +30,14 @@ class FakeDevice : public Component {
     pose_.position = position;
     twist_.linear = velocity;
     state_.state = operating;
+    state_.is_busy = busy;
     state_table().advance(t);
   }
   void press_clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
 
   Vec3 position{}, velocity{}, force{};
   OperatingStateValue operating = OperatingStateValue::enabled;
+  bool busy = false;  // operating_state's is_busy (homing)
   int commands = 0;
 
  private:

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "saw/drivers/falcon/delta_dynamics.hpp"
 #include "saw/drivers/falcon/delta_kinematics.hpp"
 #include "saw/drivers/falcon/transport.hpp"
 
@@ -16,10 +17,11 @@ struct SimFirmwareConfig {
   DeltaGeometry geometry;
   double dt = 1e-3;  // s simulated per exchange (the driver's period)
   int substeps = 4;
-  double inertia = 4e-4;  // kg·m² per arm (with the motor's, through the capstan)
-  double damping = 4e-3;  // N·m·s/rad per arm
+  double inertia = DeltaArmDynamics{}.inertia;  // kg·m² per arm (with the motor's, through the capstan)
+  double damping = DeltaArmDynamics{}.damping;  // N·m·s/rad per arm
   Eigen::Vector3d initial_angles = Eigen::Vector3d::Constant(0.7);  // rad
-  double angle_min = 0.2, angle_max = 1.1;                          // rad: the arms' mechanical stops
+  double angle_min = DeltaArmDynamics{}.angle_min;                  // rad: the arms' mechanical stops
+  double angle_max = DeltaArmDynamics{}.angle_max;
   // Until homed the encoders count from where the arms were at power-up: this far off.
   std::array<std::int16_t, 3> power_up_offset{123, -456, 789};
   double index_angle = 0.3;  // rad: an arm reaching this (going up) in homing mode is homed

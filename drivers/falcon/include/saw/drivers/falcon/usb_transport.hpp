@@ -17,7 +17,7 @@ struct UsbConfig {
   int bus = -1;                 // USB bus number to search; -1: every bus
   int index = 0;                // which Falcon when several match (0: the first found)
   int exchange_timeout_ms = 1;  // bound of each bulk transfer in the cycle (libusb's unit: ms)
-  std::string udev_rule = "config/udev/99-novint-falcon.rules";  // named in the permission error
+  std::string udev_rule = "70-novint-falcon.rules";  // named in the permission error
 };
 
 // open(): libusb_init, the Falcon by VID:PID (and bus/index), claim interface 0, FTDI setup by
