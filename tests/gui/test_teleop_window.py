@@ -1,9 +1,11 @@
 """sawgui in a real window, operated as a person would, against a running saw-rt deployment and
 its gateway: the window (a late joiner) shows the system at once; Disable and Enable are clicked
 and the state follows; a new scale is applied and the slave's plot moves twice as far; the clutch
-pauses and resumes; topics are recorded to CSV and plots saved as PNG; an
-out-of-range gain is refused by the form, an out-of-range force by the gateway (its reason
-shown); the RT process is killed with -9 and the window shows FAULT, then the gateway gone.
+pauses and resumes; topics are recorded to CSV and plots saved as PNG; gains in range are
+delivered, out of range refused by the panel with the registry's bounds, and when another peer
+sends one the gateway's refusal is shown; a force beyond the slave's declared range is refused by
+its form; the RT process is killed with -9 and the window shows FAULT (or, when the gateway's word
+is lost, the gateway gone), never the last state frozen.
 Screenshots of each view are saved (PNG)."""
 import csv
 import json
@@ -15,6 +17,7 @@ import time
 from PySide6 import QtCore
 
 from conftest import figure
+from sawdds import Client, msgs
 from sawdds.live import Live
 from sawgui.app import MainWindow
 
@@ -103,24 +106,38 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         with open(png, "rb") as f:
             assert f.read(8) == b"\x89PNG\r\n\x1a\n"
 
+        # Gains: in range, delivered; out of range, refused by the panel with the bounds the registry
+        # carries (the component's own), nothing sent.
+        panel.gain_m.setText("350")
+        panel.gain_s.setText("350")
+        qtbot.mouseClick(panel.apply_gains, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: "set_gains: delivered" in panel.outcome.text(), timeout=LONG)
         panel.gain_m.setText("20000")
         qtbot.mouseClick(panel.apply_gains, QtCore.Qt.MouseButton.LeftButton)
         assert "outside [0, 10000]" in panel.outcome.text(), panel.outcome.text()
         panel.scale.setText("nan")
         qtbot.mouseClick(panel.apply_scale, QtCore.Qt.MouseButton.LeftButton)
         assert "not finite" in panel.outcome.text(), panel.outcome.text()
+        # Another peer (sawdds, as a script would) sends that gain anyway: the gateway refuses it, and
+        # the panel shows the gateway's reason, from the teleoperation's error topic.
+        other = Client(d.domain)
+        other.send(f"rt/{d.teleop}/set_gains", msgs.MasterSlave(master=20000, slave=300))
+        qtbot.waitUntil(lambda: "set_gains rejected" in panel.refusal.text(), timeout=LONG)
+        assert "20000 is outside [0, 10000]" in panel.refusal.text(), panel.refusal.text()
+        save(w, shots, "teleop-refused")
 
-        # A force beyond the slave's declared range: the form sends it, the gateway refuses it and says why.
+        # A component's form checks the bounds its component declares (the slave's force range).
         w.tabs.setCurrentWidget(w.components)
         w.picker.setCurrentText(d.slave)
         view = w.views[d.slave]
         form = view.forms["servo_cf"]
         form.fields["wrench.force.x"].setText("1000")
         qtbot.mouseClick(form.button, QtCore.Qt.MouseButton.LeftButton)
-        qtbot.waitUntil(lambda: "refused by the gateway" in form.outcome.text(), timeout=LONG)
-        assert "1000 is outside" in form.outcome.text(), form.outcome.text()
-        qtbot.waitUntil(lambda: "servo_cf rejected" in view.log.toPlainText(), timeout=LONG)
+        assert "1000 is outside [-3.3, 3.3]" in form.outcome.text(), form.outcome.text()
         save(w, shots, "component")
+        # The teleoperation's view logs the gateway's refusal of the other peer's gain.
+        w.picker.setCurrentText(d.teleop)
+        qtbot.waitUntil(lambda: "set_gains rejected" in w.views[d.teleop].log.toPlainText(), timeout=LONG)
 
         # A headless sawgui, started now, sees what the window sees (states latched for late joiners).
         r = subprocess.run([sys.executable, "-m", "sawgui", "--domain", str(d.domain), "--headless", "2"],

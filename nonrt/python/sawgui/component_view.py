@@ -20,6 +20,9 @@ class CommandForm(QtWidgets.QGroupBox):
         if self.cls is None or not endpoint.topic:
             form.addRow(QtWidgets.QLabel(f"not mapped to DDS by the gateway ({endpoint.saw_type} has no DDS type)"))
             return
+        self.limits = model.limits(endpoint)
+        if self.limits:
+            form.addRow(QtWidgets.QLabel(f"within [{self.limits[0]:g}, {self.limits[1]:g}], as the component declares"))
         for name, kind in values.form_fields(self.cls):
             if endpoint.saw_type == "saw::StateCommand":
                 w = QtWidgets.QComboBox()
@@ -36,7 +39,7 @@ class CommandForm(QtWidgets.QGroupBox):
     def submit(self):
         raw = {n: (w.currentText() if isinstance(w, QtWidgets.QComboBox) else w.text()) for n, w in self.fields.items()}
         try:
-            sample = values.build(self.cls, raw, "state" if self.endpoint.saw_type == "saw::StateCommand" else None)
+            sample = values.build(self.cls, raw, "state" if self.endpoint.saw_type == "saw::StateCommand" else self.limits)
         except values.Invalid as e:
             self.outcome.refused(str(e))
             return

@@ -3,12 +3,11 @@ benchmark subscribe to the same), the teleoperation's settings and their limits,
 words a person reads for a state."""
 from sawdds import values
 
-# The teleoperation component's settings and the bounds it accepts (rt/teleop's teleop_law.hpp);
-# the manifest carries no limits, so the panel checks these before sending and the component
-# refuses the same ones.
-SCALE_LIMITS = (1e-3, 1e3)
-GAIN_LIMITS = (0.0, 1e4)  # N/m
-FORCE_LIMIT_LIMITS = (0.0, 100.0)  # N
+
+
+def limits(endpoint):
+    """(min, max) a write command's component declares (the registry carries them), or None."""
+    return (endpoint.limit_min, endpoint.limit_max) if endpoint is not None and endpoint.limited else None
 STATE_COLORS = {"ENABLED": "#1f9d3a", "DISABLED": "#6b6b6b", "PAUSED": "#c98a00", "FAULT": "#d01010",
                 "GONE": "#404040", "": "#909090"}
 

@@ -42,23 +42,26 @@ class TeleopPanel(QtWidgets.QWidget):
         self.apply_scale = QtWidgets.QPushButton("Apply scale")
         self.apply_gains = QtWidgets.QPushButton("Apply gains")
         self.apply_limits = QtWidgets.QPushButton("Apply force limits")
-        rows = [("scale (slave/master)", [self.scale], self.apply_scale, model.SCALE_LIMITS),
-                ("gains master, slave (N/m)", [self.gain_m, self.gain_s], self.apply_gains, model.GAIN_LIMITS),
-                ("force limits master, slave (N)", [self.lim_m, self.lim_s], self.apply_limits,
-                 model.FORCE_LIMIT_LIMITS)]
-        for r, (label, edits, button, lim) in enumerate(rows):
-            form.addWidget(QtWidgets.QLabel(label), r, 0)
+        rows = [("scale (slave/master)", "set_scale", [self.scale], self.apply_scale),
+                ("gains master, slave (N/m)", "set_gains", [self.gain_m, self.gain_s], self.apply_gains),
+                ("force limits master, slave (N)", "set_force_limits", [self.lim_m, self.lim_s], self.apply_limits)]
+        for r, (label, command, edits, button) in enumerate(rows):
+            lim = model.limits(model.endpoint(live, teleop, command, kinds=("write",)))
+            bounds = f"  [{lim[0]:g}, {lim[1]:g}]" if lim else ""
+            form.addWidget(QtWidgets.QLabel(label + bounds), r, 0)
             for j, e in enumerate(edits):
-                e.setToolTip(f"within [{lim[0]:g}, {lim[1]:g}]")
+                if lim:
+                    e.setToolTip(f"within [{lim[0]:g}, {lim[1]:g}], as the component declares")
                 form.addWidget(e, r, 1 + j)
             form.addWidget(button, r, 3)
         self.outcome = Outcome()
         form.addWidget(self.outcome, len(rows), 0, 1, 4)
+        self.refusal = QtWidgets.QLabel("")
+        self.refusal.setWordWrap(True)
+        form.addWidget(self.refusal, len(rows) + 1, 0, 1, 4)
         self.apply_scale.clicked.connect(self.send_scale)
-        self.apply_gains.clicked.connect(lambda: self.send_pair("set_gains", [self.gain_m, self.gain_s],
-                                                                model.GAIN_LIMITS))
-        self.apply_limits.clicked.connect(lambda: self.send_pair("set_force_limits", [self.lim_m, self.lim_s],
-                                                                 model.FORCE_LIMIT_LIMITS))
+        self.apply_gains.clicked.connect(lambda: self.send_pair("set_gains", [self.gain_m, self.gain_s]))
+        self.apply_limits.clicked.connect(lambda: self.send_pair("set_force_limits", [self.lim_m, self.lim_s]))
 
         self.fault = QtWidgets.QLabel("last fault: none")
         self.fault.setWordWrap(True)
@@ -92,28 +95,26 @@ class TeleopPanel(QtWidgets.QWidget):
     def state_command(self, command: str):
         self._send("state_command", msgs.StringStamped(string=command))
 
+    def _limits(self, name):
+        return model.limits(model.endpoint(self.live, self.teleop, name, kinds=("write",)))
+
     def send_scale(self):
         try:
-            s = values.parse_number("scale", self.scale.text(), float, model.SCALE_LIMITS)
+            s = values.parse_number("scale", self.scale.text(), float, self._limits("set_scale"))
         except values.Invalid as e:
             self.outcome.refused(str(e))
             return
         self._send("set_scale", msgs.Float64(data=s))
 
-    def send_pair(self, name, edits, limits):
+    def send_pair(self, name, edits):
+        """A (master, slave) setting, checked against the bounds the registry carries for it."""
         try:
-            vals = [values.parse_number(f"{name} {side}", e.text(), float, limits)
+            vals = [values.parse_number(f"{name} {side}", e.text(), float, self._limits(name))
                     for side, e in zip(("master", "slave"), edits)]
         except values.Invalid as e:
             self.outcome.refused(str(e))
             return
-        # No DDS type carries a (master, slave) pair yet: said by _send when the manifest has no topic.
-        e = model.endpoint(self.live, self.teleop, name, kinds=("write",))
-        cls = msgs.BY_DDS_NAME.get(e.dds_type) if e is not None else None
-        if cls is msgs.Vector3Stamped:
-            self._send(name, msgs.Vector3Stamped(vector=msgs.Vector3(x=vals[0], y=vals[1])))
-        else:
-            self._send(name, None)
+        self._send(name, msgs.MasterSlave(master=vals[0], slave=vals[1]))
 
     def refresh(self):
         comp = self.live.components().get(self.teleop, {})
@@ -128,4 +129,10 @@ class TeleopPanel(QtWidgets.QWidget):
         self.error_plot.show_series(*self.live.series(self._topic(self.teleop, "tracking_error")))
         self.slave_plot.show_series(*self.live.series(self._topic(self.slave, "measured_cp")))
         self.master_plot.show_series(*self.live.series(self._topic(self.master, "measured_cp")))
-        self.outcome.check_errors(self.live.errors(self.teleop))
+        errors = self.live.errors(self.teleop)
+        self.outcome.check_errors(errors)
+        refusals = [(t, text) for t, text in errors if " rejected: " in text]
+        if refusals:  # whoever sent it (this window or another peer), the gateway's last refusal
+            t, text = refusals[-1]
+            self.refusal.setText(f"last refusal by the gateway, at {clock(t)}: {text}")
+            self.refusal.setStyleSheet("QLabel { color: #d01010; }")

@@ -37,8 +37,10 @@ class Plot(pg.PlotWidget):
         xs = [t - t_end for t in times]
         for i, n in enumerate(names):
             if n not in self.curves:
+                # One number (std_msgs "data"): the title says what it is, no legend.
+                label = None if names == ["data"] else (n.split(".")[-1] if n.count(".") else n)
                 self.curves[n] = self.plot([], [], pen=pg.mkPen(PALETTE[len(self.curves) % len(PALETTE)], width=2),
-                                           name=n.split(".")[-1] if n.count(".") else n)
+                                           name=label)
             self.curves[n].setData(xs, [r[i] * scale for r in rows])
 
 
