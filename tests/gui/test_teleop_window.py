@@ -134,6 +134,8 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         form.fields["wrench.force.x"].setText("1000")
         qtbot.mouseClick(form.button, QtCore.Qt.MouseButton.LeftButton)
         assert "1000 is outside [-3.3, 3.3]" in form.outcome.text(), form.outcome.text()
+        # The view reads its component's topics from when it opened: a screenshot once 2 s are drawn.
+        qtbot.waitUntil(lambda: live.count(f"rt/{d.slave}/measured_cv") > 2000, timeout=LONG)
         save(w, shots, "component")
         # The teleoperation's view logs the gateway's refusal of the other peer's gain.
         w.picker.setCurrentText(d.teleop)

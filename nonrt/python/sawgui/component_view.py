@@ -123,7 +123,7 @@ class ComponentView(QtWidgets.QWidget):
         rl.addStretch(1)
         right.setWidget(inner)
         split.addWidget(right)
-        split.setSizes([700, 420])
+        split.setSizes([860, 340])
         lay = QtWidgets.QVBoxLayout(self)
         lay.addWidget(split)
         self._logged = {}
@@ -160,7 +160,7 @@ class ComponentView(QtWidgets.QWidget):
                                                     for k, v in list(st.items())[:3]))
         self.table.resizeColumnsToContents()
         for plot, e in zip(self.plots, self.plotted):
-            plot.setTitle(f"{self.component}.{e.name} (last 10 s)", color="k")
+            plot.setTitle(e.name, color="k")
             plot.show_series(*self.live.series(e.topic))
         lines = []
         for e in self.events:

@@ -29,6 +29,7 @@ class Plot(pg.PlotWidget):
         self.addLegend(offset=(5, 5))
         self.curves = {}
         self.setMinimumHeight(160)
+        self.setMinimumWidth(120)  # a long title must not push the plot out of its cell
 
     def show_series(self, names, times, rows, scale: float = 1.0):
         if not times:
@@ -38,7 +39,7 @@ class Plot(pg.PlotWidget):
         for i, n in enumerate(names):
             if n not in self.curves:
                 # One number (std_msgs "data"): the title says what it is, no legend.
-                label = None if names == ["data"] else (n.split(".")[-1] if n.count(".") else n)
+                label = None if names == ["data"] else ".".join(n.split(".")[-2:]) if n.count(".") > 1 else n
                 self.curves[n] = self.plot([], [], pen=pg.mkPen(PALETTE[len(self.curves) % len(PALETTE)], width=2),
                                            name=label)
             self.curves[n].setData(xs, [r[i] * scale for r in rows])
