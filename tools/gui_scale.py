@@ -72,9 +72,9 @@ def one(args, n: int, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> dic
     gw = subprocess.Popen(on_other + [args.saw_gateway, *attach, "--domain", str(domain), "--wait", "10"],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "nonrt", "python"), PYTHONDONTWRITEBYTECODE="1")
-    subs = [subprocess.Popen(on_other + [sys.executable, "-m", "sawgui", "--domain", str(domain), "--headless",
-                                         str(args.seconds + warmup), "--settle", str(warmup)], stdout=subprocess.PIPE, text=True, env=env)
-            for _ in range(n)]
+    sawgui = [sys.executable, "-m", "sawgui", "--domain", str(domain), "--headless", str(args.seconds + warmup),
+              "--settle", str(warmup)]
+    subs = [subprocess.Popen(on_other + sawgui, stdout=subprocess.PIPE, text=True, env=env) for _ in range(n)]
     try:
         time.sleep(warmup)  # the gateway attaches, subscribers discover it (their reports say if they did)
         gw_cpu0 = cpu_seconds(gw.pid)
@@ -122,8 +122,8 @@ def main():
     runs = [one(args, int(n), f"s{os.getpid()}_{i}", domain, rt_cpu, other_cpu)
             for i, n in enumerate(args.counts.split(","))]
     base = runs[0]["p99_us"] or 0
-    print(f"# RT tasks on CPU {rt_cpu}; saw-gateway and the subscribers on CPU {other_cpu}; {args.seconds:g} s measured "
-          f"per configuration (RT figures over the whole run of each)")
+    print(f"# RT tasks on CPU {rt_cpu}; saw-gateway and the subscribers on CPU {other_cpu}; "
+          f"{args.seconds:g} s measured per configuration (RT figures over the whole run of each)")
     print("| subscribers | RT overruns | wake-up p99, worst task (µs) | × none | gateway CPU | "
           "samples each subscriber received (min–max) | subscriber CPU |")
     print("|---|---|---|---|---|---|---|")

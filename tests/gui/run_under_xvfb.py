@@ -36,7 +36,8 @@ def main(argv):
         server.kill()
         print("FAIL: Xvfb did not start")
         return 1
-    env = dict(os.environ, DISPLAY=":" + display, QT_QPA_PLATFORM="xcb", SAW_RT=os.path.abspath(argv[0]), PYTHONDONTWRITEBYTECODE="1")
+    env = dict(os.environ, DISPLAY=":" + display, QT_QPA_PLATFORM="xcb", SAW_RT=os.path.abspath(argv[0]),
+               PYTHONDONTWRITEBYTECODE="1")
     env.pop("WAYLAND_DISPLAY", None)
     try:
         return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-v", "-s", HERE, *argv[1:]],

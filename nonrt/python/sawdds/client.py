@@ -5,6 +5,7 @@ to interface ``lo`` with unicast discovery (lo has no multicast), finding Fast D
 their well-known ports.
 """
 import os
+import threading
 import time
 
 LOOPBACK_URI = (
@@ -79,6 +80,7 @@ class Client:
     def __init__(self, domain: int = 0):
         self.participant = DomainParticipant(domain)
         self._topics = {}
+        self._topic_lock = threading.Lock()
         self._registry = DataReader(
             self.participant,
             self._topic("rt/saw/manifest", msgs.Manifest),
@@ -89,9 +91,11 @@ class Client:
         self._writer_of = {}  # gateway name -> publication handle of its manifest writer
 
     def _topic(self, name, cls):
-        if name not in self._topics:
-            self._topics[name] = Topic(self.participant, name, cls)
-        return self._topics[name]
+        # Under a lock: sawdds.live makes readers and writers from two threads.
+        with self._topic_lock:
+            if name not in self._topics:
+                self._topics[name] = Topic(self.participant, name, cls)
+            return self._topics[name]
 
     def manifests(self, timeout: float = 2.0, until=None):
         """Every gateway's newest manifest, by gateway name; waits up to `timeout` s (or until `until(m)`)."""

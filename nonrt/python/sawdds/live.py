@@ -38,12 +38,14 @@ class Series:
         self.last_time = None  # the sample's source time (s, wall clock)
         self.received_at = None  # when it was taken (s, monotonic)
         self.log = collections.deque(maxlen=500)  # (time, text) for events
+        self.logged = 0  # entries ever added to the log (it keeps the last 500)
 
     def add(self, sample, t: float):
         self.count += 1
         self.last, self.last_time, self.received_at = sample, t, time.monotonic()
         if self.endpoint.kind.endswith("event") or isinstance(sample, (msgs.StringStamped, msgs.OperatingState)):
             self.log.append((t, values.text(sample)))
+            self.logged += 1
         nums = values.numbers(sample)
         if not nums:
             return
@@ -148,16 +150,38 @@ class Live:
             r = self._readers.get(topic)
             return r[1].count if r else 0
 
-    def log(self, topic: str) -> list:
+    def log(self, topic: str, after: int = 0):
+        """(entries ever logged, [(time, text) logged after the first `after`]) of a watched topic's
+        events (the last 500 are kept)."""
         with self._lock:
             r = self._readers.get(topic)
-            return list(r[1].log) if r else []
+            if not r:
+                return 0, []
+            s = r[1]
+            new = min(s.logged - after, len(s.log))
+            return s.logged, list(s.log)[len(s.log) - new:] if new > 0 else []
 
     def errors(self, component: str) -> list:
-        """(time, text) of the gateway's refusals and fault reasons for `component`, oldest first."""
+        """(time, text) of the gateway's refusals and fault reasons for `component`, oldest first
+        (the last 200)."""
         with self._lock:
             e = self._errors.get(component)
             return list(e[1]) if e else []
+
+    def error_count(self, component: str) -> int:
+        """Errors ever taken for `component` (a mark for errors_after)."""
+        with self._lock:
+            e = self._errors.get(component)
+            return e[2][0] if e else 0
+
+    def errors_after(self, component: str, after: int = 0):
+        """(errors ever taken for `component`, [(time, text) taken after the first `after`])."""
+        with self._lock:
+            e = self._errors.get(component)
+            if not e:
+                return 0, []
+            new = min(e[2][0] - after, len(e[1]))
+            return e[2][0], list(e[1])[len(e[1]) - new:] if new > 0 else []
 
     # ---- commands (run in the command thread; results() hands back what happened) ----
 
@@ -166,7 +190,8 @@ class Live:
         self._jobs.put(("send", topic, sample, tag))
 
     def query(self, topic: str, data: bytes, tag=None, timeout: float = 2.0):
-        """Asks a qualified read (rq/ topic) with the qualifier's bytes; results() then holds (tag, ok, bytes or text)."""
+        """Asks a qualified read (rq/ topic) with the qualifier's bytes; results() then holds
+        (tag, ok, the reply as text or why not)."""
         self._jobs.put(("query", topic, data, tag, timeout))
 
     def results(self) -> list:
@@ -241,7 +266,7 @@ class Live:
                             self._wanted.add(e.topic)
                 if name not in self._errors:
                     self._errors[name] = (self.client.error_reader(name),
-                                          collections.deque(maxlen=200))
+                                          collections.deque(maxlen=200), [0])
 
     def _open_readers(self):
         with self._lock:
@@ -271,12 +296,13 @@ class Live:
                 rec = self._recording
             if rec and topic in rec[1]:
                 self._write_rows(rec, topic, series, samples)
-        for comp, (reader, log) in errs:
+        for comp, (reader, log, taken) in errs:
             got = [s for s in reader.take(N=64) if isinstance(s, msgs.StringStamped)]
             if got:
                 with self._lock:
                     for s in got:
                         log.append((s.sample_info.source_timestamp * 1e-9, s.string))
+                        taken[0] += 1
                         c = self._components.get(comp)
                         if c is not None and s.string.startswith(FAULT):
                             # The gateway says FAULT on both topics; whichever comes first counts.

@@ -122,8 +122,8 @@ def pack(saw_type: str, text_value: str) -> bytes:
         raise Invalid(f"a {saw_type} qualifier cannot be typed here")
     if len(words) != count:
         raise Invalid(f"{count} value(s) expected, got {len(words)}")
-    vals = [w.lower() in ("1", "true") if code == "?" else parse_number("qualifier", w, int if code in "qQiI" else float)
-            for w in words]
+    kind = int if code in "qQiI" else float
+    vals = [w.lower() in ("1", "true") if code == "?" else parse_number("qualifier", w, kind) for w in words]
     return struct.pack("<" + code * count, *vals)
 
 

@@ -39,7 +39,8 @@ class CommandForm(QtWidgets.QGroupBox):
     def submit(self):
         raw = {n: (w.currentText() if isinstance(w, QtWidgets.QComboBox) else w.text()) for n, w in self.fields.items()}
         try:
-            sample = values.build(self.cls, raw, "state" if self.endpoint.saw_type == "saw::StateCommand" else self.limits)
+            check = "state" if self.endpoint.saw_type == "saw::StateCommand" else self.limits
+            sample = values.build(self.cls, raw, check)
         except values.Invalid as e:
             self.outcome.refused(str(e))
             return
@@ -137,7 +138,7 @@ class ComponentView(QtWidgets.QWidget):
         return picks or numeric[:1]
 
     def send(self, endpoint, sample, outcome):
-        outcome.sending(endpoint.name, len(self.live.errors(self.component)))
+        outcome.sending(endpoint.name, self.live.error_count(self.component))
         self.live.send(endpoint.topic, sample, tag=outcome.delivered)
 
     def _select(self):
@@ -164,16 +165,14 @@ class ComponentView(QtWidgets.QWidget):
             plot.show_series(*self.live.series(e.topic))
         lines = []
         for e in self.events:
-            entries = self.live.log(e.topic)
-            seen = self._logged.get(e.topic, 0)
-            lines += [(t, f"{clock(t)}  {e.name}: {text}") for t, text in entries[seen:]] if len(entries) >= seen else []
-            self._logged[e.topic] = len(entries)
-        errors = self.live.errors(self.component)
-        seen = self._logged.get("error", 0)
-        lines += [(t, f"{clock(t)}  error: {text}") for t, text in errors[seen:]]
-        self._logged["error"] = len(errors)
+            total, entries = self.live.log(e.topic, self._logged.get(e.topic, 0))
+            lines += [(t, f"{clock(t)}  {e.name}: {text}") for t, text in entries]
+            self._logged[e.topic] = total
+        total, errors = self.live.errors_after(self.component, self._logged.get("error", 0))
+        lines += [(t, f"{clock(t)}  error: {text}") for t, text in errors]
+        self._logged["error"] = total
         for _, line in sorted(lines):
             self.log.appendPlainText(line)
         for f in self.forms.values():
             if hasattr(f, "outcome"):
-                f.outcome.check_errors(errors)
+                f.outcome.check_errors(self.live, self.component)

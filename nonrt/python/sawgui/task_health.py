@@ -25,7 +25,8 @@ class TaskHealth(QtWidgets.QWidget):
     def refresh(self):
         for t in model.task_topics(self.live):
             self.live.watch(t)
-        tasks = [(c, e) for c in self.live.components() for e in self.live.endpoints(c) if e.name == "period_statistics"]
+        tasks = [(c, e) for c in self.live.components() for e in self.live.endpoints(c)
+                 if e.name == "period_statistics"]
         unmapped = [c for c, e in tasks if not e.topic]
         mapped = [(c, e) for c, e in tasks if e.topic]
         if not tasks:

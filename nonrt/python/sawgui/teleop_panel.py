@@ -89,7 +89,7 @@ class TeleopPanel(QtWidgets.QWidget):
             self.outcome.refused(f"{name}: the gateway does not map it to DDS "
                                  f"({e.saw_type if e else 'not in the manifest'}); it can be set in the deployment")
             return
-        self.outcome.sending(name, len(self.live.errors(self.teleop)))
+        self.outcome.sending(name, self.live.error_count(self.teleop))
         self.live.send(e.topic, sample, tag=self.outcome.delivered)
 
     def state_command(self, command: str):
@@ -129,9 +129,8 @@ class TeleopPanel(QtWidgets.QWidget):
         self.error_plot.show_series(*self.live.series(self._topic(self.teleop, "tracking_error")))
         self.slave_plot.show_series(*self.live.series(self._topic(self.slave, "measured_cp")))
         self.master_plot.show_series(*self.live.series(self._topic(self.master, "measured_cp")))
-        errors = self.live.errors(self.teleop)
-        self.outcome.check_errors(errors)
-        refusals = [(t, text) for t, text in errors if " rejected: " in text]
+        self.outcome.check_errors(self.live, self.teleop)
+        refusals = [(t, text) for t, text in self.live.errors(self.teleop) if " rejected: " in text]
         if refusals:  # whoever sent it (this window or another peer), the gateway's last refusal
             t, text = refusals[-1]
             self.refusal.setText(f"last refusal by the gateway, at {clock(t)}: {text}")

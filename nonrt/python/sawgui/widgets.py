@@ -88,12 +88,11 @@ class Outcome(QtWidgets.QLabel):
         if self.refusal is None:
             self._show(f"{self.command or ''}: {text}", "#1f9d3a" if ok else "#d01010")
 
-    def check_errors(self, errors: list):
+    def check_errors(self, live, component: str):
         """Shows the gateway's refusal of our command when one arrives."""
-        if self.command is None or len(errors) <= self.errors_seen:
+        if self.command is None:
             return
-        new = errors[self.errors_seen:]
-        self.errors_seen = len(errors)
+        self.errors_seen, new = live.errors_after(component, self.errors_seen)
         for _, text in new:
             if text.startswith(self.command):
                 self._show("refused by the gateway: " + text, "#d01010")
