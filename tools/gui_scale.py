@@ -5,7 +5,10 @@ beside 0, 1 and 10 GUI-equivalent subscribers: `sawgui --headless`, the window's
 on the gateway's CPU. One run, the configurations one after the other; prints a Markdown table
 and writes JSON (figures, no assertion).
 
-usage: gui_scale.py SAW_RT SAW_GATEWAY [--seconds S] [--counts 0,1,10] [--json OUT]
+The configurations alternate (0, 1, 10, 0, 1, 10, ...) for --rounds rounds, so that what the
+machine's other load does to the RT CPU falls on each alike; the table gives each one's median.
+
+usage: gui_scale.py SAW_RT SAW_GATEWAY [--seconds S] [--counts 0,1,10] [--rounds N] [--json OUT]
 """
 import argparse
 import json
@@ -114,30 +117,46 @@ def main():
     p.add_argument("saw_gateway")
     p.add_argument("--seconds", type=float, default=20)
     p.add_argument("--counts", default="0,1,10")
+    p.add_argument("--rounds", type=int, default=1)
     p.add_argument("--json")
     args = p.parse_args()
     cpus = sorted(os.sched_getaffinity(0))
     rt_cpu, other_cpu = cpus[-1], cpus[0]
     domain = 200 + os.getpid() % 29
-    runs = [one(args, int(n), f"s{os.getpid()}_{i}", domain, rt_cpu, other_cpu)
-            for i, n in enumerate(args.counts.split(","))]
-    base = runs[0]["p99_us"] or 0
+    counts = [int(n) for n in args.counts.split(",")]
+    runs = [one(args, n, f"s{os.getpid()}_{r}_{i}", domain, rt_cpu, other_cpu)
+            for r in range(args.rounds) for i, n in enumerate(counts)]
     print(f"# RT tasks on CPU {rt_cpu}; saw-gateway and the subscribers on CPU {other_cpu}; "
-          f"{args.seconds:g} s measured per configuration (RT figures over the whole run of each)")
-    print("| subscribers | RT overruns | wake-up p99, worst task (µs) | × none | gateway CPU | "
-          "samples each subscriber received (min–max) | subscriber CPU |")
+          f"{args.seconds:g} s measured per configuration, {args.rounds} round(s) alternating; "
+          "RT figures over the whole run of each")
+    print("| subscribers | RT overruns, each round | wake-up p99 median (range), worst task (µs) | × none | "
+          "gateway CPU | samples each subscriber took (min–max) | subscriber CPU |")
     print("|---|---|---|---|---|---|---|")
-    for r in runs:
-        s = r["samples_per_subscriber"]
-        ratio = f"{r['p99_us'] / base:.2f}" if base and r["p99_us"] else "–"
-        cpu = r["subscriber_cpu_percent"]
-        print(f"| {r['subscribers']} | {r['overruns']} | {r['p99_us']} | {ratio} | {r['gateway_cpu_percent']:.1f} % | "
-              + (f"{min(s)}–{max(s)} in {r['seconds']:g} s, {min(s) / (4000 * r['seconds']):.1%}–"
-                 f"{max(s) / (4000 * r['seconds']):.1%} of 4 × 1 kHz" if s else "–")
-              + " | " + (f"{sum(cpu) / len(cpu):.1f} % each" if cpu else "–") + " |")
+    summary = []
+    for n in counts:
+        mine = [r for r in runs if r["subscribers"] == n]
+        p99 = sorted(r["p99_us"] for r in mine if r["p99_us"] is not None)
+        samples = [x for r in mine for x in r["samples_per_subscriber"]]
+        cpu = [x for r in mine for x in r["subscriber_cpu_percent"]]
+        summary.append({"subscribers": n, "overruns": [r["overruns"] for r in mine],
+                        "p99_median_us": p99[len(p99) // 2] if p99 else None, "p99_us": p99,
+                        "gateway_cpu_percent": sum(r["gateway_cpu_percent"] for r in mine) / len(mine),
+                        "samples_per_subscriber": samples, "subscriber_cpu_percent": cpu,
+                        "state_topics_1khz": 4, "seconds": args.seconds})
+    base = summary[0]["p99_median_us"] or 0
+    for x in summary:
+        s_ = x["samples_per_subscriber"]
+        ratio = f"{x['p99_median_us'] / base:.2f}" if base and x["p99_median_us"] else "–"
+        print(f"| {x['subscribers']} | {', '.join(map(str, x['overruns']))} | {x['p99_median_us']} "
+              f"({x['p99_us'][0]}–{x['p99_us'][-1]}) | {ratio} | {x['gateway_cpu_percent']:.1f} % | "
+              + (f"{min(s_)}–{max(s_)} in {args.seconds:g} s, {min(s_) / (4000 * args.seconds):.1%}–"
+                 f"{max(s_) / (4000 * args.seconds):.1%} of 4 × 1 kHz" if s_ else "–")
+              + " | " + (f"{sum(x['subscriber_cpu_percent']) / len(x['subscriber_cpu_percent']):.1f} % each"
+                         if x["subscriber_cpu_percent"] else "–") + " |")
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"rt_cpu": rt_cpu, "other_cpu": other_cpu, "seconds": args.seconds, "runs": runs}, f, indent=1)
+            json.dump({"rt_cpu": rt_cpu, "other_cpu": other_cpu, "seconds": args.seconds, "rounds": args.rounds,
+                   "configurations": summary, "runs": runs}, f, indent=1)
     return 0
 
 

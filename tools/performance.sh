@@ -3,7 +3,7 @@
 # (machine, kernel, date, commands, tables, goals) and the plots in docs/img/. Takes about 8
 # minutes; --quick (about 3) shortens the jitter runs and the benchmark loops for a first look;
 # --can runs only the CANopen benchmark (about 15 s) and rewrites only its section; --gui runs only
-# the remote GUIs' benchmark (about 80 s) and rewrites only its section.
+# the remote GUIs' benchmark (about 3.5 minutes) and rewrites only its section.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
@@ -22,12 +22,13 @@ run() {  # name, command...: the command line and its output into $out/name.{cmd
 # 4 s of teleoperation, about 15 s in all.
 can_rounds=2 can_e2e=4
 if ((quick)); then can_rounds=1 can_e2e=2; fi
-# Remote GUIs: 0, 1 and 10 headless sawgui subscribers beside the 1 kHz teleoperation, 20 s each.
-gui_seconds=20
-if ((quick)); then gui_seconds=8; fi
+# Remote GUIs: 0, 1 and 10 headless sawgui subscribers beside the 1 kHz teleoperation, alternating
+# for 3 rounds of 15 s each (about 3.5 minutes).
+gui_seconds=15 gui_rounds=3
+if ((quick)); then gui_seconds=8 gui_rounds=1; fi
 gui_run() {
   run gui .venv/bin/python tools/gui_scale.py build/release/bin/saw-rt build/release/bin/saw-gateway \
-    --seconds $gui_seconds --json $out/gui.json
+    --seconds $gui_seconds --rounds $gui_rounds --json $out/gui.json
 }
 if ((gui_only)); then
   tools/build.sh saw-rt saw-gateway

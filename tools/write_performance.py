@@ -229,11 +229,11 @@ def gui_section(r):
         return [GUI_TITLE, "", "(gui: not run)", ""]
     j = json.load(open(path))
     when = datetime.datetime.fromtimestamp(os.path.getmtime(path), datetime.timezone.utc)
-    runs = j["runs"]
-    base = runs[0]["p99_us"]
-    ten = next((x for x in runs if x["subscribers"] == 10), runs[-1])
-    ratio = ten["p99_us"] / base if base and ten["p99_us"] else float("nan")
-    added = ten["overruns"] - runs[0]["overruns"]
+    confs = j["configurations"]
+    base = confs[0]["p99_median_us"]
+    ten = next((x for x in confs if x["subscribers"] == 10), confs[-1])
+    ratio = ten["p99_median_us"] / base if base and ten["p99_median_us"] else float("nan")
+    added = sum(ten["overruns"]) - sum(confs[0]["overruns"])
     lines = [
         GUI_TITLE,
         "",
@@ -245,34 +245,41 @@ def gui_section(r):
         "0, 1 and 10 GUI-equivalent subscribers: `sawgui --headless`, the window's own DDS readers",
         "(`sawdds.Live`: the registry, every operating state and error topic, and what the teleoperation",
         "panel reads — both arms' `measured_cp`, the tracking error, the slave force, the fault and clutch",
-        f"events), each its own process on CPU {j['other_cpu']}. The configurations run one after the other in",
-        f"one run, {j['seconds']:g} s measured each (after 3 s for discovery); the RT figures are the whole run's",
-        "`saw-rt` summary (worst of the three tasks).",
+        f"events), each its own process on CPU {j['other_cpu']}. One run: the configurations alternate for "
+        f"{j['rounds']} rounds, {j['seconds']:g} s",
+        "measured each (after 3 s for discovery); the RT figures are each run's `saw-rt` summary (worst",
+        "of the three tasks), the p99 the median over the rounds.",
         "",
-        "| subscribers | RT overruns | wake-up p99, worst task (µs) | × none | gateway CPU | samples each subscriber took | subscriber CPU, each |",
+        "| subscribers | RT overruns, each round | wake-up p99 µs, median (range) | × none | gateway CPU | "
+        "samples each subscriber took | subscriber CPU, each |",
         "|---|---|---|---|---|---|---|",
     ]
-    for x in runs:
+    for x in confs:
         s = x["samples_per_subscriber"]
         expect = 1000 * x["state_topics_1khz"] * x["seconds"]
         cpu = x["subscriber_cpu_percent"]
         lines.append(
-            f"| {x['subscribers']} | {x['overruns']} | {x['p99_us']:.0f} | "
-            f"{x['p99_us'] / base:.2f} | {x['gateway_cpu_percent']:.1f} % | "
+            f"| {x['subscribers']} | {', '.join(map(str, x['overruns']))} | {x['p99_median_us']:.0f} "
+            f"({x['p99_us'][0]:.0f}–{x['p99_us'][-1]:.0f}) | {x['p99_median_us'] / base:.2f} | "
+            f"{x['gateway_cpu_percent']:.1f} % | "
             + (f"{min(s)}–{max(s)} ({min(s) / expect:.1%}–{max(s) / expect:.1%} of {x['state_topics_1khz']} × 1 kHz)"
                if s else "–")
             + " | " + (f"{sum(cpu) / len(cpu):.1f} %" if cpu else "–") + " |")
-    busy = ten["gateway_cpu_percent"] + sum(ten["subscriber_cpu_percent"])
+    busy = ten["gateway_cpu_percent"] + sum(ten["subscriber_cpu_percent"]) / max(1, len(ten["overruns"]))
     lines += [
         "",
         f"Goal: 10 subscribers add no overrun and keep the wake-up p99 within 1.1 × the run without: "
-        f"{'met' if added <= 0 and ratio <= 1.1 else 'not met'} in this run ({added:+d} overruns, {ratio:.2f} ×).",
-        "The subscribers load the gateway's CPU, not the RT one: the gateway copies rows out of the",
-        "shared-memory segment and DDS sends them from its own threads. With ten subscribers on this",
+        f"{'met' if added <= 0 and ratio <= 1.1 else 'not met'} in this run ({added:+d} overruns over the rounds, "
+        f"{ratio:.2f} × the median p99).",
+        "The subscribers run, like the gateway, on the other CPU: the RT tasks share only the machine",
+        "with them (memory, caches, the kernel); the gateway copies rows out of the shared-memory",
+        "segment and DDS sends them from its own threads. With ten subscribers on this",
         f"machine's other CPU, the gateway and the subscribers kept it {busy:.0f} % busy: a subscriber that",
         "is not scheduled in time loses samples (state topics are best effort, newest first), which is",
         "what the per-subscriber share shows; remote GUIs run on their own machines, where each takes",
-        "what the one-subscriber row takes. On a shared VM the p99 and the overruns move from run to run",
+        "what the one-subscriber row takes. A saturated other CPU can also push kernel work (loopback",
+        "UDP to ten readers) onto the RT CPU, which `isolcpus`/`nohz_full` and IRQ affinity keep off on",
+        "a lab PC (`docs/deploy.md`). On a shared VM the p99 and the overruns move from run to run",
         "with no subscriber at all (other processes' kernel work on the RT CPU): compare runs, not one",
         "run's figures.",
         "",
