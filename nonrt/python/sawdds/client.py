@@ -26,16 +26,16 @@ from . import msgs  # noqa: E402
 
 XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 
-# The gateway latches operating states and refusals (TRANSIENT_LOCAL, keep last): a reader that
-# asks for TRANSIENT_LOCAL gets the current state the moment it matches. A TRANSIENT_LOCAL reader
-# does not match a VOLATILE writer, so this says whether the gateways we talk to latch.
-GATEWAY_LATCHES = True
+# The gateway latches operating states (RELIABLE, TRANSIENT_LOCAL, keep last 1, published when it
+# attaches) and keeps its error topic's last 16 (TRANSIENT_LOCAL): a reader that asks for
+# TRANSIENT_LOCAL gets them the moment it matches. (A TRANSIENT_LOCAL reader would not match a
+# VOLATILE writer: this is the one place that says which topics are latched.)
 LATCHED_TYPES = ("crtk_msgs::msg::dds_::OperatingState_",)
 
 
 def latched(endpoint) -> bool:
-    """Whether the gateway latches `endpoint`'s topic (its readers are then TRANSIENT_LOCAL, keep last)."""
-    return GATEWAY_LATCHES and endpoint.dds_type in LATCHED_TYPES
+    """Whether the gateway latches `endpoint`'s topic (its readers are then TRANSIENT_LOCAL, keep last 1)."""
+    return endpoint.dds_type in LATCHED_TYPES
 
 
 def interface_uri(interface: str = "lo", peers=("127.0.0.1",)) -> str:
@@ -69,11 +69,8 @@ def reader_qos(endpoint, depth: int = 16):
 
 
 def error_qos(depth: int = 16):
-    """The QoS of a reader of rt/<component>/error (TRANSIENT_LOCAL, the last 16, once the gateway latches it)."""
-    if GATEWAY_LATCHES:
-        return Qos(Policy.Reliability.Reliable(0), Policy.Durability.TransientLocal, Policy.History.KeepLast(depth),
-                   XCDR1)
-    return Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(depth), XCDR1)
+    """The QoS of a reader of rt/<component>/error: reliable, TRANSIENT_LOCAL, the last `depth`."""
+    return Qos(Policy.Reliability.Reliable(0), Policy.Durability.TransientLocal, Policy.History.KeepLast(depth), XCDR1)
 
 
 class Client:
