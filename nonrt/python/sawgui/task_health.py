@@ -30,8 +30,10 @@ class TaskHealth(QtWidgets.QWidget):
         unmapped = [c for c, e in tasks if not e.topic]
         mapped = [(c, e) for c, e in tasks if e.topic]
         if not tasks:
-            self.note.setText("No component exports its task interface: a deployment shows a task here when it "
-                              "exports the component's `task` interface to the gateway.")
+            self.note.setText("No gateway publishes a task's period_statistics: it needs the component's `task` "
+                              "interface exported to the gateway and a DDS type for the statistics, which the "
+                              "gateway does not map yet. saw-rt prints each task's cycles, overruns and wake-up "
+                              "latencies when it stops.")
         elif unmapped:
             self.note.setText("period_statistics of " + ", ".join(unmapped) + " is listed by the gateway but not "
                               "mapped to a DDS type, so it cannot be shown here.")
