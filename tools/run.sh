@@ -16,7 +16,7 @@ if [[ "${1:-}" == "--gui" ]]; then
       "  - {component: teleop, provided: teleop}" "gateway:" "  domain: 0"; } >"$yaml"
   build/release/bin/saw-rt "$yaml" "$@" &
   rt=$!
-  PYTHONPATH=nonrt/python .venv/bin/python -m sawgui --domain 0 || true
+  PYTHONPATH="$root/nonrt/python" .venv/bin/python -m sawgui --domain 0 || true
   kill -TERM "$rt" 2>/dev/null || true
   wait "$rt" || true
   exit 0

@@ -5,6 +5,7 @@ usage: sawgui [--domain N] [--interface NAME] [--peer ADDRESS ...] [--headless S
 import argparse
 import json
 import os
+import signal
 import sys
 import time
 
@@ -85,10 +86,18 @@ def main(argv=None) -> int:
         return 2
     from sawdds.live import Live
     from .app import MainWindow
+    from PySide6 import QtCore
     app = QtWidgets.QApplication(sys.argv[:1])
     live = Live(args.domain)
     w = MainWindow(live, args.domain, args.interface)
     w.show()
+    # Ctrl-C (or SIGTERM, as tools/run.sh --gui's saw-rt gets) closes the window as its close box
+    # does: Python runs signal handlers only between Qt's calls, so a timer gives it the chance.
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: app.quit())
+    wake = QtCore.QTimer()
+    wake.timeout.connect(lambda: None)
+    wake.start(200)
     rc = app.exec()
     live.close()
     return rc
