@@ -238,7 +238,8 @@ class Live:
         alive = self.client.alive()
         now = time.time()
         with self._lock:
-            for g, m in manifests.items():
+            # Gone gateways first: a component a restarted gateway serves again is its, not the old one's.
+            for g, m in sorted(manifests.items(), key=lambda gm: alive.get(gm[0], False)):
                 was = self._gateways.get(g)
                 live = alive.get(g, False)
                 comps = sorted({e.component_name for e in m.endpoints})
