@@ -90,9 +90,13 @@ def teleop_settings(saw_rt, sawctl, domain):
     """The teleoperation's settings over DDS: their bounds are in the registry, sawctl refuses a
     value outside them before sending, and a valid one is delivered."""
     config = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "config", "teleop-sim.yaml")
+    tele = f"teleop{os.getpid()}"  # its own shared-memory segment, beside other tests' deployments
     with open(config) as src, tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
-        f.write(src.read().replace("name: teleop-sim", f"name: teleop-sim-{os.getpid()}", 1))
-        f.write(f"exports:\n  - {{component: teleop, provided: teleop}}\ngateway:\n  domain: {domain}\n")
+        text = src.read().replace("name: teleop-sim", f"name: teleop-sim-{os.getpid()}", 1)
+        for key in ("name: teleop\n", "client: teleop,", "teleop."):
+            text = text.replace(key, key.replace("teleop", tele))
+        f.write(text)
+        f.write(f"exports:\n  - {{component: {tele}, provided: teleop}}\ngateway:\n  domain: {domain}\n")
     rt = subprocess.Popen([saw_rt, f.name, "--duration", "30"], stdout=subprocess.DEVNULL)
 
     def ctl(*args):
@@ -101,16 +105,16 @@ def teleop_settings(saw_rt, sawctl, domain):
         return p.returncode, p.stdout + p.stderr
     try:
         rc, out = ctl("list")
-        gains = [line for line in out.splitlines() if "teleop.set_gains" in line]
+        gains = [line for line in out.splitlines() if f"{tele}.set_gains" in line]
         check(rc == 0 and len(gains) == 1 and "in [0, 10000]" in gains[0],
               f"the registry carries set_gains and its bounds: {gains}")
-        rc, out = ctl("call", "rt/teleop/set_gains", "1e6", "100")
+        rc, out = ctl("call", f"rt/{tele}/set_gains", "1e6", "100")
         check(rc == 2 and "outside [0, 10000]" in out, f"a gain out of bounds is refused before sending: {out.strip()}")
-        rc, out = ctl("call", "rt/teleop/set_gains", "250", "250")
+        rc, out = ctl("call", f"rt/{tele}/set_gains", "250", "250")
         check(rc == 0 and "delivered" in out, f"valid gains are delivered: {out.strip()}")
-        rc, out = ctl("call", "rt/teleop/set_force_limits", "2", "2.5")
+        rc, out = ctl("call", f"rt/{tele}/set_force_limits", "2", "2.5")
         check(rc == 0 and "delivered" in out, f"valid force limits are delivered: {out.strip()}")
-        rc, out = ctl("call", "rt/teleop/set_scale", "0.5")
+        rc, out = ctl("call", f"rt/{tele}/set_scale", "0.5")
         check(rc == 0 and "delivered" in out, f"a scale is delivered: {out.strip()}")
     finally:
         rt.terminate()
