@@ -9,7 +9,7 @@ cache="$root/.cache"
 apt_packages=(
   build-essential cmake ninja-build pkg-config git python3 python3-venv python3-pip
   libeigen3-dev liborocos-kdl-dev libusb-1.0-0-dev
-  libfastrtps-dev libfastcdr-dev fastddsgen
+  libfastrtps-dev libfastcdr-dev fastddsgen libssl-dev openssl  # openssl: the keystore tests check our files with it
   libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libbenchmark-dev rt-tests stress-ng clang-format
   libzeroc-ice-dev zeroc-ice-compilers iproute2

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "saw/gateway/gateway.hpp"
+#include "security_cli.hpp"
 
 namespace {
 std::atomic<bool> stop_requested{false};
@@ -45,6 +46,7 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
+  saw::gateway::add_enclave_option(app, config.dds);
   bool exit_with_parent = false;
   app.add_flag("--exit-with-parent", exit_with_parent, "stop when the parent process (saw-rt) is gone");
   CLI11_PARSE(app, argc, argv);

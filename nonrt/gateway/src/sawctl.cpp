@@ -10,6 +10,7 @@
 #include "saw/crtk_arm.hpp"
 #include "saw/gateway/participant.hpp"
 #include "saw_msgs/msg/ManifestPubSubTypes.h"
+#include "security_cli.hpp"
 
 namespace {
 
@@ -201,6 +202,8 @@ int main(int argc, char** argv) {
   app.add_option("--interface", dds.interfaces,
                  "IPv4 address of an interface DDS may use (default loopback)");
   app.add_option("--timeout", timeout, "seconds to wait for the registry and for samples");
+  add_enclave_option(app, dds);
+  const SecurityCommands security(app);
   app.require_subcommand(1);
   app.fallthrough();  // --timeout, --domain also after the subcommand
   auto* list_cmd = app.add_subcommand("list", "every gateway, its components, commands, events and topics");
@@ -215,6 +218,7 @@ int main(int argc, char** argv) {
   call_cmd->add_option("topic", topic, "the command's topic")->required();
   call_cmd->add_option("value", words, "the value: numbers (x y z ...) or a word");
   CLI11_PARSE(app, argc, argv);
+  if (security.chosen()) return security.run();
   try {
     Session s(dds);
     if (*list_cmd) return list(s, timeout);

@@ -1,0 +1,33 @@
+// Enclave: one participant's security files, checked before DDS is given them.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace saw::security {
+
+struct Enclave {
+  std::filesystem::path dir;
+  std::filesystem::path identity_ca, certificate, private_key;    // authentication (PKI-DH)
+  std::filesystem::path permissions_ca, governance, permissions;  // access control
+  std::string subject;                                            // e.g. CN=/gateway
+  std::chrono::system_clock::time_point not_after;
+};
+
+// Loads and checks DIR as an enclave at time `now`: every file present; the certificate valid
+// now, issued by the enclave's identity CA and matching its key; governance and permissions
+// signed by the permissions CA, the permissions granting the certificate's subject. Throws
+// std::runtime_error "enclave DIR: <what is wrong>" — DDS's own errors do not say which.
+Enclave load_enclave(const std::filesystem::path& dir,
+                     std::chrono::system_clock::time_point now = std::chrono::system_clock::now());
+
+// The enclave a participant must use: `explicit_dir` when given, else the one the ROS 2
+// environment names (ROS_SECURITY_ENABLE=true, ROS_SECURITY_KEYSTORE,
+// ROS_SECURITY_ENCLAVE_OVERRIDE), else none. With security enabled a missing enclave is an
+// error whatever ROS_SECURITY_STRATEGY says: sawrt never falls back to plaintext.
+std::optional<std::filesystem::path> resolve_enclave(
+    const std::optional<std::filesystem::path>& explicit_dir);
+
+}  // namespace saw::security

@@ -1,0 +1,140 @@
+#include "saw/security/keystore.hpp"
+
+#include <cctype>
+#include <fstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "openssl.hpp"
+
+namespace saw::security {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using std::chrono::system_clock;
+
+void write_file(const fs::path& file, const std::string& text, bool secret) {
+  if (secret) {
+    // Created empty and private before the key goes in, so it is never readable by others.
+    std::ofstream(file, std::ios::trunc).close();
+    fs::permissions(file, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::replace);
+  }
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error(file.string() + ": cannot write");
+}
+
+// A relative symbolic link, as SROS2 makes them: the keystore can be moved or copied whole.
+void link_to(const fs::path& target, const fs::path& link) {
+  std::error_code ec;
+  fs::remove(link, ec);
+  fs::create_symlink(fs::relative(target, link.parent_path()), link);
+}
+
+void make_ca(const fs::path& dir, const std::string& which, const KeystoreOptions& o,
+             system_clock::time_point now) {
+  ossl::Key key = ossl::generate_p256();
+  ossl::Cert cert = ossl::make_certificate({o.common_name + " " + which + " CA", now - std::chrono::hours(24),
+                                            now + std::chrono::days(o.ca_days), true},
+                                           key.get(), nullptr, key.get());
+  write_file(dir / "private" / (which + "_ca.key.pem"), ossl::pem_pkcs8(key.get()), true);
+  write_file(dir / "public" / (which + "_ca.cert.pem"), ossl::pem(cert.get()), false);
+}
+
+// NAME as a relative path of segments of letters, digits and '_' (ROS 2's rule for enclaves).
+fs::path enclave_path(const std::string& name) {
+  std::string n = name;
+  while (!n.empty() && n.front() == '/') n.erase(0, 1);
+  if (n.empty()) throw std::invalid_argument("enclave name '" + name + "' is empty");
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t end = n.find('/', start);
+    const std::string seg = n.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    bool ok = !seg.empty() && !std::isdigit(static_cast<unsigned char>(seg.front()));
+    for (char c : seg) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+    if (!ok)
+      throw std::invalid_argument("enclave name '" + name +
+                                  "': segments of letters, digits and '_', not starting with a digit, "
+                                  "separated by '/'");
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return fs::path(n);
+}
+
+}  // namespace
+
+bool is_keystore(const fs::path& dir) {
+  return fs::is_regular_file(dir / "public" / "identity_ca.cert.pem") &&
+         fs::is_regular_file(dir / "public" / "permissions_ca.cert.pem") &&
+         fs::is_regular_file(dir / "private" / "identity_ca.key.pem") &&
+         fs::is_regular_file(dir / "private" / "permissions_ca.key.pem") &&
+         fs::is_regular_file(dir / "enclaves" / "governance.p7s");
+}
+
+void create_keystore(const fs::path& dir, const KeystoreOptions& o) {
+  if (is_keystore(dir)) throw std::runtime_error("keystore " + dir.string() + ": already exists");
+  if (o.ca_days < 1) throw std::invalid_argument("CA validity: at least one day");
+  if (o.governance.domain_min < 0 || o.governance.domain_max > 232 ||
+      o.governance.domain_min > o.governance.domain_max)
+    throw std::invalid_argument("governance domains: a range within 0-232");
+  fs::create_directories(dir / "public");
+  fs::create_directories(dir / "private");
+  fs::create_directories(dir / "enclaves");
+  fs::permissions(dir / "private", fs::perms::owner_all, fs::perm_options::replace);
+  const auto now = system_clock::now();
+  make_ca(dir, "identity", o, now);
+  make_ca(dir, "permissions", o, now);
+  const std::string governance = governance_xml(o.governance);
+  write_file(dir / "enclaves" / "governance.xml", governance, false);
+  ossl::Cert ca = ossl::read_cert(dir / "public" / "permissions_ca.cert.pem");
+  ossl::Key ca_key = ossl::read_key(dir / "private" / "permissions_ca.key.pem");
+  write_file(dir / "enclaves" / "governance.p7s", ossl::smime_sign(governance, ca.get(), ca_key.get()),
+             false);
+}
+
+fs::path enroll(const fs::path& dir, const std::string& name, const EnrollOptions& o) {
+  if (!is_keystore(dir))
+    throw std::runtime_error(
+        "keystore " + dir.string() +
+        ": not a keystore (no CAs or governance; create it with `sawctl security init`)");
+  if (o.days < 1) throw std::invalid_argument("--expires: at least one day");
+  const fs::path rel = enclave_path(name);
+  const fs::path enclave = dir / "enclaves" / rel;
+  if (rel == "governance.xml" || rel == "governance.p7s")
+    throw std::invalid_argument("enclave name '" + name + "' is a keystore file's name");
+  fs::create_directories(enclave);
+
+  ossl::Cert id_ca = ossl::read_cert(dir / "public" / "identity_ca.cert.pem");
+  ossl::Key id_key = ossl::read_key(dir / "private" / "identity_ca.key.pem");
+  ossl::Key key = ossl::generate_p256();
+  const auto not_after = o.not_after.value_or(system_clock::now() + std::chrono::days(o.days));
+  if (not_after <= o.not_before)
+    throw std::invalid_argument("enrol " + name + ": the validity ends before it starts");
+  const std::string subject_cn = "/" + rel.generic_string();
+  ossl::Cert cert = ossl::make_certificate({subject_cn, o.not_before, not_after, false}, key.get(),
+                                           id_ca.get(), id_key.get());
+  write_file(enclave / "key.pem", ossl::pem_pkcs8(key.get()), true);
+  write_file(enclave / "cert.pem", ossl::pem(cert.get()), false);
+  link_to(dir / "public" / "identity_ca.cert.pem", enclave / "identity_ca.cert.pem");
+  link_to(dir / "public" / "permissions_ca.cert.pem", enclave / "permissions_ca.cert.pem");
+  link_to(dir / "enclaves" / "governance.p7s", enclave / "governance.p7s");
+
+  Grant grant;
+  grant.subject = ossl::subject(cert.get());
+  grant.role = o.role;
+  grant.not_before = ossl::not_before(cert.get());
+  grant.not_after = ossl::not_after(cert.get());
+  grant.components = o.components;
+  const std::string permissions = permissions_xml(grant);
+  write_file(enclave / "permissions.xml", permissions, false);
+  ossl::Cert p_ca = ossl::read_cert(dir / "public" / "permissions_ca.cert.pem");
+  ossl::Key p_key = ossl::read_key(dir / "private" / "permissions_ca.key.pem");
+  write_file(enclave / "permissions.p7s", ossl::smime_sign(permissions, p_ca.get(), p_key.get()), false);
+  return enclave;
+}
+
+}  // namespace saw::security
