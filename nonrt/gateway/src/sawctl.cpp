@@ -64,6 +64,13 @@ struct Session {
   std::map<std::string, saw_msgs::msg::Manifest> known;
 };
 
+// DDS refuses an endpoint its access control does not permit (DDS Security: the enclave's role).
+int refused(const char* what, const std::string& topic) {
+  std::fprintf(stderr, "sawctl: DDS refused to %s %s (does this enclave's role permit it?)\n", what,
+               topic.c_str());
+  return 1;
+}
+
 int list(Session& s, double timeout) {
   // Done when gateways have answered and no new one for half a second (they answer together:
   // their manifests are transient local), or at the timeout.
@@ -111,6 +118,7 @@ int echo(Session& s, const std::string& topic, int count, double timeout) {
   const bool latched = m == find_mapping(saw::type_info_of<saw::OperatingState>().name);
   auto* r = s.ctx.subscriber->create_datareader(
       s.ctx.topic(topic, *m), DdsContext::reader_qos(latched ? Flow::latched : Flow::state));
+  if (r == nullptr) return refused("read", topic);
   std::vector<std::byte> value(std::max<std::size_t>(m->size(), 1));
   std::string why;
   const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
@@ -172,6 +180,7 @@ int call(Session& s, const std::string& topic, const std::vector<std::string>& w
       }
   }
   auto* w = s.ctx.publisher->create_datawriter(s.ctx.topic(topic, *m), DdsContext::writer_qos(Flow::command));
+  if (w == nullptr) return refused("write", topic);
   // Wait for the gateway's reader, so the command is not sent into the void.
   const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
   fdds::PublicationMatchedStatus st;

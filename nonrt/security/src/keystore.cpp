@@ -1,6 +1,7 @@
 #include "saw/security/keystore.hpp"
 
 #include <cctype>
+#include <ctime>
 #include <fstream>
 #include <stdexcept>
 #include <system_error>
@@ -34,12 +35,19 @@ void link_to(const fs::path& target, const fs::path& link) {
   fs::create_symlink(fs::relative(target, link.parent_path()), link);
 }
 
+// Named with their creation time, so that two keystores' CAs are told apart in errors.
 void make_ca(const fs::path& dir, const std::string& which, const KeystoreOptions& o,
              system_clock::time_point now) {
+  const std::time_t t = system_clock::to_time_t(now);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char created[32];
+  std::strftime(created, sizeof created, "%Y-%m-%dT%H:%M:%SZ", &tm);
   ossl::Key key = ossl::generate_p256();
-  ossl::Cert cert = ossl::make_certificate({o.common_name + " " + which + " CA", now - std::chrono::hours(24),
-                                            now + std::chrono::days(o.ca_days), true},
-                                           key.get(), nullptr, key.get());
+  ossl::Cert cert =
+      ossl::make_certificate({o.common_name + " " + which + " CA " + created, now - std::chrono::hours(24),
+                              now + std::chrono::days(o.ca_days), true},
+                             key.get(), nullptr, key.get());
   write_file(dir / "private" / (which + "_ca.key.pem"), ossl::pem_pkcs8(key.get()), true);
   write_file(dir / "public" / (which + "_ca.cert.pem"), ossl::pem(cert.get()), false);
 }

@@ -17,7 +17,7 @@ namespace saw::security {
 struct KeystoreOptions {
   GovernanceOptions governance{};
   int ca_days = 3650;
-  std::string common_name = "sawrt";  // CN prefix of the two CAs
+  std::string common_name = "sawrt";  // CN prefix of the two CAs (then which CA and when it was made)
 };
 
 // Creates the keystore; throws std::runtime_error if DIR already holds one or cannot be written.
