@@ -84,15 +84,16 @@ TEST(Keystore, TheEnclaveCertificateNamesTheEnclaveAndItsPermissionsGrantIt) {
 
 TEST(Policy, MonitorsReadOperatorsAlsoCommandGatewaysDoEverything) {
   const auto m = saw::security::topic_rules(Role::monitor, {});
-  EXPECT_TRUE(m.publish.empty());
-  EXPECT_EQ(m.subscribe, (std::vector<std::string>{"rt/saw/manifest", "rt/*/*"}));
+  EXPECT_EQ(m.publish, (std::vector<std::string>{"ros_discovery_info"}));  // ROS 2's graph, nothing of ours
+  EXPECT_EQ(m.subscribe, (std::vector<std::string>{"rt/saw/manifest", "rt/*/*", "ros_discovery_info"}));
   const auto o = saw::security::topic_rules(Role::operator_, {"master", "slave"});
-  EXPECT_EQ(o.publish, (std::vector<std::string>{"rt/master/*", "rt/slave/*", "rq/master/*", "rq/slave/*"}));
+  EXPECT_EQ(o.publish, (std::vector<std::string>{"rt/master/*", "rt/slave/*", "rq/master/*", "rq/slave/*",
+                                                 "ros_discovery_info"}));
   EXPECT_NE(std::find(o.subscribe.begin(), o.subscribe.end(), "rr/slave/*"), o.subscribe.end());
   EXPECT_NE(std::find(o.deny_publish.begin(), o.deny_publish.end(), "rt/*/measured_*"), o.deny_publish.end());
   EXPECT_NE(std::find(o.deny_publish.begin(), o.deny_publish.end(), "rt/saw/manifest"), o.deny_publish.end());
   const auto g = saw::security::topic_rules(Role::gateway, {});
-  EXPECT_EQ(g.publish, (std::vector<std::string>{"rt/*", "rq/*", "rr/*"}));
+  EXPECT_EQ(g.publish, (std::vector<std::string>{"rt/*", "rq/*", "rr/*", "ros_discovery_info"}));
   EXPECT_EQ(g.subscribe, g.publish);
   EXPECT_THROW(saw::security::topic_rules(Role::operator_, {"a/*"}), std::invalid_argument);
   EXPECT_EQ(saw::security::parse_role("operator"), Role::operator_);

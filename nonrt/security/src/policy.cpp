@@ -101,6 +101,9 @@ TopicRules topic_rules(Role role, const std::vector<std::string>& components) {
     return a;
   };
   const std::string manifest = "rt/saw/manifest";
+  // ROS 2's graph topic: rmw_fastrtps and rmw_cyclonedds make a reader and a writer of it in
+  // every node, so a ROS 2 node given one of our enclaves could not start without it.
+  const std::string ros_graph = "ros_discovery_info";
   TopicRules t;
   switch (role) {
     case Role::monitor:
@@ -121,6 +124,8 @@ TopicRules topic_rules(Role role, const std::vector<std::string>& components) {
       if (components.empty()) t.publish = t.subscribe = {"rt/*", "rq/*", "rr/*"};
       break;
   }
+  t.publish.push_back(ros_graph);
+  t.subscribe.push_back(ros_graph);
   return t;
 }
 

@@ -44,7 +44,8 @@ std::string governance_xml(const GovernanceOptions& options);
 std::string permissions_xml(const Grant& grant);
 
 // The topic expressions (fnmatch patterns, as DDS Security matches them) a role may publish and
-// subscribe, and those it is denied even where a pattern would allow them.
+// subscribe (ROS 2's graph topic ros_discovery_info for every role, as SROS2 grants it), and those it
+// is denied even where a pattern would allow them.
 struct TopicRules {
   std::vector<std::string> publish, subscribe, deny_publish;
 };
