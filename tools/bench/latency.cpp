@@ -2,12 +2,15 @@
 // every configuration — Local 1P, Local 2P over shared memory, Local 2P over DDS through both
 // gateways, Network 1H across a veth pair between two network namespaces — beside, in the same
 // run and with the same payload, ZeroC Ice 3.7 (the paper's middleware) and raw Fast DDS.
-// Also the one-way latency of a state row from the server's process to the client's. Prints a
-// Markdown table, the goals as ratios, and writes CSV for tools/plot_latency.py.
+// Also the one-way latency of a state row from the server's process to the client's, and the DDS
+// paths again with DDS Security (gateway and operator enclaves of a keystore made for the run),
+// with a new peer's discovery time. Prints a Markdown table, the goals as ratios, and writes CSV
+// for tools/plot_latency.py.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <thread>
@@ -22,6 +25,7 @@
 #include "saw/gateway/participant.hpp"
 #include "saw/gateway/query_client.hpp"
 #include "saw/manager.hpp"
+#include "saw/security/keystore.hpp"
 #include "stats.hpp"
 
 namespace {
@@ -157,12 +161,16 @@ std::vector<std::int64_t> bridge_client(const Plan& plan, const std::string& nam
 }
 
 // A DDS peer (no bridge on its side) calling rq/<component>/add_oneRequest.
+using Enclave = std::optional<std::filesystem::path>;
+
 std::vector<std::int64_t> dds_client(const Plan& plan, int domain, const std::string& address,
-                                     const std::string& component, std::uint64_t& failed) {
+                                     const std::string& component, std::uint64_t& failed,
+                                     const Enclave& enclave) {
   saw::gateway::ParticipantConfig pc;
   pc.domain = domain;
   pc.name = "latency-client";
   pc.interfaces = {address};
+  pc.enclave = enclave;
   auto* p = saw::gateway::make_participant(pc);
   std::vector<std::int64_t> out;
   {
@@ -176,6 +184,32 @@ std::vector<std::int64_t> dds_client(const Plan& plan, int domain, const std::st
       ++failed;
   }
   saw::gateway::delete_participant(p);
+  return out;
+}
+
+// A new peer's discovery: from making its participant until its qualified-read client has
+// matched the server's gateway (with security: authentication and key exchange included).
+std::vector<std::int64_t> discovery(int times, int domain, const std::string& address,
+                                    const std::string& component, std::uint64_t& failed,
+                                    const Enclave& enclave) {
+  saw::gateway::ParticipantConfig pc;
+  pc.domain = domain;
+  pc.name = "latency-discovery";
+  pc.interfaces = {address};
+  pc.enclave = enclave;
+  std::vector<std::int64_t> out;
+  for (int i = 0; i < times; ++i) {
+    const auto t0 = saw::monotonic_now();
+    auto* p = saw::gateway::make_participant(pc);
+    {
+      saw::gateway::QueryClient q(p, component, "add_one");
+      if (q.wait_matched(20'000'000'000))
+        out.push_back(saw::monotonic_now() - t0);
+      else
+        ++failed;
+    }
+    saw::gateway::delete_participant(p);
+  }
   return out;
 }
 
@@ -204,7 +238,8 @@ struct Site {           // where one side of a configuration runs
 // that a slow minute of the VM falls on all of them alike; each run is a fresh client process.
 class Suite {
  public:
-  explicit Suite(Plan plan) : plan_(plan) {}
+  // `enclaves`: a keystore's enclaves/ with `gateway` and `operator`, for the secure configurations.
+  Suite(Plan plan, std::filesystem::path enclaves) : plan_(plan), enclaves_(std::move(enclaves)) {}
 
   void local() {
     const std::string name = "lat" + std::to_string(getpid());
@@ -222,12 +257,16 @@ class Suite {
                      }});
     run("Local 1P", paths);
     const Site here{"", "127.0.0.1"};
-    remote("Local 2P", name, here, here, 60);
+    remote("Local 2P", name, here, here, 60, false);
+    if (!enclaves_.empty()) remote("Local 2P secure", name + "s", here, here, 100, true);
   }
 
   void network(const saw::bench::VethPair& veth) {
     const std::string name = "latn" + std::to_string(getpid());
-    remote("Network 1H", name, {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()}, 90);
+    remote("Network 1H", name, {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()}, 90, false);
+    if (!enclaves_.empty())
+      remote("Network 1H secure", name + "s", {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()}, 130,
+             true);
   }
 
   const std::vector<Row>& rows() const { return rows_; }
@@ -261,9 +300,12 @@ class Suite {
   }
 
   // The server's process and its gateway at `server`; the client's gateway (a mirror) and the
-  // client process at `client`; and the baselines between the same two places.
+  // client process at `client`; and the baselines between the same two places. `secure`: the DDS
+  // paths only, every participant with an enclave (gateways: gateway; DDS peers: operator).
   void remote(const std::string& config, const std::string& name, const Site& server, const Site& client,
-              int domain_base) {
+              int domain_base, bool secure) {
+    const Enclave gateway_enclave = secure ? Enclave(enclaves_ / "gateway") : std::nullopt;
+    const Enclave peer_enclave = secure ? Enclave(enclaves_ / "operator") : std::nullopt;
     const bool same_host = server.ns == client.ns;
     const std::string dds = same_host ? "DDS loopback" : "DDS veth";
     const int domain = domain_base + getpid() % 40;
@@ -279,8 +321,10 @@ class Suite {
     b.mirrors = {name + "=" + mirrored};
     b.dds.domain = domain;
     b.dds.interfaces = {client.address};
+    a.dds.enclave = b.dds.enclave = gateway_enclave;
     servers.spawn(server.ns, plan_.gateway_cpu, [&] { run_gateway(a); });
-    servers.spawn(server.ns, plan_.gateway_cpu, [&] { saw::bench::raw_dds_echo(domain, {server.address}); });
+    servers.spawn(server.ns, plan_.gateway_cpu,
+                  [&] { saw::bench::raw_dds_echo(domain, {server.address}, gateway_enclave); });
     int fds[2];
     if (pipe(fds) != 0) return;
     servers.spawn(server.ns, plan_.gateway_cpu, [&] {
@@ -292,7 +336,7 @@ class Suite {
     Plan one_rep = plan_;
     one_rep.rows = std::max(1, plan_.rows / plan_.reps);
     std::vector<Path> paths;
-    if (same_host) {
+    if (same_host && !secure) {
       paths.push_back({"qualified read over the shared-memory bridge", "shared memory", client,
                        [&](auto& f) { return bridge_client(plan_, name, false, f); }});
       paths.push_back({"bare futex ping-pong (the floor for a sleeping waiter)", "shared memory", client,
@@ -300,16 +344,21 @@ class Suite {
       paths.push_back({"state row, server task -> client process (one way)", "shared memory", client,
                        [&](auto& f) { return bridge_client(one_rep, name, true, f); }});
     }
-    paths.push_back({"qualified read, DDS peer -> server's gateway -> bridge", dds, client,
-                     [&](auto& f) { return dds_client(plan_, domain, client.address, name, f); }});
-    paths.push_back({"raw Fast DDS request/reply (same types, QoS, wait)", dds, client,
-                     [&](auto& f) { return dds_client(plan_, domain, client.address, "raw", f); }});
-    paths.push_back({"ZeroC Ice 3.7 two-way call addOne(double)", same_host ? "TCP loopback" : "TCP veth",
-                     client, [&](auto& f) {
-                       std::uint64_t warm = 0;
-                       (void)saw::bench::ice_calls(endpoint, plan_.warmup, 0, warm);
-                       return saw::bench::ice_calls(endpoint, plan_.calls, 0, f);
+    paths.push_back({"qualified read, DDS peer -> server's gateway -> bridge", dds, client, [&](auto& f) {
+                       return dds_client(plan_, domain, client.address, name, f, peer_enclave);
                      }});
+    paths.push_back({"raw Fast DDS request/reply (same types, QoS, wait)", dds, client, [&](auto& f) {
+                       return dds_client(plan_, domain, client.address, "raw", f, peer_enclave);
+                     }});
+    paths.push_back({"discovery: a new DDS peer until its qualified-read client matched", dds, client,
+                     [&](auto& f) { return discovery(4, domain, client.address, name, f, peer_enclave); }});
+    if (!secure)
+      paths.push_back({"ZeroC Ice 3.7 two-way call addOne(double)", same_host ? "TCP loopback" : "TCP veth",
+                       client, [&](auto& f) {
+                         std::uint64_t warm = 0;
+                         (void)saw::bench::ice_calls(endpoint, plan_.warmup, 0, warm);
+                         return saw::bench::ice_calls(endpoint, plan_.calls, 0, f);
+                       }});
     run(config, paths);
     // Then the client's gateway, mirroring the server: not earlier, because the mirror's 1 kHz
     // state stream would load the server's gateway during the paths above and not the raw echo.
@@ -323,8 +372,24 @@ class Suite {
   }
 
   Plan plan_;
+  std::filesystem::path enclaves_;
   std::vector<Row> rows_;
 };
+
+// A keystore for the secure configurations, in a directory of its own (removed by the caller).
+std::filesystem::path make_keystore() {
+  char dir[] = "/tmp/saw-latency-keystore-XXXXXX";
+  if (mkdtemp(dir) == nullptr) throw std::runtime_error("saw-latency: cannot make a keystore directory");
+  const std::filesystem::path ks = std::filesystem::path(dir) / "keystore";
+  saw::security::create_keystore(ks);
+  for (auto [name, role] : {std::pair{"gateway", saw::security::Role::gateway},
+                            std::pair{"operator", saw::security::Role::operator_}}) {
+    saw::security::EnrollOptions o;
+    o.role = role;
+    saw::security::enroll(ks, name, o);
+  }
+  return ks;
+}
 
 const Row* find(const std::vector<Row>& rows, const std::string& config, const std::string& path_start) {
   for (const auto& r : rows)
@@ -365,10 +430,22 @@ int main(int argc, char** argv) {
   app.add_option("--gateway-cpu", plan.gateway_cpu,
                  "CPU of the gateways, the raw echo and the Ice server (-1: any; the RT server is on CPU 1)");
   app.add_flag("--no-veth", no_veth, "skip Network 1H (two network namespaces joined by a veth pair)");
+  bool no_secure = false;
+  std::string given_keystore;
+  app.add_flag("--no-secure", no_secure, "skip the DDS Security configurations");
+  app.add_option("--keystore", given_keystore,
+                 "measure the secure configurations with this keystore's enclaves gateway and operator "
+                 "(default: a new keystore, sawctl security init's governance)");
   CLI11_PARSE(app, argc, argv);
   saw::rt::DmaLatencyHold dma;
   (void)saw::rt::set_affinity(0);
-  Suite suite(plan);
+  const std::filesystem::path keystore =
+      no_secure || !given_keystore.empty() ? std::filesystem::path() : make_keystore();
+  const std::filesystem::path enclaves = no_secure ? std::filesystem::path()
+                                         : given_keystore.empty()
+                                             ? keystore / "enclaves"
+                                             : std::filesystem::path(given_keystore) / "enclaves";
+  Suite suite(plan, enclaves);
   std::fprintf(stderr, "saw-latency: %d × %d calls per configuration\n", plan.reps, plan.calls);
   suite.local();
   std::string network_note;
@@ -418,6 +495,20 @@ int main(int argc, char** argv) {
   goal(rows, "veth: both gateways, against raw Fast DDS", {"Network 1H", "qualified read, both"}, raw_net, 0);
   goal(rows, "veth: DDS peer → gateway ≤ Ice (stretch)", {"Network 1H", "qualified read, DDS peer"}, ice_net,
        1.0);
+  const Case qr_lo{"Local 2P", "qualified read, DDS peer"}, qr_net{"Network 1H", "qualified read, DDS peer"};
+  goal(rows, "loopback, secure: DDS peer → gateway ≤ 1.2 × without security",
+       {"Local 2P secure", "qualified read, DDS peer"}, qr_lo, 1.2);
+  goal(rows, "loopback, secure: raw Fast DDS ≤ 1.2 × without security", {"Local 2P secure", "raw Fast DDS"},
+       raw_lo, 1.2);
+  goal(rows, "loopback, secure: state via both gateways, against without security",
+       {"Local 2P secure", "state row"}, {"Local 2P", "state row, server task -> client process via"}, 0);
+  goal(rows, "veth, secure: DDS peer → gateway ≤ 1.2 × without security",
+       {"Network 1H secure", "qualified read, DDS peer"}, qr_net, 1.2);
+  goal(rows, "veth, secure: raw Fast DDS ≤ 1.2 × without security", {"Network 1H secure", "raw Fast DDS"},
+       raw_net, 1.2);
+  goal(rows, "loopback, secure: a new peer's discovery, against without security",
+       {"Local 2P secure", "discovery"}, {"Local 2P", "discovery"}, 0);
+  if (!keystore.empty()) std::filesystem::remove_all(keystore.parent_path());
   if (!csv.empty()) {
     std::ofstream out(csv);
     out << "configuration,path,transport,median_us,p90_us,p99_us,p999_us,max_us,n,failed\n";
