@@ -22,7 +22,9 @@ def sh(*args):
     return subprocess.run(args, capture_output=True, text=True)
 
 
-def main(saw_rt, saw_gateway):
+def main(saw_rt, saw_gateway, sawctl=None):
+    """With `sawctl`, each host's gateway runs DDS Security with its own enclave (role gateway) of a
+    keystore that sawctl makes."""
     tag = str(os.getpid())
     ns_a, ns_b = f"saw-a-{tag}", f"saw-b-{tag}"
     veth_a, veth_b = f"sa{tag}"[:15], f"sb{tag}"[:15]
@@ -47,6 +49,17 @@ def main(saw_rt, saw_gateway):
                 print(f"SKIP: cannot build the two-host network ({' '.join(cmd)}): {r.stderr.strip()}")
                 return 77
         domain = str(7 + os.getpid() % 90)
+        hosts = {"operator": f"address: {ip_a}", "patient": f"address: {ip_b}"}
+        security = "security: none         # the plain variant; the secure one gives each host its enclave"
+        if sawctl:
+            keystore = os.path.join(work, "keystore")
+            steps = [["init", keystore]] + [["enroll", keystore, h, "--role", "gateway"] for h in hosts]
+            for args in steps:
+                r = subprocess.run([sawctl, "security", *args], capture_output=True, text=True)
+                check(r.returncode == 0, f"sawctl security {args[0]}: {(r.stdout + r.stderr).strip()}")
+            for h in hosts:  # relative to the deployment file
+                hosts[h] += f", enclave: keystore/enclaves/{h}"
+            security = "# DDS Security: each host's enclave"
         # One deployment file for both hosts: each runs its part with --host; the addresses say
         # that they are two machines, so each host's saw-rt starts its gateway (attach / mirror).
         record = os.path.join(work, "patient.csv")
@@ -55,11 +68,11 @@ def main(saw_rt, saw_gateway):
             f.write(f"""deployment:
   name: two-hosts
 hosts:
-  operator: {{address: {ip_a}}}
-  patient: {{address: {ip_b}}}
+  operator: {{{hosts["operator"]}}}
+  patient: {{{hosts["patient"]}}}
 gateway:
   domain: {domain}
-  security: none         # the plain variant; the secure one gives each host its enclave
+  {security}
 components:
   - name: master
     host: operator
@@ -118,6 +131,9 @@ record:
             rms = 1e3 * (sum(e * e for e in settled) / len(settled)) ** 0.5
             print(f"figure: tracking error RMS across two hosts {m.group(1)} mm over the run, "
                   f"{rms:.2f} mm after the first second (max {1e3 * max(settled):.2f} mm)")
+        if sawctl:
+            check(all("DDS Security with enclave" in t for t in logs.values()),
+                  "both gateways run DDS Security (their logs name their enclaves)")
         a_gw = logs.get("a-rt.log", "")
         cmds = re.search(r"(\d+) commands in", a_gw)
         check(cmds is not None and int(cmds.group(1)) > 1000,
@@ -132,4 +148,4 @@ record:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1], sys.argv[2]))
+    sys.exit(main(*sys.argv[1:4]))

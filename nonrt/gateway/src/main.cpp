@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
   try {
     saw::gateway::Gateway gateway(config);
     std::printf("saw-gateway %s: %zu endpoints\n", gateway.name().c_str(), gateway.endpoints().size());
+    saw::gateway::print_security(config.dds);
     for (const auto& e : gateway.endpoints())
       std::printf("  %-14s %-26s %-24s %s\n", e.kind.c_str(), (e.component + "." + e.name).c_str(),
                   e.label().c_str(), e.topic.empty() ? "(not mapped)" : e.topic.c_str());

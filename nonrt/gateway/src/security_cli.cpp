@@ -28,6 +28,17 @@ void add_enclave_option(CLI::App& app, ParticipantConfig& dds) {
       ->type_name("DIR");
 }
 
+void print_security(const ParticipantConfig& dds) {
+  // Resolved again only to say it: the participant has already checked the same enclave.
+  if (const auto dir = security::resolve_enclave(dds.enclave)) {
+    const security::Enclave e = security::load_enclave(*dir);
+    std::printf("  DDS Security with enclave %s (%s, valid until %s)\n", e.dir.c_str(), e.subject.c_str(),
+                utc_date(e.not_after).c_str());
+  } else {
+    std::printf("  DDS without security (no enclave)\n");
+  }
+}
+
 SecurityCommands::SecurityCommands(CLI::App& app) {
   security_ = app.add_subcommand("security", "DDS Security keystores: init, enroll, check");
   security_->require_subcommand(1);

@@ -12,6 +12,9 @@ namespace saw::gateway {
 // --enclave DIR (a keystore's enclaves/NAME) into `dds.enclave`.
 void add_enclave_option(CLI::App& app, ParticipantConfig& dds);
 
+// One line to stdout: "DDS Security with enclave DIR (subject)", or that DDS runs without it.
+void print_security(const ParticipantConfig& dds);
+
 // `sawctl security init DIR [--sign-only]`, `security enroll DIR NAME --role R [--expires DAYS]
 // [--component C]...`, `security check ENCLAVE`: keystores need no DDS participant.
 class SecurityCommands {
