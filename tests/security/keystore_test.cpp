@@ -100,13 +100,19 @@ TEST(Policy, MonitorsReadOperatorsAlsoCommandGatewaysDoEverything) {
   EXPECT_THROW(saw::security::parse_role("admin"), std::invalid_argument);
 }
 
-TEST(Policy, DenialsComeBeforeTheAllowRuleAndSignOnlyLeavesPayloadsClear) {
+TEST(Policy, SubscriptionsThenDenialsThenPublicationsAndSignOnlyLeavesPayloadsClear) {
   saw::security::Grant g;
   g.subject = "CN=/op";
   g.role = Role::operator_;
   const std::string p = saw::security::permissions_xml(g);
-  ASSERT_NE(p.find("<deny_rule>"), std::string::npos);
-  EXPECT_LT(p.find("<deny_rule>"), p.find("<allow_rule>"));  // the first matching rule decides
+  // The first matching rule decides: Cyclone DDS allows a topic by the first rule naming it in any
+  // list (so subscriptions first), a writer by the first publish list naming it (so denials next).
+  const auto subscribe = p.find("<subscribe>"), deny = p.find("<deny_rule>"),
+             last_allow = p.rfind("<allow_rule>");
+  ASSERT_NE(deny, std::string::npos);
+  EXPECT_LT(subscribe, deny);
+  EXPECT_LT(deny, last_allow);
+  EXPECT_EQ(p.find("<subscribe>", last_allow), std::string::npos);
   EXPECT_NE(p.find("<default>DENY</default>"), std::string::npos);
   const std::string enc = saw::security::governance_xml({});
   EXPECT_NE(enc.find("<data_protection_kind>ENCRYPT</data_protection_kind>"), std::string::npos);

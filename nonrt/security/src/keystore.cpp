@@ -86,9 +86,9 @@ bool is_keystore(const fs::path& dir) {
 void create_keystore(const fs::path& dir, const KeystoreOptions& o) {
   if (is_keystore(dir)) throw std::runtime_error("keystore " + dir.string() + ": already exists");
   if (o.ca_days < 1) throw std::invalid_argument("CA validity: at least one day");
-  if (o.governance.domain_min < 0 || o.governance.domain_max > 232 ||
+  if (o.governance.domain_min < 0 || o.governance.domain_max > 230 ||
       o.governance.domain_min > o.governance.domain_max)
-    throw std::invalid_argument("governance domains: a range within 0-232");
+    throw std::invalid_argument("governance domains: a range within 0-230");
   fs::create_directories(dir / "public");
   fs::create_directories(dir / "private");
   fs::create_directories(dir / "enclaves");

@@ -168,17 +168,25 @@ std::string permissions_xml(const Grant& g) {
     << "      <subject_name>" << escaped(g.subject) << "</subject_name>\n"
     << "      <validity>\n        <not_before>" << date_time(g.not_before) << "</not_before>\n"
     << "        <not_after>" << date_time(g.not_after) << "</not_after>\n      </validity>\n";
-  // Rules apply in order, the first whose topics match decides: the denials come first.
-  if (!t.deny_publish.empty()) {
-    s << "      <deny_rule>\n" << doms;
-    topics(s, "publish", t.deny_publish);
-    s << "      </deny_rule>\n";
+  // Rules apply in order and the first whose topics match decides. Cyclone DDS decides whether a
+  // topic may be created at all by the first rule naming it in any list, so the subscriptions come
+  // first (an operator must be able to read measured_cp), then the denied publications, then the
+  // publications; for a writer, Fast DDS and Cyclone DDS look at the publish lists alone.
+  auto rule = [&](const char* kind, const std::vector<std::string>& pub,
+                  const std::vector<std::string>& sub) {
+    s << "      <" << kind << ">\n" << doms;
+    topics(s, "publish", pub);
+    topics(s, "subscribe", sub);
+    s << "      </" << kind << ">\n";
+  };
+  if (t.deny_publish.empty()) {
+    rule("allow_rule", t.publish, t.subscribe);
+  } else {
+    rule("allow_rule", {}, t.subscribe);
+    rule("deny_rule", t.deny_publish, {});
+    rule("allow_rule", t.publish, {});
   }
-  s << "      <allow_rule>\n" << doms;
-  topics(s, "publish", t.publish);
-  topics(s, "subscribe", t.subscribe);
-  s << "      </allow_rule>\n"
-    << "      <default>DENY</default>\n"
+  s << "      <default>DENY</default>\n"
     << "    </grant>\n  </permissions>\n</dds>\n";
   return s.str();
 }

@@ -23,8 +23,9 @@ struct GovernanceOptions {
   // Payloads signed (GMAC) but not encrypted, so a lab can read its own traffic in Wireshark;
   // discovery, liveliness and every message stay authenticated.
   bool sign_only = false;
+  // Domains 0-230: Cyclone DDS 0.10 refuses governance and permissions naming 231 or 232.
   int domain_min = 0;
-  int domain_max = 232;
+  int domain_max = 230;
 };
 
 struct Grant {
@@ -34,7 +35,7 @@ struct Grant {
   // Component names the grant covers; empty: every component.
   std::vector<std::string> components;
   int domain_min = 0;
-  int domain_max = 232;
+  int domain_max = 230;
 };
 
 // governance.xml: join access control on, unauthenticated participants refused, discovery and
