@@ -130,6 +130,22 @@ TEST(SecureDds, AGatewayAndAnOperatorFromOneKeystoreExchangeStateAndCommands) {
   EXPECT_EQ(state.other + cmd.other, 0);
 }
 
+TEST(SecureDds, ASignOnlyKeystoreStillAuthenticatesAndControlsAccess) {
+  saw::security::KeystoreOptions o;
+  o.governance.sign_only = true;
+  TempKeystore ks("sign-only", o);
+  Peer gateway(155, ks.enroll("gateway", Role::gateway)), op(155, ks.enroll("op", Role::operator_));
+  Peer plain(155, std::nullopt), monitor(155, ks.enroll("monitor", Role::monitor));
+  auto* cmd_in = gateway.reader("rt/arm/servo_cf");
+  auto* op_cmd = op.writer("rt/arm/servo_cf");
+  auto* plain_cmd = plain.writer("rt/arm/servo_cf");
+  ASSERT_TRUE(cmd_in && op_cmd && plain_cmd);
+  Tally cmd;
+  EXPECT_TRUE(deliver(op_cmd, 6.0, cmd_in, cmd, 20, {{plain_cmd, -1.0}}));
+  EXPECT_EQ(cmd.other, 0) << "sign-only let a participant without security command";
+  EXPECT_EQ(monitor.writer("rt/arm/servo_cf"), nullptr) << "sign-only let a monitor command";
+}
+
 TEST(SecureDds, AParticipantWithoutSecurityNeitherReadsStateNorDeliversCommands) {
   TempKeystore ks("plain");
   Peer gateway(151, ks.enroll("gateway", Role::gateway)), op(151, ks.enroll("op", Role::operator_));
