@@ -68,8 +68,9 @@ fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
   const std::string enclave = apply_security(qos, config);
   auto* p = fdds::DomainParticipantFactory::get_instance()->create_participant(config.domain, qos);
   if (p == nullptr)
-    throw std::runtime_error("DDS: could not create a participant in domain " + std::to_string(config.domain) +
-                             (enclave.empty() ? "" : " with enclave " + enclave + " (DDS Security refused it)"));
+    throw std::runtime_error(
+        "DDS: could not create a participant in domain " + std::to_string(config.domain) +
+        (enclave.empty() ? "" : " with enclave " + enclave + " (DDS Security refused it)"));
   register_reply_filter(p);  // so our reply writers filter for their readers (reply_filter.hpp)
   return p;
 }
