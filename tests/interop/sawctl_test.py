@@ -145,7 +145,9 @@ class Lines:
         threading.Thread(target=self._read, args=(proc.stdout,), daemon=True).start()
 
     def _read(self, stream):
+        self.all = []
         for line in stream:
+            self.all.append(line.rstrip())
             self.queue.put((time.monotonic(), line))
         self.queue.put((time.monotonic(), None))
 
@@ -176,7 +178,7 @@ def rt_killed(saw_rt, sawctl, name, domain):
         killed = time.monotonic()
         rt.kill()
         seen = lines.wait_for("FAULT", 10)
-        check(seen is not None, "an echo of the operating state prints FAULT when the RT process is killed")
+        check(seen is not None, f"an echo of the operating state prints FAULT when the RT process is killed: {lines.all}")
         if seen is not None:
             print(f"figure: FAULT seen {1000 * (seen - killed):.0f} ms after kill -9 of the RT process")
     finally:

@@ -89,7 +89,9 @@ class Gateway {
   // Before a gateway leaves because its RT process died: FAULT with `why` on every attached
   // component's operating state and error topic, acknowledged by the readers (at most `wait`),
   // so peers see FAULT and its reason rather than only a participant gone.
-  void announce_exit(const std::string& why, TimeNs wait = 200'000'000);
+  // (A second: on a loaded machine a reader's acknowledgment took over 200 ms, and samples not
+  // acknowledged when the participant goes are lost to that reader.)
+  void announce_exit(const std::string& why, TimeNs wait = 1'000'000'000);
 
  private:
   GatewayConfig config_;
