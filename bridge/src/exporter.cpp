@@ -50,12 +50,26 @@ void check_registered(const std::string& component, const std::string& name, con
   }
 }
 
+// The commands a segment carries: the interface's, then its task's `period_statistics` (from the
+// `task` interface every Task provides), so that the task's health crosses with the one interface
+// a component exports. Wire indices follow this order.
+std::vector<Command*> exported_commands(const Component& component, const ProvidedInterface& p) {
+  std::vector<Command*> all;
+  for (const auto& c : p.commands()) all.push_back(c.get());
+  const ProvidedInterface* task = component.provided("task");
+  Command* stats = task == nullptr || task == &p ? nullptr : task->find_command("period_statistics");
+  if (stats != nullptr && stats->signature.kind == CommandKind::read &&
+      p.find_command(stats->name) == nullptr)
+    all.push_back(stats);
+  return all;
+}
+
 LayoutParams params_of(const Component& component, const ProvidedInterface& p, const ExportOptions& o) {
   check_fits(sizeof SegmentHeader::component, component.name(), "the component name");
   check_fits(sizeof SegmentHeader::interface, p.name(), "the interface name of " + component.name());
   LayoutParams lp;
   std::size_t mirror = 8, command_payload = 8, event_payload = 8;  // the mirror starts with the row time
-  for (const auto& c : p.commands()) {
+  for (const Command* c : exported_commands(component, p)) {
     if (c->signature.kind == CommandKind::qualified_read &&
         (c->signature.arg.size > query_max_bytes || c->signature.result.size > query_max_bytes))
       throw BridgeError("export: qualified read '" + c->name + "' has values over " +
@@ -95,7 +109,7 @@ Exporter::Exporter(Component& component, const std::string& provided, ExportOpti
   view_ = SegmentView(segment_.data(), layout);
   initialize(view_, component.name(), provided, 0, static_cast<std::int32_t>(getpid()));
   view_.header().client_timeout = client_timeout_;
-  describe(*p);
+  describe(component, *p);
   record_.resize(layout.command_slot_size);
   last_reply_.assign(layout.slot_count, 0);
   for (std::uint32_t i = 0; i < layout.slot_count; ++i)
@@ -107,7 +121,7 @@ Exporter::Exporter(Component& component, const std::string& provided, ExportOpti
 }
 
 // The manifest (names, kinds, types, limits) and the interface hash clients compare.
-void Exporter::describe(const ProvidedInterface& p) {
+void Exporter::describe(const Component& component, const ProvidedInterface& p) {
   ManifestEntry* m = view_.manifest();
   std::uint32_t index = 0, offset = 8;
   std::uint64_t hash = 14695981039346656037ULL;
@@ -128,7 +142,7 @@ void Exporter::describe(const ProvidedInterface& p) {
                      std::to_string(e.result_version));
     return e;
   };
-  for (const auto& c : p.commands()) {
+  for (Command* c : exported_commands(component, p)) {
     ManifestEntry& e = entry(c->name, c->signature);
     if (c->limits) {
       e.has_limits = 1;
@@ -137,10 +151,10 @@ void Exporter::describe(const ProvidedInterface& p) {
     }
     if (c->signature.kind == CommandKind::read) {
       e.mirror_offset = offset;
-      reads_.push_back({c.get(), offset, static_cast<std::uint32_t>(c->signature.arg.size)});
+      reads_.push_back({c, offset, static_cast<std::uint32_t>(c->signature.arg.size)});
       offset += static_cast<std::uint32_t>((c->signature.arg.size + 7) / 8 * 8);
     }
-    commands_.push_back(c.get());
+    commands_.push_back(c);
     ++index;
   }
   for (const auto& ev : p.events()) {

@@ -22,7 +22,7 @@ struct GatewayProcess {
   pid_t pid = -1;
   ~GatewayProcess() {
     if (pid <= 0) return;
-    kill(pid, SIGTERM);
+    kill(pid, SIGINT);  // an orderly stop; SIGTERM is what it gets when we die (no FAULT said here)
     waitpid(pid, nullptr, 0);
   }
 };

@@ -73,6 +73,9 @@ void check(double d) {
 }
 void check(std::int64_t) {}
 void check(bool) {}
+void check(const TaskStatistics& t) {
+  if (!std::isfinite(t.mean_compute)) defect("task statistics not finite");
+}
 void check(const teleop::Gains& g) {
   if (!std::isfinite(g.master) || !std::isfinite(g.slave)) defect("gains not finite");
 }
@@ -132,7 +135,9 @@ using Samples = std::tuple<
     Entry<teleop::Gains, saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType,
           MasterSlaveConv<teleop::Gains>>,
     Entry<teleop::ForceLimits, saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType,
-          MasterSlaveConv<teleop::ForceLimits>>>;
+          MasterSlaveConv<teleop::ForceLimits>>,
+    Entry<TaskStatistics, saw_msgs::msg::TaskStatistics, saw_msgs::msg::TaskStatisticsPubSubType,
+          TaskStatisticsConv>>;
 constexpr std::size_t sample_kinds = std::tuple_size_v<Samples>;
 
 void run_sample(std::size_t kind, const std::uint8_t* d, std::size_t n) {

@@ -14,7 +14,11 @@
 
 namespace {
 std::atomic<bool> stop_requested{false};
-void on_signal(int) { stop_requested.store(true, std::memory_order_relaxed); }
+std::atomic<int> stop_signal{0};
+void on_signal(int sig) {
+  stop_signal.store(sig, std::memory_order_relaxed);
+  stop_requested.store(true, std::memory_order_relaxed);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -48,7 +52,9 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   saw::gateway::add_enclave_option(app, config.dds);
   bool exit_with_parent = false;
-  app.add_flag("--exit-with-parent", exit_with_parent, "stop when the parent process (saw-rt) is gone");
+  app.add_flag("--exit-with-parent", exit_with_parent,
+               "stop when the parent process (saw-rt) is gone: SIGTERM then means it died (FAULT is said), "
+               "SIGINT is its orderly stop");
   CLI11_PARSE(app, argc, argv);
   const pid_t parent = getppid();
   if (exit_with_parent) {
@@ -84,7 +90,9 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     // Orphaned: the RT process died. Say so before leaving: peers then see FAULT and why, where
     // they would otherwise see only this participant gone.
-    if (exit_with_parent && getppid() != parent)
+    // SIGTERM is the death signal: getppid() may still name the dying RT process, whose other
+    // threads the kernel reparents us to first (the thread that started us died first).
+    if (exit_with_parent && (stop_signal.load() == SIGTERM || getppid() != parent))
       gateway.announce_exit("the RT process (pid " + std::to_string(parent) + ") exited");
     const auto s = gateway.stats();
     const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };

@@ -57,7 +57,10 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
           dds_.subscriber->create_datareader(dds_.topic(e.topic, *m), DdsContext::reader_qos(Flow::state));
       states_.push_back({m, r, std::make_unique<std::byte[]>(m->size())});
       watch(r);
-      const auto column = state_table().add_column_erased(e.name, t, states_.back().value.get());
+      // The remote task's period_statistics: this mirror task has a column of that name already
+      // (its own statistics, on its `task` interface).
+      const std::string column_name = e.name == "period_statistics" ? "remote_period_statistics" : e.name;
+      const auto column = state_table().add_column_erased(column_name, t, states_.back().value.get());
       Command c;
       c.name = e.name;
       c.signature = {CommandKind::read, t};

@@ -23,9 +23,11 @@
 #include "geometry_msgs/msg/WrenchStampedPubSubTypes.h"
 #include "saw/crtk.hpp"
 #include "saw/fault.hpp"
+#include "saw/task.hpp"
 #include "saw/teleop/teleop_law.hpp"
 #include "saw/type_info.hpp"
 #include "saw_msgs/msg/MasterSlavePubSubTypes.h"
+#include "saw_msgs/msg/TaskStatisticsPubSubTypes.h"
 #include "sensor_msgs/msg/JointStatePubSubTypes.h"
 #include "sensor_msgs/msg/JoyPubSubTypes.h"
 #include "std_msgs/msg/BoolPubSubTypes.h"
@@ -558,6 +560,52 @@ struct MasterSlaveConv {
   }
 };
 
+// A task's period_statistics, as saw_msgs/TaskStatistics (read-only: never a command).
+struct TaskStatisticsConv {
+  static void to_msg(const TaskStatistics& v, saw_msgs::msg::TaskStatistics& m) {
+    m.cycles(v.cycles);
+    m.overruns(v.overruns);
+    m.missed_periods(v.missed_periods);
+    m.period(v.period);
+    m.last_wakeup_latency(v.last_wakeup_latency);
+    m.max_wakeup_latency(v.max_wakeup_latency);
+    m.last_compute(v.last_compute);
+    m.max_compute(v.max_compute);
+    m.mean_compute(v.mean_compute);
+  }
+  static bool from_msg(const saw_msgs::msg::TaskStatistics& m, TaskStatistics& v, std::string& why) {
+    if (!std::isfinite(m.mean_compute())) {
+      why = "mean_compute is not finite";
+      return false;
+    }
+    v.cycles = m.cycles();
+    v.overruns = m.overruns();
+    v.missed_periods = m.missed_periods();
+    v.period = m.period();
+    v.last_wakeup_latency = m.last_wakeup_latency();
+    v.max_wakeup_latency = m.max_wakeup_latency();
+    v.last_compute = m.last_compute();
+    v.max_compute = m.max_compute();
+    v.mean_compute = m.mean_compute();
+    return true;
+  }
+  static std::string text(const TaskStatistics& v) {
+    char b[200];
+    std::snprintf(
+        b, sizeof b,
+        "cycles %llu overruns %llu missed %llu wake-up %.1f us (max %.1f) compute %.1f us (max %.1f)",
+        static_cast<unsigned long long>(v.cycles), static_cast<unsigned long long>(v.overruns),
+        static_cast<unsigned long long>(v.missed_periods), static_cast<double>(v.last_wakeup_latency) / 1e3,
+        static_cast<double>(v.max_wakeup_latency) / 1e3, static_cast<double>(v.last_compute) / 1e3,
+        static_cast<double>(v.max_compute) / 1e3);
+    return b;
+  }
+  static bool parse(std::string_view, TaskStatistics&, std::string& why) {
+    why = "task statistics are read, not sent";
+    return false;
+  }
+};
+
 const std::vector<std::unique_ptr<Mapping>>& mappings() {
   static const auto all = [] {
     std::vector<std::unique_ptr<Mapping>> v;
@@ -590,6 +638,8 @@ const std::vector<std::unique_ptr<Mapping>>& mappings() {
                 Typed<teleop::Gains, MasterSlave, MasterSlavePubSubType, MasterSlaveConv<teleop::Gains>>>());
     v.push_back(std::make_unique<Typed<teleop::ForceLimits, MasterSlave, MasterSlavePubSubType,
                                        MasterSlaveConv<teleop::ForceLimits>>>());
+    v.push_back(std::make_unique<Typed<TaskStatistics, saw_msgs::msg::TaskStatistics,
+                                       saw_msgs::msg::TaskStatisticsPubSubType, TaskStatisticsConv>>());
     return v;
   }();
   return all;

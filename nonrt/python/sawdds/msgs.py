@@ -186,6 +186,21 @@ class MasterSlave(IdlStruct, typename="saw_msgs::msg::dds_::MasterSlave_"):
 
 @final
 @dataclass
+class TaskStatistics(IdlStruct, typename="saw_msgs::msg::dds_::TaskStatistics_"):
+    header: Header = field(default_factory=Header)
+    cycles: t.uint64 = 0
+    overruns: t.uint64 = 0
+    missed_periods: t.uint64 = 0
+    period: t.int64 = 0
+    last_wakeup_latency: t.int64 = 0
+    max_wakeup_latency: t.int64 = 0
+    last_compute: t.int64 = 0
+    max_compute: t.int64 = 0
+    mean_compute: t.float64 = 0.0
+
+
+@final
+@dataclass
 class Manifest(IdlStruct, typename="saw_msgs::msg::dds_::Manifest_"):
     header: Header = field(default_factory=Header)
     host: str = ""
@@ -214,4 +229,4 @@ class QueryReply(IdlStruct, typename="saw_msgs::msg::dds_::QueryReply_"):
 
 BY_DDS_NAME = {cls.__idl_typename__: cls for cls in (
     Float64, Int64, Bool, Empty, PoseStamped, Vector3Stamped, TwistStamped, WrenchStamped, JointState, Joy,
-    OperatingState, StringStamped, MasterSlave, Manifest, Query, QueryReply)}
+    OperatingState, StringStamped, MasterSlave, TaskStatistics, Manifest, Query, QueryReply)}

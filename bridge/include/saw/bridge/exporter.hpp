@@ -21,7 +21,8 @@ namespace saw::bridge {
 // void/write commands that client processes left in their slots' rings. Events emitted by the
 // task are copied into every claimed slot's event ring as they happen. A non-RT service thread
 // answers qualified reads (const and thread-safe by contract) and frees the slots of clients
-// whose heartbeat stopped.
+// whose heartbeat stopped. A task's `period_statistics` read (its `task` interface) is carried
+// too, after the interface's own commands: its health crosses with the one exported interface.
 //
 // Nothing a client writes is trusted: the exporter keeps every offset, size and index of its
 // own in private memory, copies each record out of the segment before looking at it, and runs a
@@ -74,7 +75,7 @@ class Exporter : public detail::CycleHook {
   static void bump(Counter& c) noexcept {  // one writer per counter
     c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
   }
-  void describe(const ProvidedInterface& p);
+  void describe(const Component& component, const ProvidedInterface& p);
   void emit(std::uint32_t index, const void* arg, std::size_t size) noexcept;
   void run_commands(Slot& slot) noexcept;
   void answer_queries();
