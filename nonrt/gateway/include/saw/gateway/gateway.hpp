@@ -89,9 +89,10 @@ class Gateway {
   // Before a gateway leaves because its RT process died: FAULT with `why` on every attached
   // component's operating state and error topic, acknowledged by the readers (at most `wait`),
   // so peers see FAULT and its reason rather than only a participant gone.
-  // (A second: on a loaded machine a reader's acknowledgment took over 200 ms, and samples not
-  // acknowledged when the participant goes are lost to that reader.)
-  void announce_exit(const std::string& why, TimeNs wait = 1'000'000'000);
+  // (Samples not acknowledged when the participant goes are lost to that reader; but a reader
+  // that left without a goodbye never acknowledges, and peers see the gateway gone only after
+  // the wait: 300 ms.)
+  void announce_exit(const std::string& why, TimeNs wait = 300'000'000);
 
  private:
   GatewayConfig config_;
