@@ -1,6 +1,6 @@
 """sawgui: a desktop GUI for a sawrt system over DDS.
 
-usage: sawgui [--domain N] [--interface NAME] [--peer ADDRESS ...] [--headless SECONDS]
+usage: sawgui [--domain N] [--interface NAME] [--peer ADDRESS ...] [--enclave DIR] [--headless SECONDS]
 """
 import argparse
 import json
@@ -24,6 +24,9 @@ def parse(argv):
                         "a remote GUI names the interface that reaches the gateway's host)")
     p.add_argument("--peer", action="append", default=None, metavar="ADDRESS",
                    help="a host to discover by unicast (default 127.0.0.1 on lo; none elsewhere: multicast)")
+    p.add_argument("--enclave", metavar="DIR",
+                   help="join a secure domain with this SROS2 enclave (KEYSTORE/enclaves/NAME, from sawctl security "
+                        "enroll; or ROS_SECURITY_* as ROS 2 has it); needs a Cyclone DDS with its security plugins")
     p.add_argument("--headless", type=float, metavar="SECONDS",
                    help="no window: read what the window reads for SECONDS, then print what arrived as JSON")
     p.add_argument("--all-reads", action="store_true", help="with --headless: read every mapped topic")
@@ -33,20 +36,42 @@ def parse(argv):
 
 
 def configure_dds(args):
-    """CYCLONEDDS_URI from the options, before cyclonedds is imported (unless the user set it)."""
-    if "CYCLONEDDS_URI" in os.environ and args.interface == LOOPBACK and args.peer is None:
-        return
+    """CYCLONEDDS_URI from the options (unless the user set it), with DDS Security when an enclave is
+    named, before any participant exists. Raises sawdds.security.SecurityError."""
     from sawdds.client import interface_uri
-    loopback = args.interface in ("lo", "lo0", "127.0.0.1")
-    peers = args.peer if args.peer is not None else (["127.0.0.1"] if loopback else [])
-    os.environ["CYCLONEDDS_URI"] = interface_uri(args.interface, peers)
+    from sawdds.security import resolve_enclave, secure_uri
+    if "CYCLONEDDS_URI" in os.environ and args.interface == LOOPBACK and args.peer is None:
+        uri = os.environ["CYCLONEDDS_URI"]
+    else:
+        loopback = args.interface in ("lo", "lo0", "127.0.0.1")
+        peers = args.peer if args.peer is not None else (["127.0.0.1"] if loopback else [])
+        uri = interface_uri(args.interface, peers)
+    enclave = resolve_enclave(args.enclave)
+    if enclave is not None:
+        uri = secure_uri(uri, enclave)
+    os.environ["CYCLONEDDS_URI"] = uri
+
+
+def open_live(args):
+    """sawdds.Live on the domain, or None after saying why DDS would not start (with an enclave:
+    Cyclone DDS refused the certificates, or its plugins do not match its libddsc)."""
+    from cyclonedds.core import DDSException
+    from sawdds.live import Live
+    try:
+        return Live(args.domain)
+    except DDSException as e:
+        secure = " with DDS Security (check the enclave, and that the plugins are this Cyclone DDS's)" \
+            if "<Security>" in os.environ.get("CYCLONEDDS_URI", "") else ""
+        print(f"sawgui: DDS did not start in domain {args.domain}{secure}: {e}", file=sys.stderr)
+        return None
 
 
 def headless(args) -> int:
     """The window's DDS readers without a window (the smoke test and the scale benchmark)."""
-    from sawdds.live import Live
     from . import model
-    live = Live(args.domain)
+    live = open_live(args)
+    if live is None:
+        return 2
     deadline = time.monotonic() + args.headless
     cpu0 = time.process_time()
     settle_at, settled = time.monotonic() + args.settle, None
@@ -75,7 +100,12 @@ def headless(args) -> int:
 
 def main(argv=None) -> int:
     args = parse(sys.argv[1:] if argv is None else argv)
-    configure_dds(args)
+    from sawdds.security import SecurityError
+    try:
+        configure_dds(args)
+    except SecurityError as e:
+        print(f"sawgui: {e}", file=sys.stderr)
+        return 2
     if args.headless is not None:
         return headless(args)
     try:
@@ -84,11 +114,12 @@ def main(argv=None) -> int:
         print("sawgui: PySide6 is missing: pip install 'sawdds[gui]' (or the repository's nonrt/python[gui])",
               file=sys.stderr)
         return 2
-    from sawdds.live import Live
     from .app import MainWindow
     from PySide6 import QtCore
+    live = open_live(args)
+    if live is None:
+        return 2
     app = QtWidgets.QApplication(sys.argv[:1])
-    live = Live(args.domain)
     w = MainWindow(live, args.domain, args.interface)
     w.show()
     # Ctrl-C (or SIGTERM, as tools/run.sh --gui's saw-rt gets) closes the window as its close box
