@@ -67,8 +67,12 @@ class ErrorLines {
 
 class Tripper : public saw::Component {
  public:
-  Tripper() : Component("tripper") { require("arm").add_function("trip", trip); }
-  saw::FunctionVoid trip;
+  Tripper() : Component("tripper") {
+    auto& arm = require("arm");
+    arm.add_function("trip", trip);
+    arm.add_function("clear", clear);
+  }
+  saw::FunctionVoid trip, clear;
 };
 
 TEST(GatewayErrorTopic, AFaultEventAndALostRtProcessAreSaidOnTheErrorTopic) {
@@ -89,6 +93,12 @@ TEST(GatewayErrorTopic, AFaultEventAndALostRtProcessAreSaidOnTheErrorTopic) {
       (void)tripper.trip();
       return errors.has("FAULT: node 5 device error (code 0x2310)");
     })) << errors.all();
+    // A fault of code none clears it: said as cleared, never as a FAULT a GUI would show.
+    ASSERT_TRUE(wait_for([&] {
+      (void)tripper.clear();
+      return errors.has("fault cleared");
+    })) << errors.all();
+    EXPECT_FALSE(errors.has("FAULT: none")) << errors.all();
     s.manager.stop();
     ASSERT_TRUE(wait_for([&] { return errors.has("FAULT: the RT process serving it stopped answering"); }))
         << errors.all();

@@ -19,7 +19,7 @@ namespace saw::testing {
 
 // Provided "arm": count (read), add (write, limited to ±10,000,000), tripled (qualified read),
 // ticked (event, every 10th cycle), trip (void: raises `fault`, a FaultInfo event, as a drive's
-// emergency would).
+// emergency would), clear (void: `fault` with code none, as a re-enabled component says it).
 class CountingDevice : public Task {
  public:
   explicit CountingDevice(std::string name)
@@ -39,6 +39,7 @@ class CountingDevice : public Task {
       f.detail = 0x2310;
       (void)(*fault_)(f);
     });
+    p.add_command_void("clear", [this] { (void)(*fault_)(FaultInfo{}); });  // re-enabled: code none
   }
   void run() override {
     ++count_;

@@ -122,7 +122,12 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
                           o->mapping->write(*o->writer, arg, wall_from_monotonic(monotonic_now()),
                                             o->self->name_);
                           o->self->event_count_.fetch_add(1, std::memory_order_relaxed);
-                          if (o->fault_text) o->self->publish_error("FAULT: " + o->mapping->to_text(arg));
+                          // A FaultInfo of code none clears the fault (the component was
+                          // enabled again): said as such, not as a FAULT.
+                          if (o->fault_text)
+                            o->self->publish_error(static_cast<const FaultInfo*>(arg)->code == FaultCode::none
+                                                       ? "fault cleared"
+                                                       : "FAULT: " + o->mapping->to_text(arg));
                         },
                         out.get()});
     events_.push_back(std::move(out));

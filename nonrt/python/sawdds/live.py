@@ -305,8 +305,11 @@ class Live:
                         log.append((s.sample_info.source_timestamp * 1e-9, s.string))
                         taken[0] += 1
                         c = self._components.get(comp)
-                        if c is not None and s.string.startswith(FAULT):
-                            # The gateway says FAULT on both topics; whichever comes first counts.
+                        ts = s.sample_info.source_timestamp * 1e-9
+                        # The gateway says FAULT on both topics; whichever comes first counts. A
+                        # late joiner also gets the topic's last 16 lines: a FAULT older than the
+                        # state it has (cleared since) does not count.
+                        if c is not None and s.string.startswith(FAULT) and ts >= (c.get("state_time") or 0):
                             if c["state"] != FAULT:
                                 c["state"] = FAULT
                                 c["state_time"] = c["fault_time"] = s.sample_info.source_timestamp * 1e-9
