@@ -17,11 +17,13 @@ def check(cond, what):
 
 
 def wait_for(reader, pred, timeout):
-    """The first sample from `reader` for which pred(sample) holds, or None after `timeout` s."""
+    """The first sample from `reader` for which pred(sample) holds, or None after `timeout` s.
+    A writer's unregistration (its gateway gone) comes as an InvalidSample, which is skipped."""
+    from cyclonedds.internal import InvalidSample
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         for s in reader.take(N=64):
-            if pred(s):
+            if not isinstance(s, InvalidSample) and pred(s):
                 return s
         time.sleep(0.001)
     return None
