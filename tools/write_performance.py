@@ -245,7 +245,9 @@ def gui_section(r):
         "0, 1 and 10 GUI-equivalent subscribers: `sawgui --headless`, the window's own DDS readers",
         "(`sawdds.Live`: the registry, every operating state and error topic, and what the teleoperation",
         "panel reads — both arms' `measured_cp`, the tracking error, the slave force, the fault and clutch",
-        f"events), each its own process on CPU {j['other_cpu']}. One run: the configurations alternate for "
+        "events — and the Task health view's three `period_statistics`, which the gateway publishes at a "
+        "tenth of the rows), each its own process on CPU "
+        f"{j['other_cpu']}. One run: the configurations alternate for "
         f"{j['rounds']} rounds, {j['seconds']:g} s",
         "measured each (after 3 s for discovery); the RT figures are each run's `saw-rt` summary (worst",
         "of the three tasks), the p99 the median over the rounds.",
@@ -256,13 +258,14 @@ def gui_section(r):
     ]
     for x in confs:
         s = x["samples_per_subscriber"]
-        expect = 1000 * x["state_topics_1khz"] * x["seconds"]
+        rate = x.get("state_rate_hz", 1000 * x.get("state_topics_1khz", 4))
+        expect = rate * x["seconds"]
         cpu = x["subscriber_cpu_percent"]
         lines.append(
             f"| {x['subscribers']} | {', '.join(map(str, x['overruns']))} | {x['p99_median_us']:.0f} "
             f"({x['p99_us'][0]:.0f}–{x['p99_us'][-1]:.0f}) | {x['p99_median_us'] / base:.2f} | "
             f"{x['gateway_cpu_percent']:.1f} % | "
-            + (f"{min(s)}–{max(s)} ({min(s) / expect:.1%}–{max(s) / expect:.1%} of {x['state_topics_1khz']} × 1 kHz)"
+            + (f"{min(s)}–{max(s)} ({min(s) / expect:.1%}–{max(s) / expect:.1%} of {rate} samples/s)"
                if s else "–")
             + " | " + (f"{sum(cpu) / len(cpu):.1f} %" if cpu else "–") + " |")
     busy = ten["gateway_cpu_percent"] + sum(ten["subscriber_cpu_percent"]) / max(1, len(ten["overruns"]))

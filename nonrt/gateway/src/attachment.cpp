@@ -13,6 +13,7 @@
 #include "saw/crtk.hpp"
 #include "saw/detail/access.hpp"
 #include "saw/fault.hpp"
+#include "saw/task.hpp"
 #include "saw_msgs/msg/QueryPubSubTypes.h"
 #include "saw_msgs/msg/QueryReplyPubSubTypes.h"
 
@@ -178,6 +179,9 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
           auto* w = dds_.publisher->create_datawriter(
               dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::state));
           (latched ? changed_states_ : states_).push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
+          // A task's statistics are cumulative: a tenth of the rows tells a GUI as much, for a
+          // tenth of the samples every subscriber takes.
+          if (m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
           if (latched && fault_writer_ == nullptr) fault_writer_ = w;
         }
       } else {
@@ -316,6 +320,7 @@ bool Attachment::publish_state(StateOut& s, bool only_if_changed) {
 void Attachment::run() {
   std::uint32_t seen = 0;
   unsigned rows = 0;
+  std::uint64_t published_rows = 0;
   bool was_alive = true;
   bool announce = true;  // the latched states, once the mirror has a row (again)
   std::string why;
@@ -342,7 +347,9 @@ void Attachment::run() {
     }
     if (row && alive && ++rows >= decimation_) {
       rows = 0;
-      for (auto& s : states_) publish_state(s, false);
+      for (auto& s : states_)
+        if (published_rows % s.every == 0) publish_state(s, false);
+      ++published_rows;
     }
     detail::Access::remote_events(*proxy_)->drain();
     for (auto& c : commands_) {

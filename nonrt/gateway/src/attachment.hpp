@@ -40,6 +40,7 @@ class Attachment {
     fdds::DataWriter* writer;
     std::vector<std::byte> value;
     std::vector<std::byte> previous = {};  // for states published on change
+    unsigned every = 1;                    // of the published rows (a task's statistics: 1 in 10)
   };
   struct EventOut {
     Attachment* self;
