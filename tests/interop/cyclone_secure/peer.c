@@ -34,8 +34,8 @@ static int usage(void) {
 }
 
 /* Reliable and XCDR1, as the gateway's command readers and sawdds use them. */
-static dds_qos_t *reliable_qos(void) {
-  dds_qos_t *q = dds_create_qos();
+static dds_qos_t* reliable_qos(void) {
+  dds_qos_t* q = dds_create_qos();
   dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
   dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 16);
   dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;
@@ -43,15 +43,21 @@ static dds_qos_t *reliable_qos(void) {
   return q;
 }
 
-static int read_poses(dds_entity_t dp, const char *component, int wanted, double timeout) {
+/* Topic rt/COMPONENT/WHAT of type `desc`; its name in `name`. Says why when Cyclone refuses it. */
+static dds_entity_t component_topic(dds_entity_t dp, const dds_topic_descriptor_t* desc,
+                                    const char* component, const char* what, char* name, size_t size) {
+  snprintf(name, size, "rt/%s/%s", component, what);
+  const dds_entity_t topic = dds_create_topic(dp, desc, name, NULL, NULL);
+  if (topic < 0) fprintf(stderr, "saw-cyclone-peer: topic %s: %s\n", name, dds_strretcode(topic));
+  return topic;
+}
+
+static int read_poses(dds_entity_t dp, const char* component, int wanted, double timeout) {
   char name[256];
-  snprintf(name, sizeof name, "rt/%s/measured_cp", component);
-  dds_entity_t topic = dds_create_topic(dp, &geometry_msgs_msg_dds__PoseStamped__desc, name, NULL, NULL);
-  if (topic < 0) {
-    fprintf(stderr, "saw-cyclone-peer: topic %s: %s\n", name, dds_strretcode(topic));
-    return 2;
-  }
-  dds_qos_t *q = dds_create_qos(); /* best effort: matches the gateway's state writers */
+  const dds_entity_t topic = component_topic(dp, &geometry_msgs_msg_dds__PoseStamped__desc, component,
+                                             "measured_cp", name, sizeof name);
+  if (topic < 0) return 2;
+  dds_qos_t* q = dds_create_qos(); /* best effort: matches the gateway's state writers */
   dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
   dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;
   dds_qset_data_representation(q, 1, &xcdr1);
@@ -65,14 +71,15 @@ static int read_poses(dds_entity_t dp, const char *component, int wanted, double
   int got = 0;
   double first = -1;
   while (got < wanted && now_s() - start < timeout) {
-    void *samples[16] = {NULL};
+    void* samples[16] = {NULL};
     dds_sample_info_t infos[16];
     const int n = dds_take(reader, samples, infos, 16, 16);
     for (int i = 0; i < n; ++i)
       if (infos[i].valid_data) {
-        const geometry_msgs_msg_dds__PoseStamped_ *p = samples[i];
+        const geometry_msgs_msg_dds__PoseStamped_* p = samples[i];
         if (first < 0) first = now_s() - start;
-        if (got == 0) printf("first pose: %g %g %g\n", p->pose.position.x, p->pose.position.y, p->pose.position.z);
+        if (got == 0)
+          printf("first pose: %g %g %g\n", p->pose.position.x, p->pose.position.y, p->pose.position.z);
         ++got;
       }
     if (n > 0) dds_return_loan(reader, samples, n);
@@ -83,15 +90,12 @@ static int read_poses(dds_entity_t dp, const char *component, int wanted, double
   return got >= wanted ? 0 : 1;
 }
 
-static int write_forces(dds_entity_t dp, const char *component, double seconds) {
+static int write_forces(dds_entity_t dp, const char* component, double seconds) {
   char name[256];
-  snprintf(name, sizeof name, "rt/%s/servo_cf", component);
-  dds_entity_t topic = dds_create_topic(dp, &geometry_msgs_msg_dds__WrenchStamped__desc, name, NULL, NULL);
-  if (topic < 0) {
-    fprintf(stderr, "saw-cyclone-peer: topic %s: %s\n", name, dds_strretcode(topic));
-    return 2;
-  }
-  dds_qos_t *q = reliable_qos();
+  const dds_entity_t topic = component_topic(dp, &geometry_msgs_msg_dds__WrenchStamped__desc, component,
+                                             "servo_cf", name, sizeof name);
+  if (topic < 0) return 2;
+  dds_qos_t* q = reliable_qos();
   dds_entity_t writer = dds_create_writer(dp, topic, q, NULL);
   dds_delete_qos(q);
   if (writer < 0) {
@@ -117,7 +121,7 @@ static int write_forces(dds_entity_t dp, const char *component, double seconds) 
   return matched > 0 ? 0 : 1;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char** argv) {
   if (argc < 5) return usage();
   const dds_domainid_t domain = (dds_domainid_t)atoi(argv[2]);
   const dds_entity_t dp = dds_create_participant(domain, NULL, NULL);
