@@ -87,7 +87,13 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  d->start();
+  try {
+    d->start();
+  } catch (const std::exception& e) {
+    // A device that does not boot, a port that does not open: the others were stopped safely.
+    std::fprintf(stderr, "saw-rt: %s\n", e.what());
+    return 1;
+  }
   const auto started = std::chrono::steady_clock::now();
   if (d->clock() == saw::deploy::Clock::stepped) {
     d->run_for(duration);

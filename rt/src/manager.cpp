@@ -283,11 +283,30 @@ void Manager::check_ready_to_start() {
 }
 
 void Manager::prepare_components() {
-  for (auto* c : components_) {
-    c->state_table().finalize();
-    c->startup();
-    detail::Access::set_lifecycle(*c, Lifecycle::ready);
+  std::size_t started = 0;
+  std::string reason;
+  try {
+    for (; started < components_.size(); ++started) {
+      Component* c = components_[started];
+      c->state_table().finalize();
+      c->startup();
+      detail::Access::set_lifecycle(*c, Lifecycle::ready);
+    }
+    return;
+  } catch (const std::exception& e) {
+    reason = e.what();
+  } catch (...) {
+    reason = "an exception that is not a std::exception";
   }
+  // Those already started stop again, last first: a device leaves its hardware safe.
+  for (std::size_t i = started; i-- > 0;) {
+    try {
+      components_[i]->cleanup();
+    } catch (...) {  // the start's failure is what gets reported
+    }
+    detail::Access::set_lifecycle(*components_[i], Lifecycle::finished);
+  }
+  throw StartError(components_[started]->name(), reason);
 }
 
 void Manager::start() {
@@ -306,7 +325,13 @@ void Manager::start() {
     dma_hold_.emplace();
     if (!dma_hold_->error().empty()) rt_warnings_.push_back(dma_hold_->error());
   }
-  prepare_components();
+  try {
+    prepare_components();
+  } catch (...) {
+    dma_hold_.reset();
+    log_drain_.reset();
+    throw;
+  }
   running_.store(true, std::memory_order_release);
   first_wakeup_.store(0, std::memory_order_relaxed);
   for (auto* c : components_) detail::Access::set_lifecycle(*c, Lifecycle::active);

@@ -205,7 +205,12 @@ void TestDrive::step(TimeNs now) noexcept {
       }
       if (nmt_.state() == NmtState::stopped) continue;
       server_->on_frame(f, now);
-      if (parse_sync(f)) sync_pending_ = true;
+      // A SYNC acts where it stands in the stream: on the RPDOs received before it (a master's
+      // last SYNC before its NMT pre-operational still takes effect).
+      if (parse_sync(f)) {
+        if (nmt_.state() == NmtState::operational) on_sync(now);
+        continue;
+      }
       if (nmt_.state() != NmtState::operational) continue;
       for (std::size_t p = 0; p < rpdos_.size(); ++p) {
         if (rpdos_[p].receive(f) != PdoReceive::ok) continue;
@@ -224,8 +229,6 @@ void TestDrive::step(TimeNs now) noexcept {
     heartbeat_ms_ = hb;
     heartbeat_.set_period(static_cast<TimeNs>(hb) * 1'000'000, now);
   }
-  if (sync_pending_ && nmt_.state() == NmtState::operational) on_sync(now);
-  sync_pending_ = false;
   if (auto f = nmt_.poll()) send(*f);
   if (auto f = server_->poll(now)) send(*f);
   if (auto f = emcy_.poll(now)) send(*f);

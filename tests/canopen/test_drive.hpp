@@ -84,7 +84,7 @@ class TestDrive {
   std::vector<std::vector<ObjectAddress>> tpdo_objects_;
   std::vector<Write> writes_;
   std::uint16_t heartbeat_ms_ = 0;
-  bool fault_ = false, silent_ = false, heartbeat_silent_ = false, sync_pending_ = false;
+  bool fault_ = false, silent_ = false, heartbeat_silent_ = false;
   std::uint16_t controlword_ = 0;
   double position_ = 0, velocity_ = 0;
   TimeNs last_sync_ = 0;

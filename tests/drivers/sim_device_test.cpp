@@ -279,6 +279,9 @@ TEST(SimHapticDevice, StateCommandsAndDisabledDeviceIgnoresForces) {
   ASSERT_EQ(rig.client.state_command(saw::StateCommand::enable), saw::Status::ok);
   rig.steps(20);
   EXPECT_EQ(rig.client.last_state, saw::OperatingStateValue::enabled);
+  EXPECT_NEAR(rig.position().x(), 0, 1e-12) << "a command sent while disabled is not applied once enabled";
+  ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{2, 0, 0}, {}}), saw::Status::ok);
+  rig.steps(20);
   EXPECT_GT(rig.position().x(), 0);
   ASSERT_EQ(rig.client.state_command(saw::StateCommand::pause), saw::Status::ok);
   rig.steps(3);

@@ -68,7 +68,7 @@ TEST(FalconCycleCost, PrintsTheCodecExchangeAndCycleCosts) {
           rig.force(0.5 * ((++i % 100) < 50 ? 1 : -1), 0, 0);
           rig.cycle();
         }));
-  EXPECT_EQ(rig.device->summary().faults, 0u);
+  EXPECT_EQ(rig.device->device_status().faults, 0u);
 }
 
 }  // namespace

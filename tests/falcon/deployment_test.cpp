@@ -99,7 +99,7 @@ TEST(FalconDeployment, ShippedFalconSimTracksAsTheSimulatedOmniDoes) {
     EXPECT_TRUE(master->operating_state().is_homed);
     EXPECT_FALSE(master->operating_state().is_busy);
     EXPECT_EQ(master->operating_state().state, saw::OperatingStateValue::enabled);
-    EXPECT_EQ(master->summary().faults, 0u);
+    EXPECT_EQ(master->device_status().faults, 0u);
     EXPECT_EQ(master->summary().saturated, 0u);
   });
   std::printf("omni-sim teleop:   tracking RMS %.3f mm, max %.3f mm over %llu cycles\n", omni.rms * 1e3,

@@ -60,7 +60,7 @@ TEST(FalconDevice, NonFiniteOrTooLargeForcesAreRefusedAndCounted) {
   rig.cycle();
   rig.force(0, 0, 50);
   rig.cycle();
-  EXPECT_EQ(rig.device->summary().refused_commands, 2u);
+  EXPECT_EQ(rig.device->device_status().refused.total(), 2u);
   EXPECT_TRUE(rig.sim->motor_torque().isZero());
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
 }

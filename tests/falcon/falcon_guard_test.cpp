@@ -43,9 +43,9 @@ TEST(RtGuard, FalconCycleOnTheSimulatedFirmwareIsRtClean) {
   const auto counts = window.counts();
   EXPECT_TRUE(rig.homed());
   EXPECT_EQ(rig.state(), saw::OperatingStateValue::enabled);
-  EXPECT_EQ(rig.device->summary().faults, 1u);
-  EXPECT_EQ(rig.device->summary().refused_commands, 1u);
-  EXPECT_EQ(rig.device->summary().watchdog_trips, 1u);
+  EXPECT_EQ(rig.device->device_status().faults, 1u);
+  EXPECT_EQ(rig.device->device_status().refused.total(), 1u);
+  EXPECT_EQ(rig.device->watchdog_trips(), 1u);
   EXPECT_EQ(rig.device->summary().no_answer, 3u);
   EXPECT_GT(enabled, 2500);
   EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
@@ -74,7 +74,7 @@ TEST(RtGuard, FalconCycleThroughTheIoThreadIsRtClean) {
   }
   const auto counts = window.counts();
   device.cleanup();
-  EXPECT_EQ(device.summary().faults, 0u);
+  EXPECT_EQ(device.device_status().faults, 0u);
   EXPECT_GT(device.summary().exchanges - device.summary().no_answer, 300u);
   EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
   EXPECT_RT_CLEAN(counts);

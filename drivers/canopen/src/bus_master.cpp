@@ -171,7 +171,8 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
   }
   std::size_t rpdos = 0;
   for (const Axis& a : impl_->axes) rpdos += a.rpdos.size();
-  impl_->outbox.resize(rpdos + 4);  // the RPDOs, an SDO request, SYNC, and room to spare
+  // The RPDOs, an SDO request, SYNC, room to spare, and an NMT command per node (shut_down()).
+  impl_->outbox.resize(rpdos + 4 + impl_->axes.size());
   impl_->inbox.resize(64);
 }
 
@@ -412,6 +413,23 @@ void BusMaster::transmit(TimeNs now) noexcept {
     m.out(*s);
     ++m.counters.syncs;
   }
+  const std::size_t sent = m.bus.send(std::span<const can::Frame>(m.outbox.data(), m.out_count));
+  m.counters.frames_sent += sent;
+  m.counters.send_refused += m.out_count - sent;
+}
+
+void BusMaster::shut_down(std::uint16_t controlword, TimeNs now) noexcept {
+  Impl& m = *impl_;
+  m.out_count = 0;
+  for (Axis& a : m.axes) {
+    a.controller.set_target(cia402::Target::switch_on_disabled, now);
+    for (const Slot& s : a.controlwords)
+      (void)a.rpdos[static_cast<std::size_t>(s.pdo)].set(static_cast<std::size_t>(s.slot), controlword);
+    for (const PdoPacker& p : a.rpdos) m.out(p.frame());
+  }
+  m.out(m.sync.extra());
+  ++m.counters.syncs;
+  for (const Axis& a : m.axes) m.out(nmt_frame(NmtCommand::enter_pre_operational, a.config.node));
   const std::size_t sent = m.bus.send(std::span<const can::Frame>(m.outbox.data(), m.out_count));
   m.counters.frames_sent += sent;
   m.counters.send_refused += m.out_count - sent;

@@ -37,7 +37,7 @@ std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
   return axes;
 }
 
-std::unique_ptr<can::Bus> open(const std::string& uri) {
+std::unique_ptr<can::Bus> open_uri(const std::string& uri) {
   can::BusConfig c;
   c.uri = uri;
   return can::open_bus(c);
@@ -102,12 +102,34 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
 CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus& bus)
     : CanopenArm(std::move(name), task, std::move(config), nullptr, &bus) {}
 
+namespace {
+
+// The contract the base runs for it: drives, whose safe state is disabled (quick stop on a fault).
+DeviceConfig contract_of(const CanopenArmConfig& c) {
+  DeviceConfig d;
+  d.interface_name = c.interface_name;
+  d.safe_state = SafeState::drive_disabled;
+  d.cartesian = d.servo_cf = c.chain.has_value();
+  d.max_force = c.max_force;
+  d.servo_jp = d.servo_jv = d.servo_jf = true;  // one of them per mode: accepts() says which
+  d.command_timeout = c.command_timeout;
+  d.fault_on_command_timeout = c.on_command_timeout == CommandTimeoutAction::fault;
+  d.start_enabled = c.start_enabled;
+  // The drives' own transitions time out first (cia402::Progress::timeout, with the statusword).
+  d.enable_timeout = 2 * c.transition_timeout;
+  for (const JointConfig& j : c.joints)
+    d.joints.push_back({j.name, j.min, j.max, j.max_velocity, j.max_torque});
+  return d;
+}
+
+}  // namespace
+
 CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config,
                        std::unique_ptr<can::Bus> owned, can::Bus* bus)
-    : Task(std::move(name), task),
+    : Device(std::move(name), task, contract_of(checked(config, task))),
       config_(checked(std::move(config), task)),
       n_(config_.joints.size()),
-      owned_bus_(bus != nullptr ? std::move(owned) : open(config_.bus)),
+      owned_bus_(bus != nullptr ? std::move(owned) : open_uri(config_.bus)),
       bus_(bus != nullptr ? *bus : *owned_bus_) {
   // A bus of the caller's is known by its address: two of them may share a name.
   claim_ = std::make_unique<Claim>(
@@ -119,12 +141,8 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
   m.controller.transition_timeout = config_.transition_timeout;
   master_ = std::make_unique<BusMaster>(bus_, m, axes_of(config_));
   if (config_.chain) kinematics_ = std::make_unique<ChainKinematics>(*config_.chain);
-  measured_js_.size = setpoint_js_.size = static_cast<std::uint32_t>(n_);
-  for (std::size_t i = 0; i < n_; ++i) {
-    (void)measured_js_.set_name(i, config_.joints[i].name);
-    (void)setpoint_js_.set_name(i, config_.joints[i].name);
-    max_torque_[i] = config_.joints[i].max_torque;
-  }
+  setpoint_js_.size = static_cast<std::uint32_t>(n_);
+  for (std::size_t i = 0; i < n_; ++i) (void)setpoint_js_.set_name(i, config_.joints[i].name);
   status_.joints = static_cast<std::uint8_t>(n_);
   status_.command_timeout = config_.command_timeout;
   provide_interfaces();
@@ -133,28 +151,8 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
 CanopenArm::~CanopenArm() = default;
 
 void CanopenArm::provide_interfaces() {
-  namespace arm = crtk::arm;
   auto& st = state_table();
-  auto& p = provide(config_.interface_name);
-  crtk::provide(p, arm::measured_js, st, &measured_js_);
-  crtk::provide(p, joint_space::setpoint_js, st, &setpoint_js_);
-  crtk::provide(p, arm::operating_state, st, &state_);
-  p.add_command_read("fault", st.add_column("fault", &fault_));
-  p.add_command_read("command_timeout", st.add_column("command_timeout", &command_timeout_));
-  p.add_command_read("watchdog_trips", st.add_column("watchdog_trips", &watchdog_trips_));
-  if (kinematics_) {
-    crtk::provide(p, arm::measured_cp, st, &measured_cp_);
-    crtk::provide(p, arm::measured_cv, st, &measured_cv_);
-    crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { servo_cf(w); });
-    if (config_.max_force > 0) p.limit(arm::servo_cf.name, -config_.max_force, config_.max_force);
-  }
-  crtk::provide(p, joint_space::servo_jp, [this](const JointState& js) { servo_joints(js, cia402::csp); });
-  crtk::provide(p, joint_space::servo_jv, [this](const JointState& js) { servo_joints(js, cia402::csv); });
-  crtk::provide(p, joint_space::servo_jf, [this](const JointState& js) { servo_joints(js, cia402::cst); });
-  crtk::provide(p, arm::state_command, [this](const StateCommand& c) { state_command(c); });
-  state_event_ = &crtk::provide(p, arm::operating_state_event);
-  fault_event_ = &p.add_event_write<FaultInfo>("fault");
-
+  crtk::provide(arm(), joint_space::setpoint_js, st, &setpoint_js_);
   auto& c = provide("canopen");
   c.add_command_read("status", st.add_column("status", &status_, ColumnUse::summary));
   c.add_command_qualified_read<SdoRequest, SdoReply>("sdo", [this](const SdoRequest& q, SdoReply& r) {
@@ -162,48 +160,47 @@ void CanopenArm::provide_interfaces() {
   });
 }
 
-void CanopenArm::startup() {
+void CanopenArm::open() {
   StartupSequence sequence(bus_, std::vector<AxisConfig>(axes_of(config_)), config_.startup);
   run_startup(sequence, config_.startup_pause);
-  if (config_.start_enabled) enable_requested_ = true;
-}
-
-void CanopenArm::set_state(OperatingStateValue s) noexcept {
-  if (state_.state == s) return;
-  state_.state = s;
-  (void)(*state_event_)(state_);
 }
 
 void CanopenArm::target_all(cia402::Target t) noexcept {
   for (std::size_t i = 0; i < n_; ++i) master_->set_state_target(i, t, now());
 }
 
-void CanopenArm::state_command(StateCommand c) noexcept {
-  switch (c) {
-    case StateCommand::enable:
-      enable_requested_ = true;  // acted on in the cycle, with its measurements
-      break;
-    case StateCommand::disable:
-      enable_requested_ = enabling_ = false;
-      state_.is_busy = false;
-      target_all(cia402::Target::switch_on_disabled);
-      set_state(OperatingStateValue::disabled);
-      break;
-    case StateCommand::pause:
-      if (state_.state == OperatingStateValue::enabled && !enabling_) set_state(OperatingStateValue::paused);
-      break;
-    case StateCommand::resume:
-      if (state_.state == OperatingStateValue::paused) set_state(OperatingStateValue::enabled);
-      break;
-    case StateCommand::home:
-      // Cyclic synchronous modes need an absolute position: the drives' encoders (or their own
-      // homing, done outside this component) give it. Nothing moves here.
-      if (!state_.is_homed) {
-        state_.is_homed = true;
-        (void)(*state_event_)(state_);
-      }
+bool CanopenArm::accepts(ServoMode m) const noexcept {
+  switch (config_.mode) {
+    case cia402::csp:
+      return m == ServoMode::jp;
+    case cia402::csv:
+      return m == ServoMode::jv;
+    default:
+      return m == ServoMode::jf || m == ServoMode::cf;
+  }
+}
+
+void CanopenArm::enter_safe_state(SafeReason why) {
+  enable_sent_ = false;
+  // A fault the base raised itself (a stale command, an enable that never completed) in
+  // CANopen's terms.
+  if (why == SafeReason::fault && reason_ == FaultReason::none)
+    reason_ = device_status().fault.code == FaultCode::input_stale ? FaultReason::command_stale
+                                                                   : FaultReason::enable_timeout;
+  switch (why) {
+    case SafeReason::fault:  // on the drives' quick-stop ramp; the master goes on watching
+      return target_all(cia402::Target::quick_stop);
+    case SafeReason::disable:  // power off; the master goes on (an enable walks them back)
+      return target_all(cia402::Target::switch_on_disabled);
+    case SafeReason::stop:
+    case SafeReason::start_failed:
       break;
   }
+  // The master stops: nothing will send the drives anything again. Zero torque or velocity,
+  // disable voltage taken at one last SYNC, and the nodes out of operational.
+  if (config_.mode != cia402::csp)
+    for (std::size_t i = 0; i < n_; ++i) (void)master_->set_setpoint(i, 0.0);
+  master_->shut_down(cia402::controlword::disable_voltage_command, now());
 }
 
 }  // namespace saw::canopen

@@ -35,6 +35,10 @@ std::optional<can::Frame> SyncProducer::poll(TimeNs now) noexcept {
   const TimeNs behind = (now - next_) / period_;  // whole periods missed
   skipped_ += static_cast<std::uint64_t>(behind);
   next_ += (behind + 1) * period_;
+  return extra();
+}
+
+can::Frame SyncProducer::extra() noexcept {
   if (overflow_ == 0) return sync_frame();
   const std::uint8_t c = counter_;
   counter_ = counter_ >= overflow_ ? 1 : static_cast<std::uint8_t>(counter_ + 1);

@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include "saw/eigen.hpp"
-#include "saw/log.hpp"
 
 namespace saw::drivers::falcon {
 namespace {
@@ -23,6 +22,18 @@ FalconConfig checked(FalconConfig c, const TaskConfig& task) {
   return c;
 }
 
+// The contract the base runs for it: a haptic device, safe at zero force.
+DeviceConfig contract_of(const FalconConfig& c) {
+  DeviceConfig d;
+  d.safe_state = SafeState::zero_force;
+  d.max_force = c.max_force;
+  d.command_timeout = c.command_timeout;
+  d.start_enabled = c.start_enabled;
+  d.home_timeout = c.homing_timeout;
+  for (const char* n : {"arm0", "arm1", "arm2"}) d.joints.push_back(JointLimits{n});
+  return d;
+}
+
 constexpr std::uint8_t leds_of(OperatingStateValue s, bool homing, bool homed) noexcept {
   if (s == OperatingStateValue::fault) return control::led_red;
   if (homing) return control::led_blue;
@@ -34,43 +45,19 @@ constexpr std::uint8_t leds_of(OperatingStateValue s, bool homing, bool homed) n
 
 FalconDevice::FalconDevice(std::string name, TaskConfig task, FalconConfig config,
                            std::unique_ptr<FalconTransport> transport)
-    : Task(std::move(name), task),
+    : Device(std::move(name), task, contract_of(checked(config, task))),
       config_(checked(std::move(config), task)),
       kinematics_(config_.geometry),
       transport_(std::move(transport)) {
-  if (!task.is_periodic())
-    throw std::invalid_argument("FalconDevice '" + this->name() + "' must be periodic");
   if (!transport_) throw std::invalid_argument("FalconDevice '" + this->name() + "': no transport");
   origin_ = config_.origin;
   if (!origin_.allFinite() && !kinematics_.forward(kinematics_.angles({0, 0, 0}), origin_))
     throw std::invalid_argument("FalconDevice: the geometry has no pose at encoder counts 0");
   x_ = origin_;
-  measured_js_.size = 3;
-  for (std::size_t i = 0; i < 3; ++i)
-    (void)measured_js_.set_name(i, i == 0 ? "arm0" : i == 1 ? "arm1" : "arm2");
-  state_.state = OperatingStateValue::disabled;
-  summary_.command_timeout = config_.command_timeout;
   publish();
 
   auto& st = state_table();
-  namespace arm_if = crtk::arm;
-  auto& arm = provide(std::string(arm_if::interface_name));
-  crtk::provide(arm, arm_if::measured_cp, st, &measured_cp_);
-  crtk::provide(arm, arm_if::measured_cv, st, &measured_cv_);
-  crtk::provide(arm, arm_if::measured_js, st, &measured_js_);
-  crtk::provide(arm, arm_if::operating_state, st, &state_);
-  arm.add_command_read("servo_force", st.add_column("servo_force", &servo_force_));
-  watchdog_.set_timeout(config_.command_timeout);
-  arm.add_command_read("command_timeout", watchdog_.holding_column());
-  arm.add_command_read("watchdog_trips", watchdog_.trips_column());
-  arm.add_command_read("fault", st.add_column("fault", &fault_));
-  crtk::provide(arm, arm_if::servo_cf, [this](const Wrench& w) { servo_cf(w); });
-  arm.limit(arm_if::servo_cf.name, -config_.max_force, config_.max_force);
-  crtk::provide(arm, arm_if::state_command, [this](const StateCommand& c) { state_command(c); });
-  state_event_ = &crtk::provide(arm, arm_if::operating_state_event);
-  clutch_event_ = &crtk::provide(arm, arm_if::clutch);
-  operator_event_ = &crtk::provide(arm, arm_if::operator_present);
-  fault_event_ = &arm.add_event_write<FaultInfo>("fault");
+  arm().add_command_read("servo_force", st.add_column("servo_force", &servo_force_));
   auto& falcon = provide("falcon");
   falcon.add_command_read("summary", st.add_column("summary", &summary_, ColumnUse::summary));
   falcon.add_command_read("leds", st.add_column("leds", &leds_));
@@ -78,81 +65,35 @@ FalconDevice::FalconDevice(std::string name, TaskConfig task, FalconConfig confi
 
 FalconDevice::~FalconDevice() = default;
 
-void FalconDevice::startup() {
-  transport_->open();  // throws TransportError saying what is wrong: the deployment stops here
-  homing_ = config_.home_on_start;
-  homing_start_ = -1;
+void FalconDevice::open() {
+  transport_->open();  // throws TransportError saying what is wrong: the start fails with it
   // Busy while homing, as after a `home` command: a teleoperation holds until the positions are
   // absolute (before, they count from wherever the arms were at power-up).
-  state_.is_busy = homing_;
-  if (config_.start_enabled) state_.state = OperatingStateValue::enabled;
+  if (config_.home_on_start) start_homing();
 }
 
-void FalconDevice::cleanup() {
-  // Leave the motors unpowered: one zero command, then let the device go.
-  Packet in{};
-  (void)transport_->exchange(encode_command(MotorCommand{}), in);
-  transport_->close();
+void FalconDevice::close() noexcept { transport_->close(); }
+
+Outcome FalconDevice::enable() {
+  consecutive_missed_ = 0;  // out of FAULT: the next exchanges say whether it is back
+  return Outcome::done();
 }
 
-void FalconDevice::servo_cf(const Wrench& w) noexcept {
-  watchdog_.commanded(now());  // a refused command is fresh too: it zeroes the force itself
-  const Eigen::Vector3d f(w.force[0], w.force[1], w.force[2]);
-  if (!f.allFinite() || f.norm() > config_.max_force) {
-    force_.setZero();  // never to the motors, nor keep pushing with the last good one
-    ++summary_.refused_commands;
-    return;
-  }
-  force_ = f;
+Outcome FalconDevice::home() {
+  if (!homed_seen_) return Outcome::pending();
+  homed_seen_ = false;
+  return Outcome::done();
 }
 
-void FalconDevice::watch_commands() noexcept {
-  if (!watchdog_.expired(now())) return;
-  force_.setZero();
-  saw::log(LogLevel::warning, name().c_str(), "no servo_cf for {} ns: force dropped to zero",
-           now() - watchdog_.last_command());
-}
-
-void FalconDevice::set_state(OperatingStateValue s) noexcept {
-  if (state_.state == s) return;
-  state_.state = s;
-  (void)(*state_event_)(state_);
-}
-
-void FalconDevice::state_command(StateCommand c) noexcept {
-  switch (c) {
-    case StateCommand::enable:
-      consecutive_missed_ = 0;  // out of FAULT: the next exchanges say whether it is back
-      set_state(OperatingStateValue::enabled);
-      break;
-    case StateCommand::disable:
-      set_state(OperatingStateValue::disabled);
-      break;
-    case StateCommand::pause:
-      if (state_.state == OperatingStateValue::enabled) set_state(OperatingStateValue::paused);
-      break;
-    case StateCommand::resume:
-      if (state_.state == OperatingStateValue::paused) set_state(OperatingStateValue::enabled);
-      break;
-    case StateCommand::home:
-      if (state_.state == OperatingStateValue::fault) break;
-      homing_ = true;
-      homing_start_ = -1;
-      state_.is_busy = true;
-      (void)(*state_event_)(state_);
-      break;
-  }
-}
-
-MotorCommand FalconDevice::command() noexcept {
+MotorCommand FalconDevice::command(const Setpoint& s) noexcept {
   MotorCommand c{};
   Eigen::Vector3d f = Eigen::Vector3d::Zero();
-  const bool fault = state_.state == OperatingStateValue::fault;
-  if (homing_ && !fault) {
+  const OperatingState& st = operating_state();
+  if (homing()) {
     c.dac = {config_.homing_dac, config_.homing_dac, config_.homing_dac};
     c.control = control::homing;
-  } else if (state_.state == OperatingStateValue::enabled && state_.is_homed && measured_) {
-    f = force_;
+  } else if (s.mode == ServoMode::cf && st.is_homed && measured_) {
+    f = Eigen::Vector3d(s.wrench.force[0], s.wrench.force[1], s.wrench.force[2]);
     const Eigen::Vector3d p = position();
     for (int k = 0; k < 3; ++k) {  // outside the workspace: nothing pushing further out
       if (p[k] < config_.workspace_min[k] && f[k] < 0) f[k] = 0;
@@ -160,56 +101,31 @@ MotorCommand FalconDevice::command() noexcept {
     }
     if (kinematics_.dac(j_, f, c.dac) < 1.0) ++summary_.saturated;
   }
-  leds_ = leds_of(state_.state, homing_, state_.is_homed);
+  leds_ = leds_of(st.state, homing(), st.is_homed);
   c.control = static_cast<std::uint8_t>(c.control | leds_);
   servo_force_ = to_vec3(f);
   return c;
 }
 
-void FalconDevice::raise(FaultCode code, std::int32_t error) noexcept {
-  force_.setZero();
-  watchdog_.disarm();
-  homing_ = false;
-  state_.is_busy = false;
-  if (state_.state == OperatingStateValue::fault) return;
-  fault_ = {};
-  fault_.code = code;
-  fault_.last_read = Status::ok;
-  fault_.detail = static_cast<std::uint32_t>(error < 0 ? -error : error);
-  fault_.time = now();
-  fault_.since_start_ns = now() - t0_;
-  fault_.set_source(code == FaultCode::limit_exceeded ? "homing" : "usb");
-  ++summary_.faults;
-  summary_.fault = fault_;
-  saw::log(LogLevel::error, name().c_str(), "FAULT, zero force: {} ({} failed exchanges in a row, error {})",
-           to_string(code).data(), consecutive_missed_, error);
-  (void)(*fault_event_)(fault_);
-  set_state(OperatingStateValue::fault);
+Outcome FalconDevice::missed(FaultCode code, const char* why, std::int32_t error) noexcept {
+  if (++consecutive_missed_ <= config_.max_missed) return Outcome::done();
+  return Outcome::failed(code, why, "usb", static_cast<std::uint32_t>(error < 0 ? -error : error));
 }
 
-void FalconDevice::missed(FaultCode code, std::int32_t error) noexcept {
-  if (++consecutive_missed_ > config_.max_missed) raise(code, error);
-}
-
-void FalconDevice::measure(const DeviceReport& r) noexcept {
+Outcome FalconDevice::measure(const DeviceReport& r) noexcept {
   const Eigen::Vector3d theta = kinematics_.angles(r.encoder);
-  if (homing_ && r.homed(0) && r.homed(1) && r.homed(2)) {
-    homing_ = false;  // the counts are absolute from now on: start the velocity afresh
-    measured_ = false;
-    state_.is_homed = true;
-    state_.is_busy = false;
-    (void)(*state_event_)(state_);
+  if (homing() && r.homed(0) && r.homed(1) && r.homed(2)) {
+    homed_seen_ = true;  // home() says so; the counts are absolute from now on:
+    measured_ = false;   // start the velocity afresh
   }
   Eigen::Vector3d x;
   Eigen::Matrix3d j;
   const bool in_model = kinematics_.forward(theta, x) && kinematics_.jacobian(theta, x, j);
   if (!in_model) {
     // Before homing the counts are relative: a pose out of the model means nothing yet.
-    if (state_.is_homed) {
-      ++summary_.out_of_model;
-      missed(FaultCode::limit_exceeded, 0);
-    }
-    return;
+    if (!operating_state().is_homed) return Outcome::done();
+    ++summary_.out_of_model;
+    return missed(FaultCode::limit_exceeded, "poses out of the model, exchange after exchange", 0);
   }
   consecutive_missed_ = 0;
   const double dt = static_cast<double>(config().period.count()) * 1e-9;
@@ -222,58 +138,55 @@ void FalconDevice::measure(const DeviceReport& r) noexcept {
   j_ = j;
   measured_ = true;
   const std::uint8_t b = r.buttons();
-  const bool clutch = b & config_.clutch_buttons, was_clutch = buttons_ & config_.clutch_buttons;
-  const bool present = b & config_.operator_buttons, was_present = buttons_ & config_.operator_buttons;
-  if (clutch != was_clutch) (void)(*clutch_event_)(ButtonEvent{clutch});
-  if (present != was_present) (void)(*operator_event_)(ButtonEvent{present});
-  buttons_ = b;
+  button(Button::clutch, (b & config_.clutch_buttons) != 0);
+  button(Button::operator_present, (b & config_.operator_buttons) != 0);
+  return Outcome::done();
 }
 
 void FalconDevice::publish() noexcept {
-  measured_cp_.position = to_vec3(position());
-  measured_cv_.linear = to_vec3(j_ * theta_dot_);
+  Measured& m = measured();
+  m.cp.position = to_vec3(position());
+  m.cv.linear = to_vec3(j_ * theta_dot_);
   for (std::size_t i = 0; i < 3; ++i) {
-    measured_js_.position[i] = theta_[static_cast<Eigen::Index>(i)];
-    measured_js_.velocity[i] = theta_dot_[static_cast<Eigen::Index>(i)];
+    m.js.position[i] = theta_[static_cast<Eigen::Index>(i)];
+    m.js.velocity[i] = theta_dot_[static_cast<Eigen::Index>(i)];
   }
-  summary_.watchdog_trips = watchdog_.trips();
 }
 
-void FalconDevice::run() {
-  if (t0_ < 0) t0_ = now();
-  if (homing_ && homing_start_ < 0) homing_start_ = now();
-  if (homing_ && now() - homing_start_ > config_.homing_timeout) raise(FaultCode::limit_exceeded, 0);
-  watch_commands();
-  const Packet out = encode_command(command());
+Outcome FalconDevice::write(const Setpoint& s) {
+  const Packet out = encode_command(command(s));
   Packet in{};
   const ExchangeResult x = transport_->exchange(out, in);
   ++summary_.exchanges;
+  Outcome o;
   switch (x.status) {
     case ExchangeStatus::ok: {
       DeviceReport r{};
       if (decode_report(std::span<const std::uint8_t>(in.data(), x.bytes), r) == FrameError::none) {
-        measure(r);
+        o = measure(r);
       } else {
         ++summary_.bad_frames;  // refused, never used: the last good measurement stands
-        missed(FaultCode::device_error, 0);
+        o = missed(FaultCode::device_error, "corrupt reports, exchange after exchange", 0);
       }
       break;
     }
     case ExchangeStatus::no_answer:
       ++summary_.no_answer;
-      missed(FaultCode::device_lost, 0);
+      o = missed(FaultCode::device_lost, "no answer, exchange after exchange", 0);
       break;
     case ExchangeStatus::usb_error:
       ++summary_.usb_errors;
       summary_.last_usb_error = x.error;
-      missed(FaultCode::device_error, x.error);
+      o = missed(FaultCode::device_error, "USB errors, exchange after exchange", x.error);
       break;
     case ExchangeStatus::disconnected:
       summary_.last_usb_error = x.error;
-      raise(FaultCode::device_lost, x.error);
+      o = Outcome::failed(FaultCode::device_lost, "the device is gone (unplugged)", "usb",
+                          static_cast<std::uint32_t>(x.error < 0 ? -x.error : x.error));
       break;
   }
   publish();
+  return o;
 }
 
 }  // namespace saw::drivers::falcon

@@ -25,26 +25,13 @@ std::string summary_line(const FalconSummary& s) {
   char b[400];
   std::snprintf(b, sizeof b,
                 "%llu exchanges: %llu unanswered, %llu USB errors (last %d), %llu corrupt frames refused, "
-                "%llu poses out of the model",
+                "%llu poses out of the model, %llu forces saturated",
                 static_cast<unsigned long long>(s.exchanges), static_cast<unsigned long long>(s.no_answer),
                 static_cast<unsigned long long>(s.usb_errors), s.last_usb_error,
                 static_cast<unsigned long long>(s.bad_frames),
-                static_cast<unsigned long long>(s.out_of_model));
-  std::string out = b;
-  if (s.refused_commands != 0 || s.saturated != 0) {
-    std::snprintf(b, sizeof b, "\n%llu force commands refused (non-finite or over max_force), %llu saturated",
-                  static_cast<unsigned long long>(s.refused_commands),
-                  static_cast<unsigned long long>(s.saturated));
-    out += b;
-  }
-  if (s.watchdog_trips != 0) {
-    std::snprintf(
-        b, sizeof b, "\nforce dropped to zero %llu times: no servo_cf for %.1f ms (command_timeout)",
-        static_cast<unsigned long long>(s.watchdog_trips), static_cast<double>(s.command_timeout) * 1e-6);
-    out += b;
-  }
-  if (s.faults != 0) out += "\n" + std::to_string(s.faults) + " faults; the last: " + to_string(s.fault);
-  return out;
+                static_cast<unsigned long long>(s.out_of_model),
+                static_cast<unsigned long long>(s.saturated));
+  return b;
 }
 
 }  // namespace

@@ -6,7 +6,6 @@
 #include "saw/drivers/falcon/delta_dynamics.hpp"
 #include "saw/drivers/falcon/delta_kinematics.hpp"
 #include "saw/eigen.hpp"
-#include "saw/log.hpp"
 
 namespace saw::drivers {
 namespace {
@@ -38,110 +37,86 @@ SimDeviceConfig with_defaults(SimDeviceConfig c, const TaskConfig& task) {
   return c;
 }
 
+// The contract the base runs for it: a haptic device, safe at zero force.
+DeviceConfig contract_of(const SimDeviceConfig& c) {
+  DeviceConfig d;
+  d.safe_state = SafeState::zero_force;
+  d.max_force = c.max_force;
+  d.command_timeout = c.command_timeout;
+  d.start_enabled = c.start_enabled;
+  const ArmKinematics k(c.model);
+  const auto names = k.joint_names();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    JointLimits j;
+    j.name = std::string(names[i]);
+    j.min = c.joint_min[static_cast<Eigen::Index>(i)];
+    j.max = c.joint_max[static_cast<Eigen::Index>(i)];
+    d.joints.push_back(j);
+  }
+  return d;
+}
+
 }  // namespace
 
 SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config)
-    : Task(std::move(name), task),
+    : Device(std::move(name), task, contract_of(with_defaults(config, task))),
       config_(with_defaults(std::move(config), task)),
       kinematics_(config_.model) {
-  if (!task.is_periodic())
-    throw std::invalid_argument("SimHapticDevice '" + this->name() + "' must be periodic");
   q_ = config_.initial_joints.cwiseMax(config_.joint_min).cwiseMin(config_.joint_max);
   hand_origin_ = kinematics_.fk(q_);
-  measured_js_.size = 3;
-  const auto names = kinematics_.joint_names();
-  for (std::size_t i = 0; i < names.size(); ++i)
-    if (!measured_js_.set_name(i, names[i])) throw std::logic_error("joint name too long");
-  operating_state_.state =
-      config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
+  hand_target_ = hand_origin_;
   publish();
 
   auto& st = state_table();
   columns_.hand_force = st.add_column("hand_force", &hand_force_);
   columns_.servo_force = st.add_column("servo_force", &servo_force_);
-  watchdog_.set_timeout(config_.command_timeout);
-  columns_.command_timeout = watchdog_.holding_column();
-  columns_.watchdog_trips = watchdog_.trips_column();
-  st.add_column("summary", &summary_, ColumnUse::summary);
-  namespace arm_if = crtk::arm;
-  auto& arm = provide(std::string(arm_if::interface_name));
-  columns_.measured_cp = crtk::provide(arm, arm_if::measured_cp, st, &measured_cp_);
-  columns_.measured_cv = crtk::provide(arm, arm_if::measured_cv, st, &measured_cv_);
-  columns_.measured_js = crtk::provide(arm, arm_if::measured_js, st, &measured_js_);
-  crtk::provide(arm, arm_if::operating_state, st, &operating_state_);
-  arm.add_command_read("servo_force", columns_.servo_force);
-  arm.add_command_read("command_timeout", columns_.command_timeout);
-  arm.add_command_read("watchdog_trips", columns_.watchdog_trips);
-  crtk::provide(arm, arm_if::servo_cf, [this](const Wrench& w) { servo_cf(w); });
-  // Declared for callers outside the host (the gateway checks it); servo_cf() checks the norm.
-  arm.limit(arm_if::servo_cf.name, -config_.max_force, config_.max_force);
-  crtk::provide(arm, arm_if::state_command, [this](const StateCommand& c) { state_command(c); });
-  state_event_ = &crtk::provide(arm, arm_if::operating_state_event);
-  clutch_event_ = &crtk::provide(arm, arm_if::clutch);
-  operator_event_ = &crtk::provide(arm, arm_if::operator_present);
+  columns_.command_timeout = watchdog().holding_column();
+  columns_.watchdog_trips = watchdog().trips_column();
+  columns_.measured_cp = contract_columns().measured_cp;
+  columns_.measured_cv = contract_columns().measured_cv;
+  columns_.measured_js = contract_columns().measured_js;
+  arm().add_command_read("servo_force", columns_.servo_force);
   auto& sim = provide("sim");
   sim.add_command_write<ButtonCommand>("set_button",
-                                       [this](const ButtonCommand& b) { button(b.button, b.pressed); });
+                                       [this](const ButtonCommand& b) { set_button(b.button, b.pressed); });
   sim.add_command_read("hand_force", columns_.hand_force);
   sim.add_command_read("rejected_commands", st.add_column("rejected_commands", &rejected_column_));
 }
 
-void SimHapticDevice::servo_cf(const Wrench& w) noexcept {
-  watchdog_.commanded(now());  // a refused command is fresh too: it zeroes the force itself
-  const Eigen::Vector3d f(w.force[0], w.force[1], w.force[2]);
-  if (!f.allFinite() || f.norm() > config_.max_force) {
-    // Never let a bad command reach the motors, nor keep pushing with the last good one.
-    force_.setZero();
-    ++rejected_;
-    return;
+void SimHapticDevice::set_button(std::uint8_t id, bool pressed) noexcept {
+  if (id == 0) button(Button::clutch, pressed);
+  if (id == 1) button(Button::operator_present, pressed);
+}
+
+void SimHapticDevice::enter_safe_state(SafeReason) {
+  ++safe_entries_;
+  applied_.setZero();  // the motors let go at once
+}
+
+Outcome SimHapticDevice::read() {
+  if (t0_ < 0) t0_ = now();
+  const double t = static_cast<double>(now() - t0_) * 1e-9;
+  const HandSample h = config_.hand.target(t, hand_cursor_);
+  if (config_.hand.kind == HandScript::Kind::csv && h.clutch != hand_clutch_) {
+    hand_clutch_ = h.clutch;
+    button(Button::clutch, h.clutch);
   }
-  force_ = f;
+  hand_target_ = hand_origin_ + h.position;
+  return Outcome::done();
 }
 
-void SimHapticDevice::watch_commands() noexcept {
-  if (!watchdog_.expired(now())) return;
-  force_.setZero();
-  saw::log(LogLevel::warning, name().c_str(), "no servo_cf for {} ns: force dropped to zero",
-           now() - watchdog_.last_command());
+Outcome SimHapticDevice::write(const Setpoint& s) {
+  applied_ = s.mode == ServoMode::cf
+                 ? Eigen::Vector3d(s.wrench.force[0], s.wrench.force[1], s.wrench.force[2])
+                 : Eigen::Vector3d::Zero();
+  const double dt = static_cast<double>(config().period.count()) * 1e-9 / config_.substeps;
+  integrate(dt, applied_, hand_target_);
+  publish();
+  return Outcome::done();
 }
 
-void SimHapticDevice::set_state(OperatingStateValue s) noexcept {
-  if (operating_state_.state == s) return;
-  operating_state_.state = s;
-  (void)(*state_event_)(operating_state_);
-}
-
-void SimHapticDevice::state_command(StateCommand c) noexcept {
-  switch (c) {
-    case StateCommand::enable:
-      set_state(OperatingStateValue::enabled);
-      break;
-    case StateCommand::disable:
-      set_state(OperatingStateValue::disabled);
-      break;
-    case StateCommand::pause:
-      if (operating_state_.state == OperatingStateValue::enabled) set_state(OperatingStateValue::paused);
-      break;
-    case StateCommand::resume:
-      if (operating_state_.state == OperatingStateValue::paused) set_state(OperatingStateValue::enabled);
-      break;
-    case StateCommand::home:
-      if (!operating_state_.is_homed) {
-        operating_state_.is_homed = true;
-        (void)(*state_event_)(operating_state_);
-      }
-      break;
-  }
-}
-
-void SimHapticDevice::button(std::uint8_t id, bool pressed) noexcept {
-  if (id == 0) (void)(*clutch_event_)(ButtonEvent{pressed});
-  if (id == 1) (void)(*operator_event_)(ButtonEvent{pressed});
-}
-
-void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& hand_target) noexcept {
-  const bool powered = operating_state_.state == OperatingStateValue::enabled;
-  const Eigen::Vector3d servo = powered ? force_ : Eigen::Vector3d::Zero();
+void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& servo,
+                                const Eigen::Vector3d& hand_target) noexcept {
   Eigen::Vector3d hand = Eigen::Vector3d::Zero();
   for (int i = 0; i < config_.substeps; ++i) {
     const Eigen::Vector3d x = kinematics_.fk(q_);
@@ -164,31 +139,17 @@ void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& hand_target) n
 }
 
 void SimHapticDevice::publish() noexcept {
+  Measured& m = measured();
   const Eigen::Vector3d x = kinematics_.fk(q_);
   const Eigen::Vector3d xd = kinematics_.jacobian(q_) * qd_;
-  measured_cp_.position = to_vec3(x);
-  measured_cv_.linear = to_vec3(xd);
+  m.cp.position = to_vec3(x);
+  m.cv.linear = to_vec3(xd);
   for (int k = 0; k < 3; ++k) {
     const auto i = static_cast<std::size_t>(k);
-    measured_js_.position[i] = q_[k];
-    measured_js_.velocity[i] = qd_[k];
+    m.js.position[i] = q_[k];
+    m.js.velocity[i] = qd_[k];
   }
-  rejected_column_ = rejected_;
-  summary_ = {rejected_, watchdog_.trips(), config_.command_timeout};
-}
-
-void SimHapticDevice::run() {
-  if (t0_ < 0) t0_ = now();
-  const double t = static_cast<double>(now() - t0_) * 1e-9;
-  const HandSample h = config_.hand.target(t, hand_cursor_);
-  if (config_.hand.kind == HandScript::Kind::csv && h.clutch != hand_clutch_) {
-    hand_clutch_ = h.clutch;
-    button(0, h.clutch);
-  }
-  watch_commands();
-  const double dt = static_cast<double>(config().period.count()) * 1e-9 / config_.substeps;
-  integrate(dt, hand_origin_ + h.position);
-  publish();
+  rejected_column_ = device_status().refused.total();
 }
 
 }  // namespace saw::drivers

@@ -1,7 +1,6 @@
 // The sim package's types for deployments: each parameter read, range-checked and located.
 #include "saw/drivers/sim_registration.hpp"
 
-#include <cstdio>
 #include <filesystem>
 
 #include "saw/drivers/sim_haptic_device.hpp"
@@ -61,24 +60,6 @@ SimDeviceSpec parse_sim_device(const ComponentContext& ctx, Params& p) {
   return {task, c};
 }
 
-std::string summary_line(const SimDeviceSummary& s) {
-  std::string out;
-  char b[160];
-  if (s.rejected_commands != 0) {
-    std::snprintf(b, sizeof b, "%llu force commands rejected (non-finite or over the limit)",
-                  static_cast<unsigned long long>(s.rejected_commands));
-    out += b;
-  }
-  if (s.watchdog_trips != 0) {
-    std::snprintf(b, sizeof b,
-                  "%sforce dropped to zero %llu times: no servo_cf for %.1f ms (command_timeout)",
-                  out.empty() ? "" : "\n", static_cast<unsigned long long>(s.watchdog_trips),
-                  static_cast<double>(s.command_timeout) * 1e-6);
-    out += b;
-  }
-  return out;
-}
-
 }  // namespace
 
 void register_components(deploy::ComponentRegistry& registry) {
@@ -87,7 +68,6 @@ void register_components(deploy::ComponentRegistry& registry) {
                [](const std::string& name, const SimDeviceSpec& s) {
                  return std::make_unique<SimHapticDevice>(name, s.task, s.config);
                });
-  registry.add_summary_format<SimDeviceSummary>(summary_line);
 }
 
 }  // namespace saw::drivers::sim

@@ -3,11 +3,48 @@
 #include <dlfcn.h>
 #include <sys/stat.h>
 
+#include <cstdio>
 #include <stdexcept>
 
 #include "saw/deploy/plugin.hpp"
+#include "saw/device.hpp"
 
 namespace saw::deploy {
+
+namespace {
+
+// A device's contract in a run's summary: what was refused, when commands stopped, the last fault.
+std::string device_summary(const DeviceStatus& s) {
+  std::string out;
+  char b[240];
+  const RefusedCommands& r = s.refused;
+  if (r.total() != 0) {
+    std::snprintf(b, sizeof b,
+                  "%llu servo commands refused before the hardware: %llu not finite, %llu over a limit, "
+                  "%llu of another mode, %llu of the wrong size",
+                  static_cast<unsigned long long>(r.total()), static_cast<unsigned long long>(r.not_finite),
+                  static_cast<unsigned long long>(r.over_limit),
+                  static_cast<unsigned long long>(r.wrong_mode),
+                  static_cast<unsigned long long>(r.wrong_size));
+    out += b;
+  }
+  if (s.watchdog_trips != 0) {
+    std::snprintf(
+        b, sizeof b, "%scommands stopped %llu times: %s after %.1f ms without one (command_timeout)",
+        out.empty() ? "" : "\n", static_cast<unsigned long long>(s.watchdog_trips),
+        std::string(to_string(s.safe_state)).c_str(), static_cast<double>(s.command_timeout) * 1e-6);
+    out += b;
+  }
+  if (s.faults != 0) {
+    out += (out.empty() ? "" : "\n") + std::to_string(s.faults) + " faults; the last: " + to_string(s.fault);
+    if (!s.reason_text().empty()) out += " — " + std::string(s.reason_text());
+  }
+  return out;
+}
+
+}  // namespace
+
+ComponentRegistry::ComponentRegistry() { add_summary_format<DeviceStatus>(device_summary); }
 
 void ComponentRegistry::add_type(std::string type, Type t) {
   if (const auto it = types_.find(type); it != types_.end())

@@ -105,6 +105,11 @@ inline constexpr Read<JointState> measured_js{"measured_js"};  // with the joint
 using crtk::operating_state;
 inline constexpr Write<Wrench> servo_cf{"servo_cf"};
 inline constexpr Write<Pose> servo_cp{"servo_cp"};  // CRTK's; no sawrt device serves it yet
+// CRTK's joint-space servo commands and the setpoint they became.
+inline constexpr Read<JointState> setpoint_js{"setpoint_js"};
+inline constexpr Write<JointState> servo_jp{"servo_jp"};  // positions
+inline constexpr Write<JointState> servo_jv{"servo_jv"};  // velocities
+inline constexpr Write<JointState> servo_jf{"servo_jf"};  // efforts: N·m or N
 using crtk::operating_state_event;
 using crtk::state_command;
 inline constexpr Event<ButtonEvent> clutch{"clutch"};                      // a foot pedal

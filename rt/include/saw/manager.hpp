@@ -23,6 +23,19 @@ class ConnectError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Thrown by start(): a component's startup() failed. The components started before it were
+// stopped again (cleanup(): a device through its safe state); nothing runs. what() is
+// "component 'NAME': REASON".
+class StartError : public std::runtime_error {
+ public:
+  StartError(std::string component, const std::string& reason)
+      : std::runtime_error("component '" + component + "': " + reason), component_(std::move(component)) {}
+  const std::string& component() const noexcept { return component_; }
+
+ private:
+  std::string component_;
+};
+
 // Finds components that live elsewhere (another process, another host) and returns a local
 // proxy for them, or nullptr. connect() asks each resolver for a server it does not know.
 class RemoteResolver {
@@ -63,7 +76,8 @@ class Manager {
   std::optional<ConnectError> check(std::string_view client, std::string_view required,
                                     std::string_view server, std::string_view provided);
 
-  // Real threads: every periodic task on its own SCHED_FIFO thread.
+  // Real threads: every periodic task on its own SCHED_FIFO thread. Each component's startup()
+  // runs first, in the order added; one that throws is a StartError (see there).
   void start();
   // Deterministic: all tasks in the calling thread on a simulated clock starting at `t0`.
   void start_stepped(TimeNs t0 = 0);

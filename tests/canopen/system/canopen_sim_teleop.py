@@ -8,6 +8,8 @@ Checks, on each run's printed summary:
 - normal run: saw-rt exits 0, the arm and the teleoperation end ENABLED, the tracking error is
   printed and below half the hand's 30 mm amplitude (an arm that did not follow would show about
   21 mm RMS), and the drives moved (saw-can-sim's positions);
+- the drives are left disabled and pre-operational whenever saw-rt ends: after the normal run,
+  and after a SIGTERM mid-run (frames on the bus before the process is gone);
 - fault run: an over-current injected on node 2 faults the arm naming the emergency, and the
   teleoperation faults too, naming the slave (zero force on both sides).
 
@@ -16,6 +18,7 @@ Usage: canopen_sim_teleop.py <saw-rt> <saw-can-sim> <canopen-sim.yaml>
 
 import os
 import re
+import signal
 import subprocess
 import sys
 import tempfile
@@ -31,7 +34,7 @@ def fail(message, *outputs):
     sys.exit(1)
 
 
-def run(tag, rt_seconds, inject=()):
+def run(tag, rt_seconds, inject=(), terminate_after=None):
     bus = f"virtual:sawcanteleop{os.getpid()}{tag}"
     with open(CONFIG) as f:
         text = f.read().replace("virtual:canopen-sim", bus)
@@ -53,8 +56,19 @@ def run(tag, rt_seconds, inject=()):
         ready = sim.stdout.readline()
         if "drives on" not in ready:
             fail("saw-can-sim did not start", ready, sim.stdout.read())
-        rt = subprocess.run([SAW_RT, config, "--duration", str(rt_seconds)], capture_output=True, text=True,
-                            timeout=120)
+        if terminate_after is None:
+            rt = subprocess.run([SAW_RT, config, "--duration", str(rt_seconds)], capture_output=True, text=True,
+                                timeout=120)
+        else:
+            # Stopped as a service manager stops it: SIGTERM, no duration.
+            p = subprocess.Popen([SAW_RT, config], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            try:
+                out, err = p.communicate(timeout=terminate_after)
+                fail("saw-rt exited before it was terminated", out, err)
+            except subprocess.TimeoutExpired:
+                p.send_signal(signal.SIGTERM)
+                out, err = p.communicate(timeout=60)
+            rt = subprocess.CompletedProcess(p.args, p.returncode, out, err)
     finally:
         sim.terminate()
         sim_out = ready + sim.communicate(timeout=30)[0]
@@ -79,10 +93,37 @@ if not m:
 rms = float(m.group(1))
 if not rms < 15.0:
     fail(f"tracking error RMS {rms} mm: the arm did not follow the master", rt.stdout)
-moved = [int(p) for p in re.findall(r"^\s*[23]\s+operational\s+operation enabled\s+\d+\s+(-?\d+)", sim_out, re.M)]
-if len(moved) != 2 or not any(abs(p) > 1000 for p in moved):
+
+
+# saw-rt left every drive safe as it exited: disabled at a last SYNC, then pre-operational (a
+# master that stops sends nothing again, so nothing may stay enabled on its last torque).
+def drives_left_safe(sim_out):
+    left = re.findall(r"^\s*([123])\s+(\S+)\s+(.+?)\s{2,}\d+\s+(-?\d+)", sim_out, re.M)
+    if sorted(n for n, *_ in left) != ["1", "2", "3"]:
+        fail("saw-can-sim's table of drives is missing", sim_out)
+    for node, nmt, state, _ in left:
+        if nmt != "pre-operational" or state != "switch on disabled":
+            fail(f"node {node} was left {nmt}, {state} when saw-rt exited (not pre-operational, "
+                 "switch on disabled)", sim_out)
+    return left
+
+
+left = drives_left_safe(sim_out)
+moved = [int(p) for n, _, _, p in left if n in "23"]
+if not any(abs(p) > 1000 for p in moved):
     fail("saw-can-sim's shoulder and elbow drives did not move", sim_out)
 print(f"ok: tracking error RMS {rms} mm; drive positions {moved}")
+
+# SIGTERM mid-run: the same safe state, and an orderly summary (exit 0).
+rt, sim_out = run("term", None, terminate_after=4)
+if rt.returncode != 0:
+    fail(f"saw-rt exited {rt.returncode} on SIGTERM", rt.stdout, rt.stderr)
+m = re.search(r"teleop: ENABLED.* over (\d+) enabled cycles", rt.stdout)
+if not m or int(m.group(1)) < 100:
+    fail("the teleoperation was not running when SIGTERM came (this machine took over 4 s to start it)",
+         rt.stdout)
+drives_left_safe(sim_out)
+print(f"ok: SIGTERM after {m.group(1)} enabled cycles left every drive disabled and pre-operational")
 
 # An over-current on the shoulder drive 2 s in.
 rt, sim_out = run("fault", 4, inject=["2:over-current:2"])

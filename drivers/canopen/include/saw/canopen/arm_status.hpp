@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "saw/crtk.hpp"
+#include "saw/device.hpp"
 #include "saw/fault.hpp"
 
 namespace saw::canopen {
@@ -30,23 +31,13 @@ constexpr std::string_view enum_type_name(FaultReason) { return "saw::canopen::F
 // Lower case, a literal (the RT log keeps the pointer): "heartbeat lost".
 const char* to_string(FaultReason r) noexcept;
 
-// Commands refused before they became a PDO, by why.
-struct RefusedCommands {
-  static constexpr std::string_view type_name = "saw::canopen::RefusedCommands";
-  static constexpr std::uint32_t layout_version = 1;
-  std::uint64_t not_finite = 0;  // NaN or infinity anywhere in it
-  std::uint64_t over_limit = 0;  // a position, step, velocity, torque or force beyond its limit
-  std::uint64_t wrong_mode = 0;  // servo_jp outside csp, servo_jv outside csv, servo_jf/cf outside cst
-  std::uint64_t wrong_size = 0;  // a joint state whose size is not the number of joints
-  static constexpr auto fields = std::tuple{&RefusedCommands::not_finite, &RefusedCommands::over_limit,
-                                            &RefusedCommands::wrong_mode, &RefusedCommands::wrong_size};
-  std::uint64_t total() const noexcept { return not_finite + over_limit + wrong_mode + wrong_size; }
-};
+// Commands refused before they became a PDO, by why: the device base's count.
+using saw::RefusedCommands;
 
 // A CANopen component's state and counters: a summary column (printed when a run ends).
 struct CanopenStatus {
   static constexpr std::string_view type_name = "saw::canopen::CanopenStatus";
-  static constexpr std::uint32_t layout_version = 1;
+  static constexpr std::uint32_t layout_version = 2;  // 2: refused is the device base's
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultReason reason = FaultReason::none;
   std::uint8_t bus_state = 0;  // can::BusState

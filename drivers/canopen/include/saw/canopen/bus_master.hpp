@@ -76,6 +76,10 @@ class BusMaster {
   double setpoint(std::size_t i) const noexcept;
 
   void transmit(TimeNs now) noexcept;
+  // The last frames of a master that stops: every drive's RPDOs with `controlword` (disable
+  // voltage, or quick stop) and the setpoints as set, one SYNC so that the drives take them at
+  // once, then NMT enter pre-operational for every node. Sent before it returns.
+  void shut_down(std::uint16_t controlword, TimeNs now) noexcept;
   // The controller's answer of the last transmit().
   const cia402::ControllerOutput& control(std::size_t i) const noexcept;
 

@@ -14,17 +14,16 @@
 #include "saw/canopen/chain_kinematics.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/canopen/startup.hpp"
-#include "saw/crtk_arm.hpp"
-#include "saw/task.hpp"
+#include "saw/device.hpp"
 
 namespace saw::canopen {
 
-// CRTK's joint-space servo commands (crtk_arm.hpp has the Cartesian ones).
+// CRTK's joint-space servo commands (crtk_arm.hpp declares them).
 namespace joint_space {
-inline constexpr crtk::Read<JointState> setpoint_js{"setpoint_js"};
-inline constexpr crtk::Write<JointState> servo_jp{"servo_jp"};  // positions (csp)
-inline constexpr crtk::Write<JointState> servo_jv{"servo_jv"};  // velocities (csv)
-inline constexpr crtk::Write<JointState> servo_jf{"servo_jf"};  // efforts: N·m or N (cst)
+using crtk::arm::servo_jf;  // efforts: N·m or N (cst)
+using crtk::arm::servo_jp;  // positions (csp)
+using crtk::arm::servo_jv;  // velocities (csv)
+using crtk::arm::setpoint_js;
 }  // namespace joint_space
 
 // One joint: its drive, its units and its limits, in SI (rad or m).
@@ -69,23 +68,23 @@ struct CanopenArmConfig {
 // std::invalid_argument saying which joint and what.
 CanopenArmConfig checked(CanopenArmConfig config, const TaskConfig& task);
 
-// Provided `<interface_name>` (CRTK, crtk_arm.hpp): measured_js (named joints), setpoint_js,
-// operating_state, fault (FaultInfo) reads; servo_jp, servo_jv, servo_jf, state_command
-// (enable, disable, pause, resume, home) writes; operating_state and fault events; with a
-// chain also measured_cp, measured_cv and servo_cf (τ = Jᵀ·w, cst). Also command_timeout
-// (true while the watchdog holds) and watchdog_trips.
+// Provided `<interface_name>` (CRTK, by the device base: saw/device.hpp): measured_js (named
+// joints), setpoint_js, operating_state, fault (FaultInfo), command_timeout, watchdog_trips
+// reads; servo_jp, servo_jv, servo_jf, state_command (enable, disable, pause, resume, home)
+// writes; operating_state and fault events; with a chain also measured_cp, measured_cv and
+// servo_cf (τ = Jᵀ·w, cst).
 // Provided "canopen": status (CanopenStatus, also the summary column), sdo (a qualified read:
 // SdoRequest → SdoReply, waiting up to 1 s: for non-RT callers only).
 //
-// Every servo command is checked before it becomes a setpoint: finite, its mode, the joints'
-// limits; a refused one is counted by reason and replaced by the hold value (the last target in
+// The base checks every servo command before it becomes a setpoint (finite, the mode, the
+// joints' limits); a refused one is counted and replaced by the hold value (the last target in
 // csp, zero velocity or torque), never sent. A fault (a drive's statusword or EMCY, a lost
 // heartbeat, a reboot, bus-off, stale TPDOs, a joint limit, a following error, an enable that
 // does not complete, and with on_command_timeout: fault a stale command) quick-stops every drive
 // and sends zero velocity/torque; FaultInfo (and CanopenStatus::reason) says why. `enable`
 // resets the drives' faults and walks them back to operation enabled; a cause still present
 // faults again at once.
-class CanopenArm : public Task {
+class CanopenArm : public Device {
  public:
   // Opens config.bus; throws std::runtime_error (the bus cannot be opened, or another component
   // of this process is its master already) or std::invalid_argument (the configuration).
@@ -94,44 +93,39 @@ class CanopenArm : public Task {
   CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus& bus);
   ~CanopenArm() override;
 
-  // The start-up sequence (StartupSequence), blocking; throws std::runtime_error saying which
-  // drive did not answer or refused what.
-  void startup() override;
-  void run() override;
-
   const CanopenArmConfig& arm_config() const noexcept { return config_; }
   std::size_t joints() const noexcept { return n_; }
   BusMaster& master() noexcept { return *master_; }
-  const OperatingState& operating_state() const noexcept { return state_; }
-  const FaultInfo& fault() const noexcept { return fault_; }
   FaultReason fault_reason() const noexcept { return reason_; }
   const CanopenStatus& status() const noexcept { return status_; }
-  const JointState& measured_js() const noexcept { return measured_js_; }
+  const JointState& measured_js() const noexcept { return measured().js; }
   const JointState& setpoint_js() const noexcept { return setpoint_js_; }
+
+ protected:
+  // The start-up sequence (StartupSequence), blocking; throws std::runtime_error saying which
+  // drive did not answer or refused what.
+  void open() override;
+  Outcome read() override;
+  Outcome write(const Setpoint& s) override;
+  Outcome enable() override;
+  void enter_safe_state(SafeReason why) override;
+  bool admit(Setpoint& s) override;
+  bool accepts(ServoMode m) const noexcept override;
 
  private:
   struct Claim;
   CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, std::unique_ptr<can::Bus> owned,
              can::Bus* bus);
   void provide_interfaces();
-  // Command handlers (the task's thread, before run()).
-  void servo_joints(const JointState& js, cia402::Mode mode) noexcept;
-  void servo_cf(const Wrench& w) noexcept;
-  void refuse(std::uint64_t& counter) noexcept;
-  void state_command(StateCommand c) noexcept;
   // The cycle.
   void read_feedback() noexcept;
-  void check_health() noexcept;
-  void check_axis(std::size_t i) noexcept;
-  void step_state() noexcept;
-  void watch_commands() noexcept;
-  void send_setpoints() noexcept;
+  Outcome check_health() noexcept;
+  Outcome check_axis(std::size_t i) noexcept;
+  void send_setpoints(const Setpoint& s) noexcept;
   void publish() noexcept;
-  void raise_fault(FaultReason reason, FaultCode code, std::size_t axis, std::uint32_t detail = 0,
-                   TimeNs age = 0) noexcept;
-  void set_state(OperatingStateValue s) noexcept;
+  Outcome failure(FaultReason reason, FaultCode code, std::size_t axis, std::uint32_t detail = 0,
+                  TimeNs age = 0) noexcept;
   void target_all(cia402::Target t) noexcept;
-  bool following() const noexcept { return state_.state == OperatingStateValue::enabled && !enabling_; }
 
   CanopenArmConfig config_;
   std::size_t n_ = 0;
@@ -144,30 +138,16 @@ class CanopenArm : public Task {
   using Joints = std::array<double, JointState::max_joints>;
   Joints q_{}, qd_{}, tau_{};  // measured
   Joints target_{};            // what was sent this cycle (csp: position, csv: velocity, cst: torque)
-  Joints command_{};           // the last servo command accepted (or the hold value after a refusal)
-  Joints max_torque_{};
-  OperatingState state_{};
-  FaultInfo fault_{};
   FaultReason reason_ = FaultReason::none;
-  bool enabling_ = false, enable_requested_ = false;
-  bool commanded_ = false;  // a servo command came since enable and has not timed out
-  bool command_timeout_ = false;
-  TimeNs last_command_ = 0, last_accepted_ = 0;
+  bool enable_sent_ = false;  // this enable's fault resets and targets are out
   TimeNs start_time_ = -1;
   std::array<std::uint64_t, JointState::max_joints> emcy_seen_{};
   std::array<std::uint32_t, JointState::max_joints> boot_ups_seen_{};
   std::array<bool, JointState::max_joints> rebooted_{};
-  RefusedCommands refused_{};
-  std::uint64_t watchdog_trips_ = 0;
-  std::uint32_t faults_ = 0;
 
   // State-table sources.
-  JointState measured_js_{}, setpoint_js_{};
-  Pose measured_cp_{};
-  Twist measured_cv_{};
+  JointState setpoint_js_{};
   CanopenStatus status_{};
-  EventWrite<OperatingState>* state_event_ = nullptr;
-  EventWrite<FaultInfo>* fault_event_ = nullptr;
 };
 
 }  // namespace saw::canopen

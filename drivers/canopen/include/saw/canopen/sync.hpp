@@ -29,6 +29,9 @@ class SyncProducer {
   // The SYNC when one is due. Periods missed entirely (an overrun) are skipped, not burst: the
   // drives expect one SYNC per cycle, never two back to back.
   std::optional<can::Frame> poll(TimeNs now) noexcept;
+  // The next SYNC now, out of the period's phase (a last one as the master stops): the counter
+  // goes on, the schedule is untouched.
+  can::Frame extra() noexcept;
   std::uint64_t skipped() const noexcept { return skipped_; }
 
  private:

@@ -6,11 +6,9 @@
 #include <cstdint>
 #include <string_view>
 
-#include "saw/command_watchdog.hpp"
-#include "saw/crtk_arm.hpp"
+#include "saw/device.hpp"
 #include "saw/drivers/arm_kinematics.hpp"
 #include "saw/drivers/hand_script.hpp"
-#include "saw/task.hpp"
 
 namespace saw::drivers {
 
@@ -41,34 +39,24 @@ struct ButtonCommand {
 // Crosses processes byte for byte (set_button).
 static_assert(sizeof(ButtonCommand) == 2 && offsetof(ButtonCommand, pressed) == 1);
 
-// What a run of the device comes to (its "summary" column, ColumnUse::summary).
-struct SimDeviceSummary {
-  static constexpr std::string_view type_name = "saw::drivers::SimDeviceSummary";
-  static constexpr std::uint32_t layout_version = 1;
-  std::uint64_t rejected_commands = 0;  // servo_cf not finite or over max_force
-  std::uint64_t watchdog_trips = 0;     // times commands stopped coming and the force went to zero
-  TimeNs command_timeout = 0;
-};
-
-// Provided "arm" (CRTK, crtk_arm.hpp): measured_cp, measured_cv, measured_js (with the model's
-// joint names), operating_state (reads); servo_cf, state_command (writes); operating_state,
-// clutch, operator_present (events).
+// Provided "arm" (CRTK, by the device base: saw/device.hpp): measured_cp, measured_cv,
+// measured_js (with the model's joint names), operating_state, fault, command_timeout,
+// watchdog_trips (reads); servo_cf, state_command (writes); operating_state, fault, clutch,
+// operator_present (events); also servo_force (the force applied this cycle).
 // Provided "sim": set_button (write), hand_force, rejected_commands (reads).
-// Also on "arm": servo_force (the force applied this cycle), command_timeout (true while the
-// watchdog holds the force at zero), watchdog_trips (reads).
-// A servo_cf that is not finite or exceeds max_force is rejected before it reaches the
-// dynamics (the device then applies zero force) and counted. A servo_cf older than
-// command_timeout is dropped: zero force until the next one.
-class SimHapticDevice : public Task {
+// The base checks every servo_cf (finite, |force| <= max_force) and runs the watchdog; this
+// driver is the simulated hardware: the hand, the dynamics and the stops.
+class SimHapticDevice : public Device {
  public:
   SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config);
 
-  void run() override;
   const SimDeviceConfig& device_config() const noexcept { return config_; }
-  std::uint64_t rejected_commands() const noexcept { return rejected_; }
-  // Times the command watchdog dropped a force (each time commands stopped coming).
-  std::uint64_t watchdog_trips() const noexcept { return watchdog_.trips(); }
+  std::uint64_t rejected_commands() const noexcept { return device_status().refused.total(); }
   TimeNs command_timeout() const noexcept { return config_.command_timeout; }
+  // What the simulated motors apply now (N): the safe output is zero.
+  Eigen::Vector3d applied_force() const noexcept { return applied_; }
+  // Times the hardware was put in its safe state (disable, fault, stop, failed start).
+  int safe_entries() const noexcept { return safe_entries_; }
 
   struct Columns {
     StateColumn<Pose> measured_cp;
@@ -80,39 +68,30 @@ class SimHapticDevice : public Task {
   };
   const Columns& columns() const noexcept { return columns_; }
 
+ protected:
+  Outcome read() override;
+  Outcome write(const Setpoint& s) override;
+  void enter_safe_state(SafeReason) override;
+
  private:
-  void servo_cf(const Wrench& w) noexcept;
-  void state_command(StateCommand c) noexcept;
-  void set_state(OperatingStateValue s) noexcept;
-  void button(std::uint8_t id, bool pressed) noexcept;
-  void integrate(double dt, const Eigen::Vector3d& hand_target) noexcept;
+  void set_button(std::uint8_t id, bool pressed) noexcept;
+  void integrate(double dt, const Eigen::Vector3d& force, const Eigen::Vector3d& hand_target) noexcept;
   void publish() noexcept;
-  void watch_commands() noexcept;
 
   SimDeviceConfig config_;
   ArmKinematics kinematics_;
   Eigen::Vector3d q_, qd_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  // accepted servo_cf
-  Eigen::Vector3d hand_origin_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d applied_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hand_origin_ = Eigen::Vector3d::Zero(), hand_target_ = Eigen::Vector3d::Zero();
   TimeNs t0_ = -1;
   std::size_t hand_cursor_ = 0;
   bool hand_clutch_ = false;
-  std::uint64_t rejected_ = 0;
-  CommandWatchdog watchdog_{state_table()};  // servo_cf's
+  int safe_entries_ = 0;
 
   // State-table sources.
-  Pose measured_cp_{};
-  Twist measured_cv_{};
-  JointState measured_js_{};
-  OperatingState operating_state_{};
   Vec3 hand_force_{}, servo_force_{};
   std::uint64_t rejected_column_ = 0;
-  SimDeviceSummary summary_{};
   Columns columns_;
-
-  EventWrite<OperatingState>* state_event_ = nullptr;
-  EventWrite<ButtonEvent>* clutch_event_ = nullptr;
-  EventWrite<ButtonEvent>* operator_event_ = nullptr;
 };
 
 }  // namespace saw::drivers

@@ -41,6 +41,9 @@ using SummaryFormat = std::function<std::string(const void* value)>;
 // bridge how to reach components in other processes and how to export one.
 class ComponentRegistry {
  public:
+  // Knows the framework's own summary columns (a device's contract, DeviceStatus).
+  ComponentRegistry();
+
   // A type in two steps, so that a whole file is checked before anything is built:
   //   parse(const ComponentContext&, Params&) -> Config   reads `task:`/`params:`; errors name
   //                                                         file:line through Params

@@ -6,12 +6,9 @@
 #include <memory>
 #include <string_view>
 
-#include "saw/command_watchdog.hpp"
-#include "saw/crtk_arm.hpp"
+#include "saw/device.hpp"
 #include "saw/drivers/falcon/delta_kinematics.hpp"
 #include "saw/drivers/falcon/transport.hpp"
-#include "saw/fault.hpp"
-#include "saw/task.hpp"
 
 namespace saw::drivers::falcon {
 
@@ -36,51 +33,46 @@ struct FalconConfig {
   TimeNs command_timeout = 0;            // 0: 3 periods (as sim_haptic_device)
 };
 
-// What a run comes to (the "summary" column).
+// What a run of the hardware comes to (the "summary" column; the contract's counters — refused
+// commands, watchdog trips, faults — are the base's "device" column).
 struct FalconSummary {
   static constexpr std::string_view type_name = "saw::drivers::falcon::FalconSummary";
-  static constexpr std::uint32_t layout_version = 1;
+  static constexpr std::uint32_t layout_version = 2;  // 2: the contract's counters left for DeviceStatus
   std::uint64_t exchanges = 0;
   std::uint64_t no_answer = 0, usb_errors = 0, bad_frames = 0, out_of_model = 0;
-  std::uint64_t refused_commands = 0, watchdog_trips = 0, saturated = 0;
-  std::uint32_t faults = 0;
+  std::uint64_t saturated = 0;
   std::int32_t last_usb_error = 0;
-  TimeNs command_timeout = 0;
-  FaultInfo fault{};  // the last fault
 };
 
-// Provided "arm" (CRTK, as sim_haptic_device): measured_cp, measured_cv, measured_js (arm angles),
-// operating_state, fault, servo_force, command_timeout, watchdog_trips (reads); servo_cf,
-// state_command (writes); operating_state, clutch, operator_present, fault (events).
-// Provided "falcon": summary, leds (reads).
-// The transport is opened in startup() (not RT); run() does one bounded exchange.
-class FalconDevice : public Task {
+// Provided "arm" (CRTK, by the device base: saw/device.hpp): measured_cp, measured_cv,
+// measured_js (arm angles), operating_state, fault, command_timeout, watchdog_trips, servo_force
+// (reads); servo_cf, state_command (writes); operating_state, clutch, operator_present, fault
+// (events). Provided "falcon": summary, leds (reads).
+// The transport is opened in open() (not RT); write() does one bounded exchange per cycle.
+class FalconDevice : public Device {
  public:
   FalconDevice(std::string name, TaskConfig task, FalconConfig config,
                std::unique_ptr<FalconTransport> transport);
   ~FalconDevice() override;
 
-  void startup() override;
-  void cleanup() override;
-  void run() override;
-
   const FalconConfig& device_config() const noexcept { return config_; }
   const FalconSummary& summary() const noexcept { return summary_; }
-  const OperatingState& operating_state() const noexcept { return state_; }
-  const FaultInfo& fault() const noexcept { return fault_; }
   FalconTransport& transport() noexcept { return *transport_; }
   Eigen::Vector3d position() const noexcept { return x_ - origin_; }
-  bool homing() const noexcept { return homing_; }
+
+ protected:
+  void open() override;
+  void close() noexcept override;
+  Outcome read() override { return Outcome::done(); }  // the exchange is write()'s
+  Outcome write(const Setpoint& s) override;
+  Outcome enable() override;
+  Outcome home() override;
+  void enter_safe_state(SafeReason) override {}  // the next exchange carries zero force
 
  private:
-  void servo_cf(const Wrench& w) noexcept;
-  void state_command(StateCommand c) noexcept;
-  void set_state(OperatingStateValue s) noexcept;
-  void watch_commands() noexcept;
-  MotorCommand command() noexcept;
-  void measure(const DeviceReport& r) noexcept;
-  void missed(FaultCode code, std::int32_t error) noexcept;
-  void raise(FaultCode code, std::int32_t error) noexcept;
+  MotorCommand command(const Setpoint& s) noexcept;
+  Outcome measure(const DeviceReport& r) noexcept;
+  Outcome missed(FaultCode code, const char* why, std::int32_t error) noexcept;
   void publish() noexcept;
 
   FalconConfig config_;
@@ -89,27 +81,13 @@ class FalconDevice : public Task {
   Eigen::Vector3d theta_ = Eigen::Vector3d::Zero(), theta_dot_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d x_ = Eigen::Vector3d::Zero(), origin_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d j_ = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d force_ = Eigen::Vector3d::Zero();  // accepted servo_cf
-  bool measured_ = false, homing_ = false;
-  TimeNs homing_start_ = 0, t0_ = -1;
+  bool measured_ = false, homed_seen_ = false;
   int consecutive_missed_ = 0;
-  std::uint8_t buttons_ = 0;
 
   // State-table sources.
-  Pose measured_cp_{};
-  Twist measured_cv_{};
-  JointState measured_js_{};
-  OperatingState state_{};
   Vec3 servo_force_{};
-  CommandWatchdog watchdog_{state_table()};  // servo_cf's
   std::uint8_t leds_ = 0;
-  FaultInfo fault_{};
   FalconSummary summary_{};
-
-  EventWrite<OperatingState>* state_event_ = nullptr;
-  EventWrite<ButtonEvent>* clutch_event_ = nullptr;
-  EventWrite<ButtonEvent>* operator_event_ = nullptr;
-  EventWrite<FaultInfo>* fault_event_ = nullptr;
 };
 
 }  // namespace saw::drivers::falcon
