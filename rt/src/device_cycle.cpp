@@ -84,8 +84,8 @@ void Device::begin_enable(TimeNs t) noexcept {
   command_ = {};
   has_jp_ = false;
   watchdog_.disarm();
-  state_.is_busy = true;  // DISABLED and busy until the hardware says it is powered
-  set_state(OperatingStateValue::disabled);
+  state_.is_busy = true;                         // DISABLED and busy until the hardware says it is powered
+  state_.state = OperatingStateValue::disabled;  // said by step_enable(), unless done at once
 }
 
 void Device::step_enable(TimeNs t) noexcept {
@@ -96,6 +96,7 @@ void Device::step_enable(TimeNs t) noexcept {
     state_.is_busy = homing_;
     return set_state(OperatingStateValue::enabled);
   }
+  if (t == enable_start_) (void)(*state_event_)(state_);  // DISABLED, busy: under way
   if (t - enable_start_ > config_.enable_timeout)
     raise(Outcome::failed(FaultCode::device_error, "enable timed out", o.source, o.detail));
 }

@@ -279,3 +279,38 @@ TEST(CollaborativeControlForce, AStartupTimeoutEndsInAFaultIfTheMasterNeverComes
 }
 
 }  // namespace
+
+// A controller that cannot drive its devices says so: enabled but busy while a device is
+// disabled, no force either side, nothing counted as tracking; a device that stays disabled for
+// device_timeout faults the task naming the side; one enabled in time is followed from where it is.
+namespace {
+
+TEST(CollaborativeControlForce, ADisabledDeviceIsWaitedForBusyThenFaultsNamingItsSide) {
+  TeleopConfig c = basic();
+  c.device_timeout = 0.05;
+  Rig rig(c);
+  rig.step(2);
+  ASSERT_FALSE(rig.teleop.state().is_busy);
+  rig.slave.operating = saw::OperatingStateValue::disabled;
+  const auto counted = rig.teleop.enabled_cycles();
+  rig.master.position[0] += 0.01;
+  rig.step(20);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_TRUE(rig.teleop.state().is_busy) << "waiting for the slave: not plainly enabled";
+  EXPECT_LT(norm(rig.slave.force), 1e-12);
+  EXPECT_LT(norm(rig.master.force), 1e-12);
+  EXPECT_EQ(rig.teleop.enabled_cycles(), counted);
+  rig.slave.operating = saw::OperatingStateValue::enabled;  // enabled in time: followed from here
+  rig.step(2);
+  EXPECT_FALSE(rig.teleop.state().is_busy);
+  EXPECT_LT(norm(rig.slave.force), 1e-9) << "no jump when the slave comes back";
+  rig.slave.operating = saw::OperatingStateValue::disabled;
+  rig.step(60);
+  EXPECT_EQ(rig.teleop.operating_state(), saw::OperatingStateValue::fault);
+  EXPECT_EQ(rig.teleop.fault().code, saw::FaultCode::device_disabled);
+  EXPECT_NE(saw::to_string(rig.teleop.fault()).find("slave device not enabled"), std::string::npos)
+      << saw::to_string(rig.teleop.fault());
+  EXPECT_FALSE(rig.teleop.state().is_busy);
+}
+
+}  // namespace

@@ -25,8 +25,9 @@ enum class FaultCode : std::uint8_t {
   device_lost,        // the device stopped answering (a missed CANopen heartbeat, a USB unplug)
   limit_exceeded,     // a measured value left its safe range (a joint limit, a current)
   device_fault,       // a device this one drives reports FAULT (its own fault says why)
+  device_disabled,    // a device this one drives stayed disabled: it cannot be driven
 };
-constexpr std::size_t enum_count(FaultCode) { return 9; }
+constexpr std::size_t enum_count(FaultCode) { return 10; }
 constexpr std::string_view enum_type_name(FaultCode) { return "saw::FaultCode"; }
 
 constexpr std::string_view to_string(FaultCode c) {
@@ -49,6 +50,8 @@ constexpr std::string_view to_string(FaultCode c) {
       return "limit exceeded";
     case FaultCode::device_fault:
       return "device in FAULT";
+    case FaultCode::device_disabled:
+      return "device not enabled";
   }
   return "?";
 }
@@ -58,7 +61,7 @@ constexpr std::string_view to_string(FaultCode c) {
 // bounded: filled in RT code without allocating.
 struct FaultInfo {
   static constexpr std::string_view type_name = "saw::FaultInfo";
-  static constexpr std::uint32_t layout_version = 2;  // 2: FaultCode::device_fault
+  static constexpr std::uint32_t layout_version = 3;  // 2: FaultCode::device_fault; 3: device_disabled
   static constexpr std::size_t max_source = 23;       // characters, then at least one NUL
 
   FaultCode code = FaultCode::none;

@@ -117,6 +117,7 @@ void CollaborativeControlForce::require_side(Side& s, const char* iface) {
 void CollaborativeControlForce::set_operating_state(OperatingStateValue s) noexcept {
   if (state_.state == s) return;
   state_.state = s;
+  if (s != OperatingStateValue::enabled) state_.is_busy = false;  // waits only while enabled
   (void)(*state_event_)(state_);
 }
 
@@ -209,6 +210,9 @@ bool CollaborativeControlForce::read_side(Side& s, Input& out, FaultInfo& why) n
       return false;
     }
     s.busy = device.is_busy;
+    // A device only read (a read-only master) need not be enabled to be followed.
+    s.enabled = device.state == OperatingStateValue::enabled || !s.cf.is_bound();
+    s.paused = device.state == OperatingStateValue::paused && s.cf.is_bound();
   }
   // A read that fails (a writer pre-empted mid-row, a NaN, a peer gone) keeps the last good
   // value; only an input older than stale_timeout is a fault.
@@ -348,6 +352,29 @@ void CollaborativeControlForce::refresh_summary() noexcept {
   summary_.master_age_late = master_age_late_;
 }
 
+bool CollaborativeControlForce::waiting_for_devices() noexcept {
+  const bool waiting = state_.state == OperatingStateValue::enabled &&
+                       !(master_.enabled && slave_.enabled && !master_.busy && !slave_.busy);
+  if (!waiting) {
+    waiting_since_ = -1;
+  } else if (waiting_since_ < 0) {
+    waiting_since_ = now();
+  } else if (now() - waiting_since_ > static_cast<TimeNs>(config_.device_timeout * 1e9)) {
+    // Busy (homing, enabling) and paused devices are on their way; a disabled one is not.
+    const Side* idle = !slave_.enabled && !slave_.busy && !slave_.paused      ? &slave_
+                       : !master_.enabled && !master_.busy && !master_.paused ? &master_
+                                                                              : nullptr;
+    if (idle != nullptr) raise_fault(fault_on(idle->side, FaultCode::device_disabled));
+  }
+  // A controller that cannot drive its devices says so: busy, not plainly enabled.
+  const bool busy = waiting && state_.state == OperatingStateValue::enabled;
+  if (state_.is_busy != busy) {
+    state_.is_busy = busy;
+    (void)(*state_event_)(state_);
+  }
+  return waiting;
+}
+
 void CollaborativeControlForce::cycle_body() noexcept {
   if (start_time_ < 0) start_time_ = now();
   Input master, slave;
@@ -355,7 +382,7 @@ void CollaborativeControlForce::cycle_body() noexcept {
   if (!read_side(master_, master, why) || !read_side(slave_, slave, why)) return on_input_failure(why);
   inputs_seen_ = true;
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  const bool busy = master_.busy || slave_.busy;
+  const bool busy = waiting_for_devices();
   if (state_.state != OperatingStateValue::enabled || clutched_ || busy) {
     // Forces off; keep the offset cancelling so that enabling or releasing the clutch cannot jump.
     snap_offsets(master, slave);

@@ -38,6 +38,7 @@ TeleopSpec parse_teleop(const ComponentContext& ctx, Params& p) {
   c.prediction.slave_horizon = deploy::seconds_in_range(pr, "slave", 0ns, 0, max_horizon);
   c.stale_timeout = deploy::seconds_in_range(p, "stale_timeout", 10ms, 1e-6, 10);
   c.startup_timeout = deploy::seconds_in_range(p, "startup_timeout", 0ns, 0, 600);
+  c.device_timeout = deploy::seconds_in_range(p, "device_timeout", 5s, 0.001, 600);
   c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.align = p.get_or<bool>("align", false);
   c.slave_offset = p.get_or<Vec3>("slave_offset", {0, 0, 0});

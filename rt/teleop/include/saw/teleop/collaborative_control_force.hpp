@@ -40,6 +40,9 @@ struct TeleopConfig {
   // s: how long a device that has not published yet (a remote master still coming up) is
   // waited for after start before it is a fault; 0: stale_timeout.
   double startup_timeout = 0.0;
+  // s: enabled, but a device stays disabled (not busy, not paused) this long: FAULT, naming the
+  // side. Meanwhile the task is busy and drives nothing.
+  double device_timeout = 5.0;
   // Aligned mode: after enabling, the slave offset travels (jerk-limited) from the value that
   // cancels the error to `slave_offset`, pulling the slave smoothly into the configured pose.
   bool align = false;
@@ -83,6 +86,7 @@ class CollaborativeControlForce : public Task {
 
   // Readable from the owning thread or, through the state table, from any thread.
   OperatingStateValue operating_state() const noexcept { return state_.state; }
+  const OperatingState& state() const noexcept { return state_; }
   const FaultInfo& fault() const noexcept { return fault_; }
   std::uint64_t rejected_commands() const noexcept { return rejected_; }
   // Input rows refused (not finite, stamped in the future) and Ruckig refusals of the offset.
@@ -131,7 +135,9 @@ class CollaborativeControlForce : public Task {
     Input last{};
     TimeNs time = 0;  // of the last good input: its row's, or its source row's plus the delay
     bool valid = false, not_finite = false;
-    bool busy = false;           // the device said it is busy (homing): not driven meanwhile
+    bool busy = false;    // the device said it is busy (homing): not driven meanwhile
+    bool enabled = true;  // the device said it is enabled (or says nothing of its state)
+    bool paused = false;
     Status status = Status::ok;  // of the last read
   };
   // What the offset is expressed in: a change re-expresses it so that e_s does not jump.
@@ -142,6 +148,9 @@ class CollaborativeControlForce : public Task {
   void add_settings(ProvidedInterface& p);
   void require_side(Side& s, const char* iface);
   bool read_side(Side& s, Input& out, FaultInfo& why) noexcept;
+  // True while enabled but a device cannot be driven (busy, paused, disabled): busy, and FAULT
+  // once a disabled device has kept it waiting device_timeout.
+  bool waiting_for_devices() noexcept;
   Status read_time(Side& s, TimeNs row_time, TimeNs& time) noexcept;
   void handle_state_command(StateCommand c) noexcept;
   void set_operating_state(OperatingStateValue s) noexcept;
@@ -164,6 +173,7 @@ class CollaborativeControlForce : public Task {
   bool reexpress_pending_ = false;
   bool inputs_seen_ = false;  // a producer that has not published yet is not a fault, for a while
   TimeNs start_time_ = -1;
+  TimeNs waiting_since_ = -1;  // enabled, a device not: since when
   LawSettings previous_;
   FaultInfo fault_{};
   std::uint64_t rejected_ = 0, refused_sends_ = 0, rejected_inputs_ = 0, offset_errors_ = 0;
