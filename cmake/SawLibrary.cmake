@@ -39,3 +39,21 @@ function(saw_program target)
   install(TARGETS ${target} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
   saw_warnings(${target})
 endfunction()
+
+# saw_package(name SOURCES ... LIBS ...): a package as saw-rt loads it, a plug-in module
+# (SAW_PLUGIN) in the package directory: lib/sawrt/packages of the build tree, and
+# ${CMAKE_INSTALL_LIBDIR}/sawrt/packages installed. saw-rt links no package; it loads them all
+# from there, in-tree ones and a lab's alike.
+function(saw_package name)
+  cmake_parse_arguments(P "" "" "SOURCES;LIBS" ${ARGN})
+  set(target saw_package_${name})
+  add_library(${target} MODULE ${P_SOURCES})
+  target_link_libraries(${target} PRIVATE saw::deploy ${P_LIBS})
+  set_target_properties(${target} PROPERTIES
+    OUTPUT_NAME ${name} PREFIX "libsawrt-"
+    LIBRARY_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/lib/sawrt/packages
+    INSTALL_RPATH "$ORIGIN/../..")  # from <libdir>/sawrt/packages to <libdir>
+  install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/sawrt/packages COMPONENT runtime)
+  saw_warnings(${target})
+  set_property(GLOBAL APPEND PROPERTY SAW_PACKAGE_MODULES ${target})
+endfunction()

@@ -1,5 +1,6 @@
-// saw-rt: the RT host. Registers the packages' component types, loads a YAML deployment (and its
-// plug-ins), validates all of it, runs it, prints a summary. It knows no concrete component.
+// saw-rt: the RT host. Loads the packages (the package directory, as plug-ins), a YAML deployment
+// (and its plug-ins), validates all of it, runs it, prints a summary. It knows no concrete
+// component and links no package.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
@@ -7,27 +8,15 @@
 #include <thread>
 
 #include "gateway_process.hpp"
+#include "packages.hpp"
 #include "run_summary.hpp"
-#include "saw/bridge/registration.hpp"
-#include "saw/canopen/registration.hpp"
 #include "saw/deploy/deployment.hpp"
-#include "saw/drivers/falcon/registration.hpp"
-#include "saw/drivers/sim_registration.hpp"
-#include "saw/teleop/registration.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
 std::atomic<bool> stop_requested{false};
 void on_signal(int) { stop_requested.store(true, std::memory_order_relaxed); }
-
-void register_packages(saw::deploy::ComponentRegistry& registry) {
-  saw::bridge::register_components(registry);
-  saw::canopen::register_components(registry);
-  saw::drivers::falcon::register_components(registry);
-  saw::drivers::sim::register_components(registry);
-  saw::teleop::register_components(registry);
-}
 
 }  // namespace
 
@@ -50,7 +39,12 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   saw::deploy::ComponentRegistry registry;
-  register_packages(registry);
+  try {
+    saw::apps::load_packages(registry);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "saw-rt: %s\n", e.what());
+    return 2;
+  }
   for (const auto& p : plugins) {
     try {
       registry.load_plugin(p);
