@@ -443,6 +443,15 @@ def main(directory, out):
         "firmware has the slave track at 0.451 mm RMS over the 9909 cycles after homing, the simulated",
         "Omni master (`config/teleop-sim.yaml`, same slave, law and hand) at 0.475 mm over all 10001.",
         "",
+        "The device base (`DeviceCycleCost.PrintsTheBaseBesideABareTask`, label `bench`, prints it):",
+        "a device on `saw::Device` with a driver whose hardware calls do nothing cycles in p50 0.10 µs",
+        "(p99 0.11 µs), a bare task doing the same mailbox, command and state-table work in 0.04 µs",
+        "(0.05 µs): the whole contract (state machine, command checks, watchdog, safe output, status)",
+        "costs about 0.06 µs a cycle. The Falcon's whole cycle through the base (`FalconCycleCost`,",
+        "above) was p50 1.84–1.87 µs beside 1.78–1.84 µs for the same driver before it moved onto the",
+        "base, the two builds run alternately five times each on the same machine: +0.02–0.07 µs, well",
+        "within the 1 µs allowed.",
+        "",
     ]
     text = "\n".join(line for line in doc if line is not None)
     text = re.sub(r"\n{3,}", "\n\n", text)
