@@ -1,5 +1,6 @@
 // saw-rt: the RT host. Loads the packages (the package directory, as plug-ins), a YAML deployment
-// (and its plug-ins), validates all of it, runs it, prints a summary. It knows no concrete
+// (and its plug-ins), validates all of it, runs it (with its packages' sections: a gateway
+// process), prints a summary. It knows no concrete
 // component and links no package.
 #include <CLI/CLI.hpp>
 #include <atomic>
@@ -7,7 +8,6 @@
 #include <cstdio>
 #include <thread>
 
-#include "gateway_process.hpp"
 #include "packages.hpp"
 #include "run_summary.hpp"
 #include "saw/deploy/deployment.hpp"
@@ -67,9 +67,7 @@ int main(int argc, char** argv) {
   try {
     auto spec = saw::deploy::load_deployment_spec(config, registry, host);
     if (stepped) spec.clock = saw::deploy::Clock::stepped;
-    d.emplace(saw::deploy::build_deployment(
-        std::move(spec), registry,
-        [&](const saw::deploy::GatewaySpec& g) { return saw::apps::launch_gateway(g, registry); }));
+    d.emplace(saw::deploy::build_deployment(std::move(spec), registry));
     if (!record.empty()) d->set_record_file(record);
   } catch (const saw::deploy::ConfigError& e) {
     std::fprintf(stderr, "saw-rt: %s\nnothing was started.\n", e.what());

@@ -169,8 +169,7 @@ namespace {
 
 // The shipped deployment, on the stepped clock: the slave tracks the master.
 TEST(Integration, ShippedTeleopSimTracksInSteppedMode) {
-  auto d = saw::deploy::load_deployment(SAW_SOURCE_DIR "/config/teleop-sim.yaml", registry(), "",
-                                        saw::testing::no_gateway);
+  auto d = saw::deploy::load_deployment(SAW_SOURCE_DIR "/config/teleop-sim.yaml", registry());
   d.set_clock(saw::deploy::Clock::stepped);
   d.start();
   d.run_for(5.0);
@@ -253,74 +252,6 @@ TEST(Integration, TwoProcessesTeleoperateThroughTheBridge) {
   ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(RMS ([0-9.]+) mm)"))) << out;
   EXPECT_LT(std::stod(m[1]), 1.0) << out;
   EXPECT_TRUE(std::regex_search(out, std::regex(R"(slave +1\.00ms +1[45]\d\d )"))) << out;
-}
-
-}  // namespace
-
-namespace {
-
-std::string gateway_error(const std::string& tail) {
-  try {
-    (void)build(std::string(good) + tail, "cfg.yaml", registry());
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no error for: " << tail;
-  return "";
-}
-
-void expect_error(const std::string& tail, const char* pattern) {
-  const auto message = gateway_error(tail);
-  EXPECT_TRUE(std::regex_search(message, std::regex(pattern)))
-      << "message: " << message << "\nexpected: " << pattern;
-}
-
-TEST(Deployment, AGatewaySectionIsCheckedLikeTheRest) {
-  expect_error("gateway: {domain: 3}\n", R"(^cfg\.yaml:17:\d+: key 'gateway': nothing to map)");
-  const std::string exported = "exports:\n  - {component: master, provided: arm}\n";
-  expect_error(exported + "gateway: {attach: [slave]}\n",
-               R"(^cfg\.yaml:19:\d+: key 'gateway\.attach': 'slave' is not exported)");
-  expect_error(exported + "gateway: {domain: 300}\n",
-               R"(^cfg\.yaml:19:\d+: key 'gateway\.domain': .*out of range)");
-  expect_error(exported + "gateway: {domian: 3}\n",
-               R"(^cfg\.yaml:19:\d+: key 'gateway\.domian': unknown parameter)");
-  // A good one parses, naming what it maps; nothing is started until the deployment starts.
-  auto d = build(std::string(good) + exported + "gateway: {domain: 3}\n", "cfg.yaml", registry());
-  ASSERT_TRUE(d.gateway().has_value());
-  EXPECT_EQ(d.gateway()->attach, std::vector<std::string>{"master"});
-  EXPECT_EQ(d.gateway()->domain, 3);
-  EXPECT_EQ(d.gateway()->interfaces, std::vector<std::string>{"127.0.0.1"});
-}
-
-TEST(Deployment, AGatewayOffLoopbackNeedsAnEnclaveOrSaysSecurityNone) {
-  const std::string exported = "exports:\n  - {component: master, provided: arm}\n";
-  expect_error(exported + "gateway: {interfaces: [10.0.0.1]}\n",
-               R"(^cfg\.yaml:19:\d+: key 'gateway': the gateway's DDS leaves loopback and no security)");
-  expect_error(exported + "gateway: {interfaces: [10.0.0.1], security: plain}\n",
-               R"(^cfg\.yaml:19:\d+: key 'gateway\.security': 'plain': the only value is none)");
-  const std::string enclave = ::testing::TempDir() + "deploy-enclave-" + std::to_string(getpid());
-  std::filesystem::create_directories(enclave);
-  expect_error(exported + "gateway: {interfaces: [10.0.0.1], enclave: " + enclave + "}\n",
-               R"(^cfg\.yaml:19:\d+: key 'gateway\.enclave': enclave .* has no cert\.pem)");
-  for (const char* f : {"cert.pem", "key.pem", "identity_ca.cert.pem", "permissions_ca.cert.pem",
-                        "governance.p7s", "permissions.p7s"})
-    std::ofstream(enclave + "/" + f) << "x";
-  expect_error(exported + "gateway: {interfaces: [10.0.0.1], enclave: " + enclave + ", security: none}\n",
-               R"(key 'gateway\.security': security: none and an enclave: choose one)");
-  // Either one runs: the enclave is handed to the gateway, or no security is said out loud.
-  {  // (one at a time: each exports master's segment)
-    auto secure =
-        build(std::string(good) + exported + "gateway: {interfaces: [10.0.0.1], enclave: " + enclave + "}\n",
-              "cfg.yaml", registry());
-    EXPECT_EQ(secure.gateway()->enclave, enclave);
-  }
-  {
-    auto plain = build(std::string(good) + exported + "gateway: {interfaces: [10.0.0.1], security: none}\n",
-                       "cfg.yaml", registry());
-    EXPECT_TRUE(plain.gateway()->insecure);
-    EXPECT_TRUE(plain.gateway()->enclave.empty());
-  }
-  std::filesystem::remove_all(enclave);
 }
 
 }  // namespace

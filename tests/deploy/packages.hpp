@@ -1,8 +1,6 @@
 // The in-tree packages' component types, registered as saw-rt registers them, for tests.
 #pragma once
 
-#include <stdexcept>
-
 #include "saw/bridge/registration.hpp"
 #include "saw/deploy/deployment.hpp"
 #include "saw/drivers/sim_registration.hpp"
@@ -26,15 +24,10 @@ inline deploy::ComponentRegistry& registry() {
   return r;
 }
 
-// In-process tests never start a gateway process (the system tests run saw-rt for that).
-inline std::shared_ptr<void> no_gateway(const deploy::GatewaySpec&) {
-  throw std::runtime_error("this test starts no gateway");
-}
-
 // Parses and builds, as saw-rt does.
 inline deploy::Deployment build(const std::string& text, const std::string& file,
                                 deploy::ComponentRegistry& r, const std::string& host = "") {
-  return deploy::make_deployment(text, file, r, host, no_gateway);
+  return deploy::make_deployment(text, file, r, host);
 }
 
 }  // namespace saw::testing

@@ -8,6 +8,7 @@
 
 #include "../deploy/packages.hpp"
 #include "saw/deploy/deployment.hpp"
+#include "saw/gateway/settings.hpp"
 
 namespace {
 
@@ -16,12 +17,11 @@ saw::deploy::ComponentRegistry make_registry() {
   saw::deploy::ComponentRegistry r;
   saw::drivers::sim::register_components(r);
   saw::teleop::register_components(r);
+  saw::gateway::register_components(r, false);  // the gateway: section, parsed; no process started
   r.set_exporter([](saw::Component&, const std::string&) { return std::shared_ptr<void>(); });
   r.allow_plugins(false);
   return r;
 }
-
-std::shared_ptr<void> no_gateway(const saw::deploy::GatewaySpec&) { return nullptr; }
 
 }  // namespace
 
@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // A file placed on hosts is parsed as one of them would (the seeds name this host).
   const std::string host = text.find("hosts") != std::string::npos ? "operator" : "";
   try {
-    (void)saw::deploy::make_deployment(text, "fuzz.yaml", registry, host, no_gateway);
+    (void)saw::deploy::make_deployment(text, "fuzz.yaml", registry, host);
   } catch (const saw::deploy::ConfigError& e) {
     if (std::string_view(e.what()).substr(0, 10) != "fuzz.yaml:") {
       std::fprintf(stderr, "a ConfigError that does not name the file: %s\n", e.what());

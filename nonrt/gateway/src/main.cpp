@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "saw/gateway/gateway.hpp"
+#include "saw/gateway/settings.hpp"
 #include "security_cli.hpp"
 
 namespace {
@@ -21,36 +22,61 @@ void on_signal(int sig) {
 }
 }  // namespace
 
+// The gateway's configuration from its settings: the one place the two meet.
+saw::gateway::GatewayConfig config_of(const saw::gateway::GatewaySettings& s) {
+  saw::gateway::GatewayConfig c;
+  c.attach = s.attach;
+  c.mirrors = s.mirrors;
+  for (const auto& im : s.imports) {
+    saw::gateway::ImportConfig i;
+    i.component = im.component;
+    i.arm = im.arm;
+    i.ros_namespace = s.ros_namespace;
+    i.clutch_topic = s.clutch_topic;
+    i.operator_present_topic = s.operator_present_topic;
+    c.imports.push_back(i);
+  }
+  c.dds.domain = s.domain;
+  c.dds.interfaces = s.interfaces;
+  if (!s.enclave.empty()) c.dds.enclave = s.enclave;
+  c.decimation = static_cast<unsigned>(s.decimation);
+  c.name = s.name;
+  return c;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"saw-gateway: maps components exported through the shared-memory bridge to DDS"};
-  saw::gateway::GatewayConfig config;
+  saw::gateway::GatewaySettings s;
+  std::string settings;
   double duration = 0, wait = 5;
   std::vector<std::string> imports;
-  std::string ros_namespace;
-  saw::gateway::ImportConfig defaults;
-  app.add_option("--attach", config.attach, "exported component to map to DDS (repeatable)");
+  app.add_option("--settings", settings,
+                 "all settings at once, as a deployment's gateway: section (YAML; saw-rt passes them so)");
+  app.add_option("--attach", s.attach, "exported component to map to DDS (repeatable)");
   app.add_option("--import", imports,
                  "foreign CRTK arm to present through the bridge: NAME or NAME=ARM (topics rt/[NS/]ARM/...; "
                  "repeatable)");
   app.add_option(
-      "--mirror", config.mirrors,
+      "--mirror", s.mirrors,
       "component served by a gateway on another host, to present on this host: NAME, or NAME=LOCAL to "
       "present it under another name (repeatable)");
-  app.add_option("--ros-namespace", ros_namespace, "namespace of the imported arms' topics");
-  app.add_option("--clutch-topic", defaults.clutch_topic, "sensor_msgs/Joy topic of the clutch (\"\": none)");
-  app.add_option("--operator-present-topic", defaults.operator_present_topic,
+  app.add_option("--ros-namespace", s.ros_namespace, "namespace of the imported arms' topics");
+  app.add_option("--clutch-topic", s.clutch_topic, "sensor_msgs/Joy topic of the clutch (\"\": none)");
+  app.add_option("--operator-present-topic", s.operator_present_topic,
                  "sensor_msgs/Joy topic of the operator-present sensor (\"\": none)");
-  app.add_option("--domain", config.dds.domain, "DDS domain id")->check(CLI::Range(0, 232));
-  app.add_option("--interface", config.dds.interfaces,
+  app.add_option("--domain", s.domain, "DDS domain id")->check(CLI::Range(0, 232));
+  app.add_option("--interface", s.interfaces,
                  "IPv4 address of a network interface DDS may use (repeatable; default loopback only)");
-  app.add_option("--decimation", config.decimation, "publish state every Nth row")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--name", config.name, "gateway name, unique per host (default gateway.<pid>)");
+  app.add_option("--decimation", s.decimation, "publish state every Nth row")->check(CLI::PositiveNumber);
+  app.add_option("--name", s.name, "gateway name, unique per host (default gateway.<pid>)");
   app.add_option("--wait", wait, "seconds to wait for the components to be exported")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
-  saw::gateway::add_enclave_option(app, config.dds);
+  app.add_option(
+         "--enclave", s.enclave,
+         "DDS Security enclave KEYSTORE/enclaves/NAME (default: ROS_SECURITY_* environment, else none)")
+      ->type_name("DIR");
   bool exit_with_parent = false;
   app.add_flag("--exit-with-parent", exit_with_parent,
                "stop when the parent process (saw-rt) is gone: SIGTERM then means it died (FAULT is said), "
@@ -61,18 +87,30 @@ int main(int argc, char** argv) {
     prctl(PR_SET_PDEATHSIG, SIGTERM);                  // the RT process died (even kill -9): go too
     if (getppid() != parent || parent == 1) return 0;  // it died before we asked
   }
-  if (config.attach.empty() && imports.empty() && config.mirrors.empty()) {
+  if (!settings.empty()) {
+    for (const char* o :
+         {"--attach", "--import", "--mirror", "--ros-namespace", "--clutch-topic", "--operator-present-topic",
+          "--domain", "--interface", "--decimation", "--name", "--enclave"})
+      if (app.count(o) != 0) {
+        std::fprintf(stderr, "saw-gateway: --settings gives every setting; %s too is ambiguous\n", o);
+        return 2;
+      }
+    try {
+      s = saw::gateway::settings_from_yaml(settings, "--settings");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "saw-gateway: %s\n", e.what());
+      return 2;
+    }
+  }
+  for (const auto& i : imports) {
+    const auto eq = i.find('=');
+    s.imports.push_back({i.substr(0, eq), eq == std::string::npos ? i.substr(0, eq) : i.substr(eq + 1)});
+  }
+  if (s.attach.empty() && s.imports.empty() && s.mirrors.empty()) {
     std::fprintf(stderr, "saw-gateway: nothing to do: give --attach, --import or --mirror\n");
     return 2;
   }
-  for (const auto& i : imports) {
-    saw::gateway::ImportConfig c = defaults;
-    const auto eq = i.find('=');
-    c.component = i.substr(0, eq);
-    c.arm = eq == std::string::npos ? c.component : i.substr(eq + 1);
-    c.ros_namespace = ros_namespace;
-    config.imports.push_back(c);
-  }
+  saw::gateway::GatewayConfig config = config_of(s);
   config.attach_timeout = static_cast<saw::TimeNs>(wait * 1e9);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -94,13 +132,13 @@ int main(int argc, char** argv) {
     // threads the kernel reparents us to first (the thread that started us died first).
     if (exit_with_parent && (stop_signal.load() == SIGTERM || getppid() != parent))
       gateway.announce_exit("the RT process (pid " + std::to_string(parent) + ") exited");
-    const auto s = gateway.stats();
+    const auto st = gateway.stats();
     const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf(
         "saw-gateway: published %llu state samples, %llu events; %llu commands in, %llu rejected; "
         "%llu reconnects; %llu queries; imported %llu samples, %llu rejected; mirrored %llu samples\n",
-        u(s.published), u(s.events), u(s.commands), u(s.rejected), u(s.reconnects), u(s.queries),
-        u(s.imported), u(s.imported_rejected), u(s.mirrored));
+        u(st.published), u(st.events), u(st.commands), u(st.rejected), u(st.reconnects), u(st.queries),
+        u(st.imported), u(st.imported_rejected), u(st.mirrored));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "saw-gateway: %s\n", e.what());
     return 1;

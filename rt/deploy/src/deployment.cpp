@@ -71,38 +71,46 @@ void Deployment::connect_all() {
   }
 }
 
-Deployment build_deployment(DeploymentSpec spec, const ComponentRegistry& registry,
-                            GatewayLauncher launch_gateway) {
-  Deployment d(std::move(spec));
-  d.make_components(registry);
-  d.check_before_export(registry);
-  if (d.spec_.gateway && !launch_gateway)
-    throw ConfigError(d.spec_.gateway->at, "this program cannot start a gateway");
-  d.launch_gateway_ = std::move(launch_gateway);
-  d.export_interfaces(registry);
-  for (const auto& make : registry.resolvers()) d.manager_->add_resolver(make());
-  // Mirrors and imports must be in this host's bridge before connect() looks for them; the
-  // handle stops the gateway again if anything below fails.
-  if (d.spec_.gateway && d.spec_.gateway->before_connect()) {
+void Deployment::start_sections(bool before_connect) {
+  for (const auto& s : spec_.sections) {
+    if (s.value.before_connect != before_connect) continue;
+    const Section* section = registry_->find_section(s.key);
+    if (section == nullptr || !section->start) continue;
     try {
-      d.gateway_process_ = d.launch_gateway_(*d.spec_.gateway);
+      sections_running_.push_back(section->start(s.value.value, *registry_));
     } catch (const std::exception& e) {
-      throw ConfigError(d.spec_.gateway->at, e.what());
+      throw ConfigError(s.at, e.what());
     }
   }
+}
+
+const SectionSpec* Deployment::section(const std::string& key) const noexcept {
+  for (const auto& s : spec_.sections)
+    if (s.key == key) return &s;
+  return nullptr;
+}
+
+Deployment build_deployment(DeploymentSpec spec, const ComponentRegistry& registry) {
+  Deployment d(std::move(spec));
+  d.registry_ = &registry;
+  d.make_components(registry);
+  d.check_before_export(registry);
+  d.export_interfaces(registry);
+  for (const auto& make : registry.resolvers()) d.manager_->add_resolver(make());
+  // What a section presents here (a gateway's mirrors and imports) must be in this host's bridge
+  // before connect() looks for it; the handles stop it again if anything below fails.
+  d.start_sections(true);
   d.connect_all();
   return d;
 }
 
 Deployment make_deployment(const std::string& yaml_text, const std::string& file, ComponentRegistry& registry,
-                           const std::string& host, GatewayLauncher launch_gateway) {
-  return build_deployment(parse_deployment(yaml_text, file, registry, host), registry,
-                          std::move(launch_gateway));
+                           const std::string& host) {
+  return build_deployment(parse_deployment(yaml_text, file, registry, host), registry);
 }
 
-Deployment load_deployment(const std::string& path, ComponentRegistry& registry, const std::string& host,
-                           GatewayLauncher launch_gateway) {
-  return build_deployment(load_deployment_spec(path, registry, host), registry, std::move(launch_gateway));
+Deployment load_deployment(const std::string& path, ComponentRegistry& registry, const std::string& host) {
+  return build_deployment(load_deployment_spec(path, registry, host), registry);
 }
 
 void Deployment::set_record_file(std::string path) {
@@ -128,7 +136,7 @@ void Deployment::start() {
     manager_->start();
     if (recorder_) recorder_->start_thread();
   }
-  if (spec_.gateway && !gateway_process_) gateway_process_ = launch_gateway_(*spec_.gateway);
+  start_sections(false);
 }
 
 void Deployment::run_for(double seconds) {
@@ -146,9 +154,9 @@ void Deployment::run_for(double seconds) {
 
 void Deployment::stop() {
   manager_->stop();
-  // Then the gateway: its mirrors served the tasks until they stopped, and its attachments now
-  // publish FAULT for this host's components, as they would for a crash.
-  gateway_process_.reset();
+  // Then the sections (the gateway): its mirrors served the tasks until they stopped, and its
+  // attachments now publish FAULT for this host's components, as they would for a crash.
+  while (!sections_running_.empty()) sections_running_.pop_back();
   if (recorder_) recorder_->stop();
 }
 

@@ -162,111 +162,45 @@ void implied_by_placement(const YAML::Node& root, const Placement& place, Deploy
   }
 }
 
-std::string relative_to(const std::string& directory, const std::string& path) {
-  std::filesystem::path p(path);
-  if (p.is_relative() && !directory.empty()) p = std::filesystem::path(directory) / p;
-  return p.lexically_normal().string();
-}
-
-// An enclave as `sawctl security enroll` makes it (SROS2's layout): checked here so that a wrong
-// path is a file:line error, not a gateway failing after the RT tasks started.
-void check_enclave(const std::string& dir, const Location& at) {
-  for (const char* f : {"cert.pem", "key.pem", "identity_ca.cert.pem", "permissions_ca.cert.pem",
-                        "governance.p7s", "permissions.p7s"})
-    if (std::error_code ec; !std::filesystem::exists(std::filesystem::path(dir) / f, ec))  // (a bad path: no)
-      throw ConfigError(at, "enclave " + dir + " has no " + f +
-                                " (make one with: sawctl security enroll KEYSTORE NAME --role gateway)");
-}
-
-// Off this machine's loopback, a gateway without DDS Security lets anyone on that network read
-// the robot and command it: refused unless the file says `security: none` (saw-rt then warns).
-void check_gateway_security(const GatewaySpec& gw) {
-  const bool off_loopback = std::any_of(gw.interfaces.begin(), gw.interfaces.end(),
-                                        [](const std::string& a) { return !a.starts_with("127."); });
-  if (off_loopback && gw.enclave.empty() && !gw.insecure)
-    throw ConfigError(gw.at,
-                      "the gateway's DDS leaves loopback and no security is configured: give its enclave "
-                      "(enclave: KEYSTORE/enclaves/NAME, see docs/security.md) or say security: none");
-}
-
-void parse_gateway(const YAML::Node& root, const Params& top, const Placement& place, DeploymentSpec& spec) {
-  std::vector<std::string> remote_attach, mirrors, exported;
-  implied_by_placement(root, place, spec, remote_attach, mirrors);
-  for (const auto& e : spec.exports) exported.push_back(e.component);
-  bool interfaces_named = false;
-  if (top.has("gateway")) {
-    Params g = top.child("gateway");
-    GatewaySpec gw;
-    gw.at = location_of(root["gateway"], spec.file, "gateway");
-    gw.attach = g.get_or<std::vector<std::string>>("attach", exported);
-    // The da Vinci stream: foreign CRTK arms presented here (rt/[namespace/]<arm>/measured_cp, ...).
-    if (g.has("import")) {
-      g.mark_used("import");
-      const YAML::Node import_list = root["gateway"]["import"];
-      if (!import_list.IsSequence()) g.fail_at("import", "expected a list of {component, arm}");
-      for (std::size_t i = 0; i < import_list.size(); ++i) {
-        Params im(import_list[i], spec.file, "gateway.import[" + std::to_string(i) + "]");
-        const auto component = im.get<std::string>("component");
-        const auto arm = im.get_or<std::string>("arm", component);
-        im.check_all_used();
-        if (here_by_name(spec, component) || place.host_of.count(component) != 0)
-          im.fail_at("component", "a component named '" + component + "' exists already");
-        gw.imports.emplace_back(component, arm);
-      }
+// The packages' sections (a `gateway:`): each parsed by its owner, with what this host's placement
+// implies (what crosses to other machines), even when the file does not write the section.
+void parse_sections(const YAML::Node& root, const Params& top, const Placement& place,
+                    const ComponentRegistry& registry, DeploymentSpec& spec) {
+  std::vector<std::string> remote_clients, remote_servers;
+  implied_by_placement(root, place, spec, remote_clients, remote_servers);
+  for (const auto& [key, section] : registry.sections()) {
+    SectionContext ctx;
+    if (top.has(key)) {
+      ctx.params = top.child(key);
+      ctx.node = root[key];
+      ctx.at = location_of(root[key], spec.file, key);
+    } else {
+      ctx.at = {spec.file, 0, 0, place.active ? "hosts" : key};
     }
-    gw.ros_namespace = g.get_or<std::string>("namespace", "");
-    for (const auto& a : gw.attach)
-      if (std::find(exported.begin(), exported.end(), a) == exported.end())
-        g.fail_at("attach", "'" + a + "' is not exported by this deployment (see exports:)");
-    if (gw.attach.empty() && gw.imports.empty() && remote_attach.empty() && mirrors.empty())
-      g.fail("nothing to map: this deployment exports no interface (see exports:)");
-    gw.domain = static_cast<int>(g.get_in_range("domain", 0, 232, 0));
-    if (g.has("domain") && g.get<double>("domain") != gw.domain) g.fail_at("domain", "expected an integer");
-    interfaces_named = g.has("interfaces");
-    gw.interfaces = g.get_or<std::vector<std::string>>("interfaces", gw.interfaces);
-    if (gw.interfaces.empty()) g.fail_at("interfaces", "at least one interface address");
-    gw.decimation = static_cast<int>(g.get_in_range("decimation", 1, 1000, 1));
-    if (g.has("enclave")) {
-      gw.enclave = relative_to(spec.directory, g.get<std::string>("enclave"));
-      check_enclave(gw.enclave, location_of(root["gateway"]["enclave"], spec.file, "gateway.enclave"));
+    ctx.file = spec.file;
+    ctx.directory = spec.directory;
+    if (place.active) {
+      ctx.host = place.self;
+      ctx.address = place.address.at(place.self);
+      ctx.host_entry.emplace(place.entry.at(place.self), spec.file, "hosts." + place.self);
     }
-    if (g.has("security")) {
-      const auto mode = g.get<std::string>("security");
-      if (mode != "none")
-        g.fail_at("security", "'" + mode +
-                                  "': the only value is none (to run without DDS Security); for "
-                                  "security give enclave:");
-      if (g.has("enclave")) g.fail_at("security", "security: none and an enclave: choose one");
-      gw.insecure = true;
+    for (const auto& e : spec.exports) ctx.exported.push_back(e.component);
+    ctx.remote_clients = remote_clients;
+    ctx.remote_servers = remote_servers;
+    ctx.is_component = [&](const std::string& n) {
+      return here_by_name(spec, n) || place.host_of.count(n) != 0;
+    };
+    std::optional<SectionValue> value;
+    try {
+      value = section.parse(ctx);
+    } catch (const ConfigError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw ConfigError(ctx.at, e.what());
     }
-    g.check_all_used();
-    spec.gateway = gw;
+    if (ctx.params) ctx.params->check_all_used();
+    if (value) spec.sections.push_back({key, std::move(*value), ctx.at});
   }
-  if (remote_attach.empty() && mirrors.empty()) {
-    if (spec.gateway) check_gateway_security(*spec.gateway);
-    return;
-  }
-  if (!spec.gateway) {
-    spec.gateway = GatewaySpec{};
-    spec.gateway->attach.clear();
-    spec.gateway->at = {spec.file, 0, 0, "hosts"};
-  }
-  for (const auto& a : remote_attach)
-    if (std::find(spec.gateway->attach.begin(), spec.gateway->attach.end(), a) == spec.gateway->attach.end())
-      spec.gateway->attach.push_back(a);
-  if (!interfaces_named && !place.address.at(place.self).empty())
-    spec.gateway->interfaces = {place.address.at(place.self)};
-  spec.gateway->mirrors = mirrors;
-  // A host's own enclave (each machine's gateway has its own certificate).
-  if (const auto e = place.enclave.find(place.self); e != place.enclave.end()) {
-    const std::string key = "hosts." + place.self + ".enclave";
-    const Location at = location_of(root["hosts"][place.self]["enclave"], spec.file, key);
-    if (spec.gateway->insecure)
-      throw ConfigError(at, "gateway: says security: none; a host's enclave contradicts it");
-    spec.gateway->enclave = relative_to(spec.directory, e->second);
-    check_enclave(spec.gateway->enclave, at);
-  }
-  check_gateway_security(*spec.gateway);
 }
 
 void parse_connections(const YAML::Node& root, const Params& top, const Placement& place,
@@ -275,9 +209,11 @@ void parse_connections(const YAML::Node& root, const Params& top, const Placemen
   const YAML::Node connections = root["connections"];
   if (!connections.IsDefined() || connections.IsNull()) return;
   if (!connections.IsSequence()) top.fail_at("connections", "expected a list of connections");
+  // Components a section presents here (arms a gateway imports) may be connected too.
   const auto imported = [&](const std::string& n) {
-    return spec.gateway && std::any_of(spec.gateway->imports.begin(), spec.gateway->imports.end(),
-                                       [&](const auto& im) { return im.first == n; });
+    return std::any_of(spec.sections.begin(), spec.sections.end(), [&](const SectionSpec& s) {
+      return std::find(s.value.presents.begin(), s.value.presents.end(), n) != s.value.presents.end();
+    });
   };
   for (std::size_t i = 0; i < connections.size(); ++i) {
     Params c(connections[i], spec.file, "connections[" + std::to_string(i) + "]");
@@ -334,10 +270,13 @@ DeploymentSpec parse_tree(const YAML::Node& root, const std::string& file, Compo
   spec.clock =
       head.get_enum<Clock>("clock", {{"real", Clock::real}, {"stepped", Clock::stepped}}, Clock::real);
   load_plugins(root, top, spec.directory, registry, spec);
-  Placement place = parse_placement(root, top, host);
+  std::vector<std::string> host_keys;
+  for (const auto& [key, section] : registry.sections())
+    host_keys.insert(host_keys.end(), section.host_keys.begin(), section.host_keys.end());
+  Placement place = parse_placement(root, top, host, host_keys);
   parse_components(root, top, registry, place, spec);
   parse_exports(root, top, spec);
-  parse_gateway(root, top, place, spec);
+  parse_sections(root, top, place, registry, spec);
   parse_connections(root, top, place, spec);
   parse_record(root, top, place, spec);
   top.check_all_used();

@@ -4,11 +4,12 @@ namespace saw::deploy {
 
 std::string Placement::names() const {
   std::string s;
-  for (const auto& entry : address) s += (s.empty() ? "" : ", ") + entry.first;
+  for (const auto& a : address) s += (s.empty() ? "" : ", ") + a.first;
   return s;
 }
 
-Placement parse_placement(const YAML::Node& root, const Params& top, const std::string& host) {
+Placement parse_placement(const YAML::Node& root, const Params& top, const std::string& host,
+                          const std::vector<std::string>& section_keys) {
   Placement p;
   if (!top.has("hosts")) {
     if (!host.empty())
@@ -24,7 +25,9 @@ Placement parse_placement(const YAML::Node& root, const Params& top, const std::
     const auto name = h.first.as<std::string>();
     Params entry(h.second.IsNull() ? YAML::Node(YAML::NodeType::Map) : h.second, top.file(), "hosts." + name);
     p.address[name] = entry.get_or<std::string>("address", "");
-    if (entry.has("enclave")) p.enclave[name] = entry.get<std::string>("enclave");
+    // Keys a package's section owns (the gateway's, for this host): read by that section.
+    for (const auto& k : section_keys) entry.mark_used(k);
+    p.entry.emplace(name, h.second.IsNull() ? YAML::Node(YAML::NodeType::Map) : h.second);
     entry.check_all_used();
   }
   p.active = true;

@@ -61,6 +61,20 @@ TaskConfig periodic_task(const ComponentContext& ctx, const Params& params, cons
   return t;
 }
 
+void ComponentRegistry::add_section(std::string key, Section section) {
+  if (const auto it = section_origins_.find(key); it != section_origins_.end())
+    throw std::invalid_argument("deployment section '" + key + "' is registered already (by " +
+                                (it->second.empty() ? std::string("saw-rt") : it->second) + "; now by " +
+                                (loading_.empty() ? std::string("saw-rt") : loading_) + ")");
+  section_origins_[key] = loading_;
+  sections_.emplace(std::move(key), std::move(section));
+}
+
+const Section* ComponentRegistry::find_section(const std::string& key) const {
+  const auto it = sections_.find(key);
+  return it == sections_.end() ? nullptr : &it->second;
+}
+
 const ComponentRegistry::Type* ComponentRegistry::find(const std::string& type) const {
   const auto it = types_.find(type);
   return it == types_.end() ? nullptr : &it->second;

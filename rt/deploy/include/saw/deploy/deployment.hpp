@@ -15,10 +15,6 @@
 
 namespace saw::deploy {
 
-// Starts the deployment's DDS gateway process (the host's business: the RT process never runs
-// DDS); the handle stops it when released. Throws std::runtime_error saying why not.
-using GatewayLauncher = std::function<std::shared_ptr<void>(const GatewaySpec& spec)>;
-
 class Deployment {
  public:
   Deployment(Deployment&&) noexcept = default;
@@ -35,11 +31,13 @@ class Deployment {
   T* find(const std::string& name) const {
     return dynamic_cast<T*>(manager_->find(name));
   }
-  const std::optional<GatewaySpec>& gateway() const noexcept { return spec_.gateway; }
+  // A package's section (its key, e.g. "gateway"), as its parser made it; nullptr: none here.
+  const SectionSpec* section(const std::string& key) const noexcept;
   // Overrides the file's record file (or records the file's columns somewhere else).
   void set_record_file(std::string path);
 
-  // Starts the recorder (if any) and the manager, real or stepped per clock(), then the gateway.
+  // Starts the recorder (if any) and the manager, real or stepped per clock(), then the sections
+  // not started yet (a gateway). A component that does not start: StartError, nothing running.
   void start();
   // Stepped: advances simulated time by `seconds` as fast as possible; real: sleeps.
   void run_for(double seconds);
@@ -47,31 +45,32 @@ class Deployment {
   const Recorder* recorder() const noexcept { return recorder_.get(); }
 
  private:
-  friend Deployment build_deployment(DeploymentSpec, const ComponentRegistry&, GatewayLauncher);
+  friend Deployment build_deployment(DeploymentSpec, const ComponentRegistry&);
   explicit Deployment(DeploymentSpec spec);
   void make_components(const ComponentRegistry& registry);
   void check_before_export(const ComponentRegistry& registry) const;
   void export_interfaces(const ComponentRegistry& registry);
   void connect_all();
+  void start_sections(bool before_connect);
 
   DeploymentSpec spec_;
   std::unique_ptr<Manager> manager_;
   std::unique_ptr<Recorder> recorder_;
-  std::vector<std::shared_ptr<void>> exports_;  // keeps exported interfaces exported
-  GatewayLauncher launch_gateway_;
-  std::shared_ptr<void> gateway_process_;  // while running
+  std::vector<std::shared_ptr<void>> exports_;           // keeps exported interfaces exported
+  const ComponentRegistry* registry_ = nullptr;          // outlives the deployment (its sections' starters)
+  std::vector<std::shared_ptr<void>> sections_running_;  // a gateway process, while running
 };
 
 // Builds what `spec` describes: makes each component with its type's make(), checks exports and
-// record columns, exports, starts the gateway first if connections need it (mirrors, imports),
-// connects. Throws ConfigError at the offending entry, having left nothing running.
-Deployment build_deployment(DeploymentSpec spec, const ComponentRegistry& registry,
-                            GatewayLauncher launch_gateway = {});
+// record columns, exports, starts the sections that present components first (a gateway's
+// mirrors, imports), connects. Throws ConfigError at the offending entry, having left nothing
+// running. `registry` must outlive the deployment.
+Deployment build_deployment(DeploymentSpec spec, const ComponentRegistry& registry);
 
 // parse_deployment + build_deployment.
 Deployment make_deployment(const std::string& yaml_text, const std::string& file, ComponentRegistry& registry,
-                           const std::string& host = "", GatewayLauncher launch_gateway = {});
-Deployment load_deployment(const std::string& path, ComponentRegistry& registry, const std::string& host = "",
-                           GatewayLauncher launch_gateway = {});
+                           const std::string& host = "");
+Deployment load_deployment(const std::string& path, ComponentRegistry& registry,
+                           const std::string& host = "");
 
 }  // namespace saw::deploy

@@ -9,6 +9,7 @@
 
 #include "saw/deploy/config_error.hpp"
 #include "saw/deploy/registry.hpp"
+#include "saw/deploy/section.hpp"
 
 namespace saw::deploy {
 
@@ -40,27 +41,6 @@ struct RecordSpec {
   Location at;
 };
 
-// The deployment's DDS gateway (a `gateway:` section, or implied by hosts on other machines).
-struct GatewaySpec {
-  std::vector<std::string> attach;  // exported components to map (default: every export)
-  int domain = 0;
-  std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
-  int decimation = 1;
-  std::vector<std::string> mirrors;  // components of other machines to present here (started before connect)
-  // Foreign CRTK arms (a dVRK's masters) to present here as components, read-only: component
-  // name → arm name; topics rt/[ros_namespace/]<arm>/... (started before connect).
-  std::vector<std::pair<std::string, std::string>> imports;
-  std::string ros_namespace;
-  // DDS Security: the gateway's enclave (a directory made by `sawctl security enroll`), absolute.
-  // Off loopback one is required unless the file says `security: none` (`insecure`).
-  std::string enclave;
-  bool insecure = false;
-  Location at;
-  // Mirrors or imports: connect() looks for them in this host's bridge, so the gateway starts
-  // before the connections are made rather than with the tasks.
-  bool before_connect() const noexcept { return !mirrors.empty() || !imports.empty(); }
-};
-
 struct DeploymentSpec {
   std::string name, file, directory;
   Clock clock = Clock::real;
@@ -68,7 +48,7 @@ struct DeploymentSpec {
   std::vector<ComponentSpec> components;    // this host's, in file order
   std::vector<ExportSpec> exports;          // the file's, then those its placement implies
   std::vector<ConnectionSpec> connections;  // those this host makes
-  std::optional<GatewaySpec> gateway;
+  std::vector<SectionSpec> sections;        // the packages' sections (gateway:), parsed by their owners
   std::optional<RecordSpec> record;
 };
 

@@ -12,6 +12,7 @@
 
 #include "saw/component.hpp"
 #include "saw/deploy/params.hpp"
+#include "saw/deploy/section.hpp"
 #include "saw/manager.hpp"
 #include "saw/task.hpp"
 
@@ -87,6 +88,12 @@ class ComponentRegistry {
   const std::vector<std::function<std::unique_ptr<RemoteResolver>()>>& resolvers() const noexcept {
     return resolvers_;
   }
+  // A top-level deployment section a package owns (its key, e.g. "gateway"); taken already:
+  // std::invalid_argument naming both origins.
+  void add_section(std::string key, Section section);
+  const std::map<std::string, Section>& sections() const noexcept { return sections_; }
+  const Section* find_section(const std::string& key) const;
+
   void set_exporter(Exporter e) { exporter_ = std::move(e); }
   const Exporter& exporter() const noexcept { return exporter_; }
 
@@ -102,6 +109,8 @@ class ComponentRegistry {
   void add_type(std::string type, Type t);
 
   std::map<std::string, Type> types_;
+  std::map<std::string, Section> sections_;
+  std::map<std::string, std::string> section_origins_;
   std::map<std::string, SummaryFormat> summary_formats_;
   std::vector<std::function<std::unique_ptr<RemoteResolver>()>> resolvers_;
   Exporter exporter_;

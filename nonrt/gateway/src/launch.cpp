@@ -1,5 +1,4 @@
-#include "gateway_process.hpp"
-
+// launch_gateway: saw-gateway as a process of its own beside the RT process, which never runs DDS.
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -10,9 +9,11 @@
 #include <filesystem>
 #include <thread>
 
+#include "saw/gateway/settings.hpp"
+
 extern char** environ;
 
-namespace saw::apps {
+namespace saw::gateway {
 namespace {
 
 using namespace std::chrono_literals;
@@ -34,22 +35,10 @@ std::string own_directory() {
                : ".";
 }
 
-std::vector<std::string> arguments(const std::string& exe, const deploy::GatewaySpec& spec) {
-  std::vector<std::string> args{exe,
-                                "--exit-with-parent",
-                                "--domain",
-                                std::to_string(spec.domain),
-                                "--decimation",
-                                std::to_string(spec.decimation)};
-  for (const auto& a : spec.attach) args.insert(args.end(), {"--attach", a});
-  for (const auto& i : spec.interfaces) args.insert(args.end(), {"--interface", i});
-  for (const auto& m : spec.mirrors) args.insert(args.end(), {"--mirror", m});
-  for (const auto& [component, arm] : spec.imports)
-    args.insert(args.end(), {"--import", component + "=" + arm});
-  if (!spec.ros_namespace.empty()) args.insert(args.end(), {"--ros-namespace", spec.ros_namespace});
-  if (!spec.enclave.empty()) args.insert(args.end(), {"--enclave", spec.enclave});
-  args.insert(args.end(), {"--wait", "30"});  // our own exports go live when the manager starts
-  return args;
+// The settings cross as one serialized form, read back by the same parser.
+std::vector<std::string> arguments(const std::string& exe, const GatewaySettings& s) {
+  // --wait: our own exports go live when the manager starts.
+  return {exe, "--exit-with-parent", "--settings", to_yaml(s), "--wait", "30"};
 }
 
 bool presented(const std::string& name, const deploy::ComponentRegistry& registry) {
@@ -64,8 +53,7 @@ bool presented(const std::string& name, const deploy::ComponentRegistry& registr
 
 }  // namespace
 
-std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec,
-                                     const deploy::ComponentRegistry& registry) {
+std::shared_ptr<void> launch_gateway(const GatewaySettings& spec, const deploy::ComponentRegistry& registry) {
   // Installed side by side (bin/ of the build, or the package's bin directory).
   const std::string exe = own_directory() + "/saw-gateway";
   if (access(exe.c_str(), X_OK) != 0)
@@ -87,8 +75,9 @@ std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec,
   if (const int err = posix_spawn(&p->pid, exe.c_str(), nullptr, nullptr, argv.data(), environ); err != 0)
     throw std::runtime_error("gateway: cannot start " + exe + ": " + std::strerror(err));
   // Mirrors of other hosts' components and imported arms: connect() will look for them here.
-  std::vector<std::string> wanted = spec.mirrors;
-  for (const auto& im : spec.imports) wanted.push_back(im.first);
+  std::vector<std::string> wanted;
+  for (const auto& m : spec.mirrors) wanted.push_back(m.substr(m.find('=') + 1));  // NAME=LOCAL: LOCAL
+  for (const auto& im : spec.imports) wanted.push_back(im.component);
   for (const auto& m : wanted) {
     const auto deadline = std::chrono::steady_clock::now() + 30s;
     while (!presented(m, registry)) {
@@ -106,4 +95,4 @@ std::shared_ptr<void> launch_gateway(const deploy::GatewaySpec& spec,
   return p;
 }
 
-}  // namespace saw::apps
+}  // namespace saw::gateway

@@ -1,0 +1,60 @@
+// GatewaySettings: everything a gateway is told, declared once; the deployment's `gateway:` section.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "saw/deploy/registry.hpp"
+
+namespace saw::gateway {
+
+// A foreign CRTK arm (a dVRK master) presented on this host as a component, read-only.
+struct ImportSettings {
+  std::string component;  // its name here
+  std::string arm;        // topics rt/[namespace/]<arm>/...
+  bool operator==(const ImportSettings&) const = default;
+};
+
+// One declaration for every way a gateway is configured: a deployment's `gateway:` section (and
+// what its placement on hosts implies), the one serialized form saw-rt hands saw-gateway
+// (to_yaml / settings_from_yaml, the same parser), and saw-gateway's command line.
+struct GatewaySettings {
+  std::vector<std::string> attach;  // exported components to map (default: every export)
+  // Components served by gateways on other hosts, presented on this host: NAME or NAME=LOCAL.
+  std::vector<std::string> mirrors;
+  std::vector<ImportSettings> imports;
+  std::string ros_namespace;                          // of the imported arms' topics
+  std::string clutch_topic = "rt/footpedals/clutch";  // sensor_msgs/Joy; "" for none
+  std::string operator_present_topic = "rt/footpedals/operatorpresent";
+  int domain = 0;
+  std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
+  int decimation = 1;                                // publish state every Nth row
+  // DDS Security: the gateway's enclave (made by `sawctl security enroll`), absolute. Off
+  // loopback one is required unless the file says `security: none` (`insecure`).
+  std::string enclave;
+  bool insecure = false;
+  std::string name;  // unique per host; "" for gateway.<pid>
+
+  bool operator==(const GatewaySettings&) const = default;
+};
+
+// The `gateway:` section: reads it (or what placement implies without one), checks it (enclave
+// files, security off loopback, attach against the exports, import names), file:line errors.
+// nullopt: no gateway here.
+std::optional<GatewaySettings> parse_gateway_section(deploy::SectionContext& ctx);
+
+// The serialized form (a YAML mapping of the section's keys, fully resolved) and back, through
+// the same parser as a deployment's section (without a deployment's cross-checks).
+std::string to_yaml(const GatewaySettings& s);
+GatewaySettings settings_from_yaml(const std::string& text, const std::string& origin);
+
+// Starts saw-gateway (beside this program) with `s`, and waits until what it presents here
+// (mirrors, imports) is in this host's bridge; the handle stops it (SIGINT) when released.
+std::shared_ptr<void> launch_gateway(const GatewaySettings& s, const deploy::ComponentRegistry& registry);
+
+// Registers the `gateway:` section (parse and, with start_processes, launch_gateway). The gateway
+// package (libsawrt-gateway.so) does this in saw-rt; tests register it without processes.
+void register_components(deploy::ComponentRegistry& registry, bool start_processes = true);
+
+}  // namespace saw::gateway
