@@ -94,6 +94,7 @@ FalconSpec parse_falcon(const deploy::ComponentContext& ctx, Params& p) {
       f.inertia = m.get_in_range("inertia", 1e-6, 1, f.inertia);
       f.damping = m.get_in_range("damping", 0, 1, f.damping);
       if (m.has("initial_angles")) f.initial_angles = to_eigen(m.get<Vec3>("initial_angles"));
+      f.operator_homes = m.get_or<bool>("operator_homes", f.operator_homes);
       if (m.has("hand")) {
         const Params h = m.child("hand");
         f.hand = true;
