@@ -84,9 +84,18 @@ bool DeltaKinematics::angle_rates(const Eigen::Vector3d& x, Eigen::Matrix3d& m) 
 // halving a step that leaves the model or does not bring the angles closer. It converges in
 // about 6 steps over the workspace; the bounds keep the cycle's cost bounded when it cannot.
 bool DeltaKinematics::forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x) const noexcept {
+  return newton(theta, x, Eigen::Vector3d(0, 0, 0.11));
+}
+
+bool DeltaKinematics::forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x,
+                              const Eigen::Vector3d& seed) const noexcept {
+  return (seed.allFinite() && newton(theta, x, seed)) || forward(theta, x);
+}
+
+bool DeltaKinematics::newton(const Eigen::Vector3d& theta, Eigen::Vector3d& x,
+                             Eigen::Vector3d p) const noexcept {
   constexpr int max_steps = 40, max_halvings = 30;
   constexpr double tolerance = 1e-12;  // rad
-  Eigen::Vector3d p(0, 0, 0.11);
   Eigen::Vector3d t;
   if (!inverse(p, t)) return false;
   Eigen::Vector3d residual = t - theta;

@@ -132,7 +132,7 @@ Outcome FalconDevice::measure(const DeviceReport& r) noexcept {
   }
   Eigen::Vector3d x;
   Eigen::Matrix3d j;
-  const bool in_model = kinematics_.forward(theta, x) && kinematics_.jacobian(theta, x, j);
+  const bool in_model = kinematics_.forward(theta, x, x_) && kinematics_.jacobian(theta, x, j);
   if (!in_model) {
     // Before homing the counts are relative: a pose out of the model means nothing yet.
     if (!homed_) return Outcome::done();

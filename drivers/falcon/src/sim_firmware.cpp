@@ -74,7 +74,7 @@ bool SimFalconFirmware::homing_mode() const noexcept { return control_ & wire::h
 
 Eigen::Vector3d SimFalconFirmware::tip() const noexcept {
   Eigen::Vector3d x = Eigen::Vector3d::Zero();
-  (void)kinematics_.forward(theta_, x);
+  (void)kinematics_.forward(theta_, x, tip_);
   return x;
 }
 
@@ -85,7 +85,10 @@ void SimFalconFirmware::step(double dt) noexcept {
     target += config_.hand_amplitude * std::sin(2 * std::numbers::pi * config_.hand_frequency * t);
   Eigen::Vector3d x;
   Eigen::Matrix3d j;
-  if (!kinematics_.forward(theta_, x) || !kinematics_.jacobian(theta_, x, j)) j.setZero();
+  if (kinematics_.forward(theta_, x, tip_) && kinematics_.jacobian(theta_, x, j))
+    tip_ = x;  // the next step's seed
+  else
+    j.setZero();
   const Eigen::Vector3d xd = j * theta_dot_;
   const bool homed = homed_[0] && homed_[1] && homed_[2];
   const bool gesture = config_.operator_homes && homing_mode() && !homed;

@@ -49,8 +49,11 @@ class DeltaKinematics {
   Eigen::Vector3d angles(const std::array<std::int16_t, 3>& encoders) const noexcept;
 
   // Tip position for arm angles; false when the three arms cannot meet (out of the model).
-  // Newton's method on inverse() (no closed form with the offsets): at most 40 steps.
+  // Newton's method on inverse() (no closed form with the offsets): at most 40 steps from the
+  // workspace's middle, or from `seed` (the last tip: about 2 steps in a cycle), falling back
+  // to the middle when the seed does not converge.
   bool forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x) const noexcept;
+  bool forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x, const Eigen::Vector3d& seed) const noexcept;
   // Arm angles for a tip position (knees outwards); false when out of reach.
   bool inverse(const Eigen::Vector3d& x, Eigen::Vector3d& theta) const noexcept;
   // ẋ = J·θ̇ at (θ, x = forward(θ)); τ = Jᵀ·f. False at a singularity. J is computed at x.
@@ -66,6 +69,7 @@ class DeltaKinematics {
  private:
   // Leg i's angles (θ1, θ2, θ3) for the tip x; false when out of its reach.
   bool leg(int i, const Eigen::Vector3d& x, Eigen::Vector3d& angles) const noexcept;
+  bool newton(const Eigen::Vector3d& theta, Eigen::Vector3d& x, Eigen::Vector3d p) const noexcept;
   // dθ1ᵢ/dx, row i; false when out of reach or singular.
   bool angle_rates(const Eigen::Vector3d& x, Eigen::Matrix3d& dtheta_dx) const noexcept;
 

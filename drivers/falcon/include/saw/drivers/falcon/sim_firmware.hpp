@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 
@@ -86,6 +87,7 @@ class SimFalconFirmware {
   std::array<bool, 3> absolute_{};  // counts from the index (homed once): kept when homing is lost
   double gesture_t_ = 0;            // s into the operator's homing gesture
   Eigen::Vector3d pulled_out_, pushed_in_;
+  Eigen::Vector3d tip_ = Eigen::Vector3d::Constant(NAN);  // the last step's tip (forward's seed)
   std::uint8_t control_ = 0, buttons_ = 0;
   int drop_ = 0, corrupt_ = 0;
   bool unplugged_ = false;
