@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+
 namespace saw::drivers::falcon {
 namespace {
 
@@ -41,7 +44,9 @@ TEST(FalconSimFirmware, ADacCommandMovesTheArmsTheWayTheKinematicsSay) {
 }
 
 TEST(FalconSimFirmware, HomingModeReportsEachArmHomedAtItsIndex) {
-  SimTransport t;
+  SimFirmwareConfig f;
+  f.operator_homes = false;
+  SimTransport t(f);
   t.open();
   const DeviceReport before = exchange(t, {});
   DeltaKinematics k;
@@ -51,10 +56,33 @@ TEST(FalconSimFirmware, HomingModeReportsEachArmHomedAtItsIndex) {
   for (int i = 0; i < 2000 && !(r.homed(0) && r.homed(1) && r.homed(2)); ++i)
     r = exchange(t, {{500, 500, 500}, control::homing | control::led_blue});  // arms up
   EXPECT_TRUE(r.homed(0) && r.homed(1) && r.homed(2));
-  EXPECT_EQ(t.firmware().leds(), control::led_blue);
+  EXPECT_EQ(t.firmware().led(), SimLed::blue);
+  r = exchange(t, {{}, control::homing});
+  EXPECT_TRUE(r.homed(0) && r.homed(1) && r.homed(2)) << "homed while the bit is held";
   r = exchange(t, {});
   EXPECT_EQ(r.encoder[1], k.encoder(t.firmware().angles()[1]));
   EXPECT_FALSE(r.homed(0));  // homing status only in homing mode
+  r = exchange(t, {{}, control::homing});
+  EXPECT_FALSE(r.homed(0)) << "dropping the homing bit lost the homing";
+}
+
+// The operator's gesture: in homing mode with no force, the simulated hand pulls the grip out
+// and pushes it in until the firmware reports every arm homed.
+TEST(FalconSimFirmware, TheOperatorsGestureHomesWithoutMotorForce) {
+  SimTransport t;
+  t.open();
+  DeviceReport r{};
+  double deepest = 10, furthest = 0;
+  int n = 0;
+  for (; n < 2000 && !(r.homed(0) && r.homed(1) && r.homed(2)); ++n) {
+    r = exchange(t, {{}, control::homing});
+    deepest = std::min(deepest, t.firmware().tip().z());
+    furthest = std::max(furthest, t.firmware().tip().z());
+  }
+  std::printf("homed by the gesture in %d exchanges, grip z %.1f..%.1f mm\n", n, deepest * 1e3,
+              furthest * 1e3);
+  EXPECT_TRUE(r.homed(0) && r.homed(1) && r.homed(2));
+  EXPECT_TRUE(t.firmware().motor_torque().isZero());
 }
 
 TEST(FalconSimFirmware, ScriptedFaults) {

@@ -60,9 +60,9 @@ TEST(FalconThreadedTransport, AFalconHomesAndIsPushedThroughTheIoThread) {
   EXPECT_TRUE(device.operating_state().is_homed);
   EXPECT_EQ(device.operating_state().state, OperatingStateValue::enabled);
   device.cleanup();  // stops the thread: the firmware may be read now
-  EXPECT_TRUE(sim.homed(0) && sim.homed(1) && sim.homed(2));
   EXPECT_TRUE(sim.motor_torque().isZero()) << "closing leaves the motors unpowered";
-  EXPECT_EQ(sim.leds(), 0) << "and the LEDs off";
+  EXPECT_EQ(sim.led(), SimLed::off) << "and the LEDs off";
+  EXPECT_FALSE(sim.homing_mode()) << "and the homing given up with the last null packet";
   std::printf("threaded: %llu exchanges, %llu without a new report\n",
               static_cast<unsigned long long>(device.summary().exchanges),
               static_cast<unsigned long long>(device.summary().no_answer));

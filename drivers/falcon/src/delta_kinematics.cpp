@@ -23,73 +23,115 @@ Eigen::Vector3d DeltaKinematics::angles(const std::array<std::int16_t, 3>& e) co
   return {angle(e[0]), angle(e[1]), angle(e[2])};
 }
 
-Eigen::Vector3d DeltaKinematics::radial(int i) const noexcept {
-  const double a = g_.azimuth[static_cast<std::size_t>(i)];
-  return {std::cos(a), std::sin(a), 0};
-}
-
-Eigen::Vector3d DeltaKinematics::knee(int i, double theta) const noexcept {
-  const Eigen::Vector3d u = radial(i);
-  return (g_.base_radius - g_.effector_radius + g_.upper_arm * std::cos(theta)) * u +
-         Eigen::Vector3d(0, 0, g_.upper_arm * std::sin(theta));
-}
-
-Eigen::Vector3d DeltaKinematics::knee_rate(int i, double theta) const noexcept {
-  return -g_.upper_arm * std::sin(theta) * radial(i) + Eigen::Vector3d(0, 0, g_.upper_arm * std::cos(theta));
-}
-
-// The tip is where three spheres (radius lower_arm, centred on the shifted knees) meet: the
-// intersection further along +z (the grip hangs below the motors).
-bool DeltaKinematics::forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x) const noexcept {
-  const Eigen::Vector3d p1 = knee(0, theta[0]), p2 = knee(1, theta[1]), p3 = knee(2, theta[2]);
-  const double d = (p2 - p1).norm();
-  if (!(d > 1e-12)) return false;
-  const Eigen::Vector3d ex = (p2 - p1) / d;
-  const double i = ex.dot(p3 - p1);
-  Eigen::Vector3d ey = p3 - p1 - i * ex;
-  const double jn = ey.norm();
-  if (!(jn > 1e-12)) return false;
-  ey /= jn;
-  const Eigen::Vector3d ez = ex.cross(ey);
-  const double r2 = g_.lower_arm * g_.lower_arm;
-  const double px = d / 2;  // equal radii
-  const double py = (i * i + jn * jn) / (2 * jn) - (i / jn) * px;
-  const double pz2 = r2 - px * px - py * py;
-  if (!(pz2 >= 0)) return false;
-  const Eigen::Vector3d c = p1 + px * ex + py * ey;
-  const double pz = std::sqrt(pz2);
-  const Eigen::Vector3d a = c + pz * ez, b = c - pz * ez;
-  x = a.z() > b.z() ? a : b;
-  return x.allFinite();
+// Leg i's constraint with θ1 alone left: the knee (a cos θ1, a sin θ1) and the shin's lower end
+// (u + c, w) are K apart, K = d + e + b sin θ3 fixed by v. With t = tan(θ1/2) that is
+// l2 t² + l1 t + l0 = 0 (Stamper's thesis; libnifalcon's IK). Its root with the knee outwards is
+// (−l1 − √disc)/(2 l2), taken here as 2 l0/(−l1 + √disc): the same number without the
+// cancellation near θ1 = 0 (it cost 1e-6 of relative accuracy: the reference's README).
+bool DeltaKinematics::leg(int i, const Eigen::Vector3d& x, Eigen::Vector3d& angles) const noexcept {
+  const double phi = g_.azimuth[static_cast<std::size_t>(i)];
+  const double cp = std::cos(phi), sp = std::sin(phi);
+  const double u = cp * x.x() + sp * x.y() - g_.base_radius;
+  const double v = -sp * x.x() + cp * x.y() - g_.base_offset;
+  const double w = x.z();
+  const double a = g_.upper_arm, b = g_.lower_arm, c = g_.effector_radius;
+  const double q = (v + g_.effector_offset) / b;
+  if (!(q > -1 && q < 1)) return false;
+  const double th3 = std::acos(q);
+  const double k = g_.shin_offset + g_.knee_offset + b * std::sin(th3);
+  const double l0 = (u + c - a) * (u + c - a) + w * w - k * k;
+  const double l1 = -4 * a * w;
+  const double l2 = (u + c + a) * (u + c + a) + w * w - k * k;
+  const double disc = l1 * l1 - 4 * l0 * l2;
+  const double den = -l1 + std::sqrt(disc);
+  if (!(disc >= 0) || !(std::abs(den) > 0)) return false;
+  const double th1 = 2 * std::atan(2 * l0 / den);
+  const double th2 = std::atan2(w - a * std::sin(th1), u + c - a * std::cos(th1));
+  angles = {th1, th2, th3};
+  return angles.allFinite();
 }
 
 bool DeltaKinematics::inverse(const Eigen::Vector3d& x, Eigen::Vector3d& theta) const noexcept {
+  Eigen::Vector3d t;
   for (int i = 0; i < 3; ++i) {
-    const Eigen::Vector3d u = radial(i);
-    const Eigen::Vector3d v = x - (g_.base_radius - g_.effector_radius) * u;
-    const double vu = v.dot(u), vz = v.z();
-    const double rho = std::hypot(vu, vz);
-    const double k =
-        (v.squaredNorm() + g_.upper_arm * g_.upper_arm - g_.lower_arm * g_.lower_arm) / (2 * g_.upper_arm);
-    if (!(rho > 0) || std::abs(k) > rho) return false;
-    theta[i] = std::atan2(vz, vu) - std::acos(k / rho);  // the knee outwards
+    Eigen::Vector3d l;
+    if (!leg(i, x, l)) return false;
+    t[i] = l[0];
   }
-  return theta.allFinite();
+  theta = t;
+  return true;
 }
 
-// Each arm's constraint |x − kᵢ(θᵢ)|² = b² differentiated: (x − kᵢ)ᵀ·ẋ = (x − kᵢ)ᵀ·kᵢ'·θ̇ᵢ.
-bool DeltaKinematics::jacobian(const Eigen::Vector3d& theta, const Eigen::Vector3d& x,
-                               Eigen::Matrix3d& j) const noexcept {
-  Eigen::Matrix3d a;
-  Eigen::Matrix3d d = Eigen::Matrix3d::Zero();
+// The leg's constraint g = (u + c − a cos θ1)² + (w − a sin θ1)² − K(v)² = 0 differentiated:
+// ∂g/∂θ1 = 2aK·sin(θ1 − θ2) and ∂g/∂(u, v, w) = 2K·(cos θ2, cot θ3, sin θ2), so
+// dθ1/d(u, v, w) = −(cos θ2, cot θ3, sin θ2) / (a sin(θ1 − θ2)), turned back by the azimuth.
+bool DeltaKinematics::angle_rates(const Eigen::Vector3d& x, Eigen::Matrix3d& m) const noexcept {
   for (int i = 0; i < 3; ++i) {
-    const Eigen::Vector3d r = x - knee(i, theta[i]);
-    a.row(i) = r.transpose();
-    d(i, i) = r.dot(knee_rate(i, theta[i]));
+    Eigen::Vector3d l;
+    if (!leg(i, x, l)) return false;
+    const double den = g_.upper_arm * std::sin(l[0] - l[1]);
+    const double s3 = std::sin(l[2]);
+    if (!(std::abs(den) > 1e-12) || !(std::abs(s3) > 1e-12)) return false;
+    const double du = -std::cos(l[1]) / den, dv = -(std::cos(l[2]) / s3) / den, dw = -std::sin(l[1]) / den;
+    const double phi = g_.azimuth[static_cast<std::size_t>(i)];
+    const double cp = std::cos(phi), sp = std::sin(phi);
+    m.row(i) << du * cp - dv * sp, du * sp + dv * cp, dw;
   }
-  const double det = a.determinant();
+  return m.allFinite();
+}
+
+// No closed form with the offsets: Newton's method on inverse() from the workspace's middle,
+// halving a step that leaves the model or does not bring the angles closer. It converges in
+// about 6 steps over the workspace; the bounds keep the cycle's cost bounded when it cannot.
+bool DeltaKinematics::forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x) const noexcept {
+  return newton(theta, x, Eigen::Vector3d(0, 0, 0.11));
+}
+
+bool DeltaKinematics::forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x,
+                              const Eigen::Vector3d& seed) const noexcept {
+  return (seed.allFinite() && newton(theta, x, seed)) || forward(theta, x);
+}
+
+bool DeltaKinematics::newton(const Eigen::Vector3d& theta, Eigen::Vector3d& x,
+                             Eigen::Vector3d p) const noexcept {
+  constexpr int max_steps = 40, max_halvings = 30;
+  constexpr double tolerance = 1e-12;  // rad
+  Eigen::Vector3d t;
+  if (!inverse(p, t)) return false;
+  Eigen::Vector3d residual = t - theta;
+  for (int step = 0; step < max_steps; ++step) {
+    if (residual.cwiseAbs().maxCoeff() < tolerance) {
+      x = p;
+      return true;
+    }
+    Eigen::Matrix3d m;
+    if (!angle_rates(p, m)) return false;
+    const Eigen::Vector3d dx = m.partialPivLu().solve(residual);
+    double lambda = 1;
+    bool better = false;
+    for (int h = 0; h < max_halvings && !better; ++h, lambda /= 2) {
+      const Eigen::Vector3d candidate = p - lambda * dx;
+      Eigen::Vector3d tc;
+      if (inverse(candidate, tc) && (tc - theta).norm() < residual.norm()) {
+        p = candidate;
+        residual = tc - theta;
+        better = true;
+      }
+    }
+    if (!better) break;  // at the limit of double precision, or no way closer
+  }
+  if (!(residual.cwiseAbs().maxCoeff() < 1e-9)) return false;
+  x = p;
+  return x.allFinite();
+}
+
+bool DeltaKinematics::jacobian(const Eigen::Vector3d&, const Eigen::Vector3d& x,
+                               Eigen::Matrix3d& j) const noexcept {
+  Eigen::Matrix3d m;
+  if (!angle_rates(x, m)) return false;
+  const double det = m.determinant();
   if (!(std::abs(det) > 1e-12)) return false;
-  j = a.inverse() * d;
+  j = m.inverse();
   return j.allFinite();
 }
 

@@ -76,23 +76,27 @@ void FalconDevice::close() noexcept { transport_->close(); }
 
 Outcome FalconDevice::enable() {
   consecutive_missed_ = 0;  // out of FAULT: the next exchanges say whether it is back
+  // Homing was lost (the fault said so): the counts may be relative again, so home again.
+  if (operating_state().is_homed && !homed_ && !homing()) start_homing();
   return Outcome::done();
 }
 
 Outcome FalconDevice::home() {
   if (!homed_seen_) return Outcome::pending();
   homed_seen_ = false;
+  homed_ = true;
   return Outcome::done();
 }
 
 MotorCommand FalconDevice::command(const Setpoint& s) noexcept {
-  MotorCommand c{};
+  // The homing bit in every packet, homed or not: the firmware stays homed only while it is set
+  // and reports homed arms only then (libnifalcon's FalconFirmware.h).
+  MotorCommand c{{}, control::homing};
   Eigen::Vector3d f = Eigen::Vector3d::Zero();
   const OperatingState& st = operating_state();
   if (homing()) {
     c.dac = {config_.homing_dac, config_.homing_dac, config_.homing_dac};
-    c.control = control::homing;
-  } else if (s.mode == ServoMode::cf && st.is_homed && measured_) {
+  } else if (s.mode == ServoMode::cf && homed_ && measured_) {
     f = Eigen::Vector3d(s.wrench.force[0], s.wrench.force[1], s.wrench.force[2]);
     const Eigen::Vector3d p = position();
     for (int k = 0; k < 3; ++k) {  // outside the workspace: nothing pushing further out
@@ -101,7 +105,7 @@ MotorCommand FalconDevice::command(const Setpoint& s) noexcept {
     }
     if (kinematics_.dac(j_, f, c.dac) < 1.0) ++summary_.saturated;
   }
-  leds_ = leds_of(st.state, homing(), st.is_homed);
+  leds_ = leds_of(st.state, homing(), homed_);
   c.control = static_cast<std::uint8_t>(c.control | leds_);
   servo_force_ = to_vec3(f);
   return c;
@@ -114,25 +118,37 @@ Outcome FalconDevice::missed(FaultCode code, const char* why, std::int32_t error
 
 Outcome FalconDevice::measure(const DeviceReport& r) noexcept {
   const Eigen::Vector3d theta = kinematics_.angles(r.encoder);
-  if (homing() && r.homed(0) && r.homed(1) && r.homed(2)) {
+  const bool all_homed = r.homed(0) && r.homed(1) && r.homed(2);
+  if (homing() && all_homed) {
     homed_seen_ = true;  // home() says so; the counts are absolute from now on:
     measured_ = false;   // start the velocity afresh
+  } else if (homed_ && !all_homed) {
+    // The firmware no longer says every arm is homed (while the bit is held): its counts may
+    // have restarted from wherever the arms are, and a force from them would push blindly.
+    homed_ = false;
+    measured_ = false;
+    return Outcome::failed(FaultCode::device_error,
+                           "homing lost: the Falcon no longer reports its arms homed", "homing", r.status);
   }
   Eigen::Vector3d x;
   Eigen::Matrix3d j;
-  const bool in_model = kinematics_.forward(theta, x) && kinematics_.jacobian(theta, x, j);
+  const bool in_model = kinematics_.forward(theta, x, x_) && kinematics_.jacobian(theta, x, j);
   if (!in_model) {
     // Before homing the counts are relative: a pose out of the model means nothing yet.
-    if (!operating_state().is_homed) return Outcome::done();
+    if (!homed_) return Outcome::done();
     ++summary_.out_of_model;
     return missed(FaultCode::limit_exceeded, "poses out of the model, exchange after exchange", 0);
   }
   consecutive_missed_ = 0;
-  const double dt = static_cast<double>(config().period.count()) * 1e-9;
-  if (measured_)
+  // Over the interval since the last report measured, not one period: after missed exchanges
+  // (or a slower I/O thread) the arms moved for several periods.
+  const TimeNs t = now();
+  const double dt = static_cast<double>(t - last_report_) * 1e-9;
+  if (measured_ && dt > 0)
     theta_dot_ = config_.velocity_filter * (theta - theta_) / dt + (1 - config_.velocity_filter) * theta_dot_;
   else
     theta_dot_.setZero();
+  last_report_ = t;
   theta_ = theta;
   x_ = x;
   j_ = j;

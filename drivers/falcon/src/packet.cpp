@@ -21,14 +21,14 @@ std::int16_t get_word(std::span<const std::uint8_t> f, std::size_t at) noexcept 
 
 bool is_nibble(std::uint8_t b) noexcept { return b >= nibble_base && b <= max_nibble; }
 
-// The checks both directions share: size, framing, the motor/encoder nibbles and byte 14.
+// The checks both directions share: size, framing and the motor/encoder nibbles. Not byte 14:
+// "unknown" in libnifalcon, which never looks at it.
 FrameError check_frame(std::span<const std::uint8_t> f) noexcept {
   if (f.size() < packet_size) return FrameError::short_frame;
   if (f[0] != packet_start) return FrameError::bad_start;
   if (f[15] != packet_end) return FrameError::bad_end;
   for (std::size_t i = 1; i <= 12; ++i)
     if (!is_nibble(f[i])) return FrameError::bad_nibble;
-  if (!is_nibble(f[14])) return FrameError::bad_nibble;  // unused by the firmware: always 'A'+nibble
   return FrameError::none;
 }
 

@@ -84,6 +84,9 @@ FalconSpec parse_falcon(const deploy::ComponentContext& ctx, Params& p) {
       s.usb.bus = static_cast<int>(u.get_in_range("bus", -1, 255, -1));
       s.usb.index = static_cast<int>(u.get_in_range("index", 0, 15, 0));
       s.usb.exchange_timeout_ms = static_cast<int>(u.get_in_range("exchange_timeout_ms", 1, 100, 1));
+      s.usb.handshake_tries =
+          static_cast<int>(u.get_in_range("handshake_tries", 1, 1000, s.usb.handshake_tries));
+      s.usb.load_attempts = static_cast<int>(u.get_in_range("load_attempts", 1, 100, s.usb.load_attempts));
     }
   } else {
     SimFirmwareConfig& f = s.sim;
@@ -94,6 +97,7 @@ FalconSpec parse_falcon(const deploy::ComponentContext& ctx, Params& p) {
       f.inertia = m.get_in_range("inertia", 1e-6, 1, f.inertia);
       f.damping = m.get_in_range("damping", 0, 1, f.damping);
       if (m.has("initial_angles")) f.initial_angles = to_eigen(m.get<Vec3>("initial_angles"));
+      f.operator_homes = m.get_or<bool>("operator_homes", f.operator_homes);
       if (m.has("hand")) {
         const Params h = m.child("hand");
         f.hand = true;

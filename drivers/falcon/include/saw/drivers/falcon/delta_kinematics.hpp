@@ -7,13 +7,25 @@
 
 namespace saw::drivers::falcon {
 
-// The device's geometry and calibration (defaults: libnifalcon's documented Falcon figures).
-// The frame: z along the delta's axis, from the motors towards the grip; x to the right.
+// The device's geometry and calibration: libnifalcon's Falcon (include/falcon/core/FalconGeometry.h,
+// Begley's adjusted measurements; the letters are its names; tests/falcon/reference/README.md).
+// The frame is libnifalcon's, absolute: the origin on the delta's axis in the motors' plane, z
+// along the axis towards the grip, x to the right (arm 0 at the top). Encoder counts 0 (every arm
+// at 35°) put the tip at (0, 0, 134.6 mm).
+//
+// Each leg i, in its own frame (u radial, v along the motor axis, w = z), obtained by turning
+// the point by −azimuth[i] and taking off (base_radius, base_offset, 0): θ1 the arm (motor)
+// angle, θ3 the parallelogram's angle about its own axis, θ2 the shin's elevation, and
+//   u = a cos θ1 − c + K cos θ2,  v = b cos θ3 − f,  w = a sin θ1 + K sin θ2,  K = d + e + b sin θ3.
 struct DeltaGeometry {
   double upper_arm = 0.060;          // m, motor axis to knee ("a")
   double lower_arm = 0.1025;         // m, the parallelogram's side ("b")
-  double base_radius = 0.040;        // m, delta axis to each motor's axis ("r")
-  double effector_radius = 0.01443;  // m, grip centre to each parallelogram's lower joint ("c")
+  double base_radius = 0.040;        // m, delta axis to each motor's axis, radial ("r")
+  double base_offset = -0.02309;     // m, the same along the motor axis ("s")
+  double effector_radius = 0.01443;  // m, grip centre to each parallelogram's lower joint, radial ("c")
+  double effector_offset = -0.025;   // m, the same along the motor axis ("f")
+  double knee_offset = 0.01125;      // m, knee to the parallelogram's upper joints ("e")
+  double shin_offset = 0.01125;      // m, the parallelogram's lower joints to the effector ("d")
   // The three arms' directions around the axis (rad): 90°, -30°, -150°, each turned by 15°.
   std::array<double, 3> azimuth{1.8325957145940461, -0.2617993877991494, -2.3561944901923448};
   // Encoder → arm angle: 320 slots × 4 (quadrature) per motor turn, reduced by the capstan
@@ -37,10 +49,14 @@ class DeltaKinematics {
   Eigen::Vector3d angles(const std::array<std::int16_t, 3>& encoders) const noexcept;
 
   // Tip position for arm angles; false when the three arms cannot meet (out of the model).
+  // Newton's method on inverse() (no closed form with the offsets): at most 40 steps from the
+  // workspace's middle, or from `seed` (the last tip: about 2 steps in a cycle), falling back
+  // to the middle when the seed does not converge.
   bool forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x) const noexcept;
+  bool forward(const Eigen::Vector3d& theta, Eigen::Vector3d& x, const Eigen::Vector3d& seed) const noexcept;
   // Arm angles for a tip position (knees outwards); false when out of reach.
   bool inverse(const Eigen::Vector3d& x, Eigen::Vector3d& theta) const noexcept;
-  // ẋ = J·θ̇ at (θ, x = forward(θ)); τ = Jᵀ·f. False at a singularity.
+  // ẋ = J·θ̇ at (θ, x = forward(θ)); τ = Jᵀ·f. False at a singularity. J is computed at x.
   bool jacobian(const Eigen::Vector3d& theta, const Eigen::Vector3d& x, Eigen::Matrix3d& j) const noexcept;
 
   // Force at the tip (N) → arm torques → DAC counts, scaled down together (direction kept) when
@@ -51,10 +67,11 @@ class DeltaKinematics {
   Eigen::Vector3d torque(const std::array<std::int16_t, 3>& dac) const noexcept;
 
  private:
-  Eigen::Vector3d radial(int i) const noexcept;
-  // Centre of arm i's lower-arm sphere, relative to the tip: the knee moved in by the effector.
-  Eigen::Vector3d knee(int i, double theta) const noexcept;
-  Eigen::Vector3d knee_rate(int i, double theta) const noexcept;  // d knee / dθ
+  // Leg i's angles (θ1, θ2, θ3) for the tip x; false when out of its reach.
+  bool leg(int i, const Eigen::Vector3d& x, Eigen::Vector3d& angles) const noexcept;
+  bool newton(const Eigen::Vector3d& theta, Eigen::Vector3d& x, Eigen::Vector3d p) const noexcept;
+  // dθ1ᵢ/dx, row i; false when out of reach or singular.
+  bool angle_rates(const Eigen::Vector3d& x, Eigen::Matrix3d& dtheta_dx) const noexcept;
 
   DeltaGeometry g_;
 };

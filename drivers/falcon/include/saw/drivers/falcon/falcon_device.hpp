@@ -18,11 +18,15 @@ struct FalconConfig {
   // The workspace (m, in measured_cp's frame): outside it, force pushing further out is dropped.
   Eigen::Vector3d workspace_min = Eigen::Vector3d::Constant(-0.06);
   Eigen::Vector3d workspace_max = Eigen::Vector3d::Constant(0.06);
-  // measured_cp = tip − origin; NaN (the default): the tip at encoder counts 0 (the arms at 35°).
+  // measured_cp = tip − origin, both in libnifalcon's frame (DeltaGeometry); NaN (the default):
+  // the tip at encoder counts 0 (the arms at 35°), (0, 0, 134.6 mm) in that frame.
   Eigen::Vector3d origin = Eigen::Vector3d::Constant(NAN);
   bool start_enabled = true;
-  bool home_on_start = true;      // home in the first cycles (the encoders are relative until then)
-  std::int16_t homing_dac = 500;  // DAC counts driving the arms up onto their index while homing
+  bool home_on_start = true;  // home in the first cycles (the encoders are relative until then)
+  // DAC counts driving the arms up onto their index while homing. 0 (the default): no force;
+  // the operator homes by hand, pulling the grip all the way out and pushing it in, as
+  // libnifalcon does (docs/devices.md). Either way the homing bit is sent in every packet.
+  std::int16_t homing_dac = 0;
   TimeNs homing_timeout = 5'000'000'000;
   // A failed exchange (no answer, USB error, corrupt or short frame, a pose out of the model):
   // this many in a row → FAULT, zero force. An unplug faults at once.
@@ -81,7 +85,10 @@ class FalconDevice : public Device {
   Eigen::Vector3d theta_ = Eigen::Vector3d::Zero(), theta_dot_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d x_ = Eigen::Vector3d::Zero(), origin_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d j_ = Eigen::Matrix3d::Zero();
-  bool measured_ = false, homed_seen_ = false;
+  bool measured_ = false;
+  bool homed_seen_ = false;  // the firmware reported every arm homed while homing
+  bool homed_ = false;       // homed, and the firmware has said so in every report since
+  TimeNs last_report_ = 0;   // cycle time of the last report measured (the velocity's interval)
   int consecutive_missed_ = 0;
 
   // State-table sources.

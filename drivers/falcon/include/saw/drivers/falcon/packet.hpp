@@ -17,12 +17,15 @@ inline constexpr std::uint8_t packet_start = '<';
 inline constexpr std::uint8_t packet_end = '>';
 inline constexpr std::uint8_t nibble_base = 'A';  // 0x41: payload byte = 'A' + value
 
-// Bits of the control nibble the host sends (byte 13).
+// Bits of the control nibble the host sends (byte 13): libnifalcon's enum (FalconFirmware.h), not
+// the stale comment in its FalconFirmwareNovintSDK.h (red 0x2, green 0x4, blue 0x8, homing 0x10).
 namespace control {
-inline constexpr std::uint8_t homing = 0x01;  // homing mode: the firmware reports homed axes
-inline constexpr std::uint8_t led_red = 0x02;
-inline constexpr std::uint8_t led_green = 0x04;
-inline constexpr std::uint8_t led_blue = 0x08;
+// Homing mode: set in every packet for the device to stay homed; the homed status bits mean
+// something only while it is set.
+inline constexpr std::uint8_t homing = 0x01;
+inline constexpr std::uint8_t led_green = 0x02;
+inline constexpr std::uint8_t led_blue = 0x04;
+inline constexpr std::uint8_t led_red = 0x08;
 inline constexpr std::uint8_t mask = 0x0f;
 }  // namespace control
 
@@ -66,7 +69,9 @@ const char* to_string(FrameError e) noexcept;
 
 // Host side.
 Packet encode_command(const MotorCommand& c) noexcept;
-// Returns none and fills `out` only when every byte checks; `out` is untouched otherwise.
+// Returns none and fills `out` only when every byte checks; `out` is untouched otherwise. Byte 14
+// is not checked: its meaning is unknown (libnifalcon ignores it), and refusing on it could
+// refuse every report of a real Falcon.
 FrameError decode_report(std::span<const std::uint8_t> frame, DeviceReport& out) noexcept;
 
 // Device side (the simulated firmware speaks the same format).
