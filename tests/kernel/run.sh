@@ -8,8 +8,8 @@
 # or the kernel package is missing.
 # Usage: run.sh SRC RESULTS NAME=PROGRAM...   (the built programs guest.sh needs, by name)
 set -euo pipefail
-src=$1
-out=$2
+src=$(realpath "$1")
+out=$(realpath -m "$2")  # absolute: the guest runs its checks from /tmp
 shift 2
 
 skip() {
@@ -30,6 +30,7 @@ for target in "$@"; do
   name=${target%%=*}
   path=${target#*=}
   [ -x "$path" ] || { echo "run.sh: $name: $path is not built" >&2; exit 1; }
+  path=$(realpath "$path")
   printf '%s=%q\n' "$name" "$path" >> "$out/targets.env"
 done
 
