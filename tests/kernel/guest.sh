@@ -90,6 +90,8 @@ export -f kernel_is_preempt_rt saw_rt_teleop_sim socketcan_conformance guard
 echo "guest: $(uname -r) $(uname -v), $(nproc) CPUs, up $(cat "$out/boot-seconds") s"
 check kernel.preempt_rt 30 kernel_is_preempt_rt
 check saw_rt.teleop_sim 120 saw_rt_teleop_sim
+# The Falcon over real USB: a gadget on dummy_hcd plays it (tests/kernel/falcon_gadget.py).
+check falcon.usb 150 "$src/tests/kernel/falcon_usb.sh" "$src" "$saw_rt"
 
 vcan_up() {
   modprobe vcan
