@@ -20,6 +20,10 @@ apt_packages=(
   xvfb xauth libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0
   libxcb-render-util0 libxcb-randr0 libxcb-shape0 libxcb-xkb1 libxcb-xfixes0 libxcb-sync1 libxcb-shm0
   libegl1 libgl1 libfontconfig1 libdbus-1-3
+  file  # CPackDeb reads the binaries' types with it: the package tests fail without it on a new root
+  # tests/kernel: Debian's PREEMPT_RT kernel booted under QEMU by virtme-ng (from the venv), with
+  # can-utils as an independent SocketCAN peer inside the guest.
+  qemu-system-x86 linux-image-rt-amd64 can-utils busybox-static  # busybox-static: virtme-ng's initramfs (9p is a module)
 )
 
 # The package check runs once per package list (and with --check): builds call this script

@@ -1,5 +1,8 @@
 #include "run_summary.hpp"
 
+#include <sys/utsname.h>
+
+#include <cstring>
 #include <vector>
 
 namespace saw::apps {
@@ -49,6 +52,10 @@ void print_summary(std::FILE* out, const deploy::Deployment& d, const deploy::Co
                    double seconds) {
   std::fprintf(out, "summary of '%s' (%s clock, %.3f s):\n", d.name().c_str(),
                d.clock() == deploy::Clock::stepped ? "stepped" : "real", seconds);
+  // The kernel the figures come from: a PREEMPT_RT one says so in its version string.
+  if (utsname u{}; uname(&u) == 0)
+    std::fprintf(out, "  kernel: %s %s (%s)\n", u.release, u.version,
+                 std::strstr(u.version, "PREEMPT_RT") != nullptr ? "PREEMPT_RT" : "not PREEMPT_RT");
   print_tasks(out, d);
   for (const Component* c : d.components()) print_columns(out, *c, registry);
   if (const auto* r = d.recorder())

@@ -14,6 +14,7 @@ Checks, on each run's printed summary:
   teleoperation faults too, naming the slave (zero force on both sides).
 
 Usage: canopen_sim_teleop.py <saw-rt> <saw-can-sim> <canopen-sim.yaml>
+(SAW_TEST_CANOPEN_BUS=socketcan:vcan0 runs both on that bus instead of a private virtual one)
 """
 
 import os
@@ -35,7 +36,8 @@ def fail(message, *outputs):
 
 
 def run(tag, rt_seconds, inject=(), terminate_after=None):
-    bus = f"virtual:sawcanteleop{os.getpid()}{tag}"
+    # SAW_TEST_CANOPEN_BUS: another bus, e.g. socketcan:vcan0 in the PREEMPT_RT guest (tests/kernel).
+    bus = os.environ.get("SAW_TEST_CANOPEN_BUS") or f"virtual:sawcanteleop{os.getpid()}{tag}"
     with open(CONFIG) as f:
         text = f.read().replace("virtual:canopen-sim", bus)
     # The shipped file's staleness limits (10 ms for a drive's TPDOs, 20 ms for the teleoperation's
@@ -74,7 +76,7 @@ def run(tag, rt_seconds, inject=(), terminate_after=None):
         sim_out = ready + sim.communicate(timeout=30)[0]
         os.unlink(config)
         shm = "/dev/shm/saw-can." + bus.split(":", 1)[1]
-        if os.path.exists(shm):
+        if bus.startswith("virtual:") and os.path.exists(shm):
             os.unlink(shm)
     print(rt.stdout[-3000:])
     print(sim_out[-1500:])
@@ -91,7 +93,10 @@ m = re.search(r"teleop: ENABLED, tracking error \|e_s\| RMS ([0-9.]+) mm", rt.st
 if not m:
     fail("no tracking error printed, or the teleoperation did not end ENABLED", rt.stdout)
 rms = float(m.group(1))
-if not rms < 15.0:
+# SAW_TEST_CANOPEN_MAX_RMS_MM: a looser bound where the cycles run under software emulation (the
+# PREEMPT_RT guest without KVM), whose stalls the arm cannot follow through; the path is under test.
+max_rms = float(os.environ.get("SAW_TEST_CANOPEN_MAX_RMS_MM", "15"))
+if not rms < max_rms:
     fail(f"tracking error RMS {rms} mm: the arm did not follow the master", rt.stdout)
 
 
