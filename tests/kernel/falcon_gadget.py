@@ -11,7 +11,8 @@ of 64 bytes (full speed, as the FT232). Its behaviour follows the baud rate the 
 - a middle rate (140000 baud, the upload): every byte is echoed;
 - a fast rate (the packet protocol): each 16-byte command `<` 12 force nibbles, control, pad `>`
   (each value byte 'A' + a nibble) is answered with a report `<` 12 encoder nibbles, status, pad
-  `>`. The encoders stay at 0; once the host has asked for homing mode for HOMING_REPORTS
+  `>`, once a firmware was uploaded (before that nothing answers: a probe for a running firmware
+  finds none). The encoders stay at 0; once the host has asked for homing mode for HOMING_REPORTS
   commands, the status says all three arms are homed.
 
 It prints `ready` once bound, then one line per phase, and on SIGTERM or when the host goes away
@@ -91,6 +92,7 @@ class Falcon:
         self.first = None
         self.last = None
         self.firmware_bytes = 0
+        self.loaded = False  # a firmware runs: uploaded, then the host switched to packet speed
         self.homing_commands = 0
         self.homed = False
         self.lock = threading.Lock()
@@ -102,6 +104,8 @@ class Falcon:
         with self.lock:
             if mode != self.mode:
                 print(f"mode {mode} (divisor {whole})", flush=True)
+            if self.mode == "upload" and mode == "packet" and self.firmware_bytes > 0:
+                self.loaded = True
             self.mode = mode
             self.rx.clear()
 
@@ -124,6 +128,11 @@ class Falcon:
                     print("loader handshake", flush=True)
                     self.tx.put(b"\x0a\x44\x2c\x0d")
                     del self.rx[: i + 3]
+                return
+            if not self.loaded:
+                # Powered up, no firmware yet: nothing speaks the report protocol (a host that
+                # probes for a running firmware gets no answer, and must upload it).
+                self.rx.clear()
                 return
             while True:
                 start = self.rx.find(b"<")
