@@ -27,6 +27,12 @@ void Device::start_homing() noexcept {
   state_.is_busy = true;
 }
 
+void Device::lose_homing() noexcept {
+  if (!state_.is_homed) return;
+  state_.is_homed = false;
+  (void)(*state_event_)(state_);
+}
+
 void Device::button(Button b, bool pressed) noexcept {
   const auto i = static_cast<std::size_t>(b);
   if (buttons_[i] == pressed) return;

@@ -44,10 +44,7 @@ class CanopenRig : public Rig {
     }
   }
   void send(Command c) override {
-    const double v = c == Command::good         ? 0.1
-                     : c == Command::not_finite ? NAN
-                     : c == Command::infinite   ? INFINITY
-                                                : 2 * config_.joints[0].units.rated_torque * 1000;
+    const double v = value_of(c, 0.1, config_.joints[0].units.rated_torque * 1000);
     JointState js;
     js.size = 3;
     js.effort = {v, v, v};

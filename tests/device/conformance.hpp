@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 #include <map>
 #include <memory>
@@ -84,6 +85,35 @@ class Rig {
  private:
   detail::Mailbox mailbox_{"conformance client", 64, sizeof(JointState)};
   std::map<std::string, std::uint32_t> targets_;
+};
+
+// The suite's command as a value: `good` itself, NaN, infinity, or twice `limit`.
+inline double value_of(Command c, double good, double limit) {
+  return c == Command::good         ? good
+         : c == Command::not_finite ? NAN
+         : c == Command::infinite   ? INFINITY
+                                    : 2 * limit;
+}
+
+// A haptic device stepped alone, its simulator behind its own seam (inside the device, or behind
+// its transport): one cycle a step, servo_cf along one axis.
+class HapticRig : public Rig {
+ public:
+  void cycle(int n) override {
+    for (int i = 0; i < n; ++i, now_ += period()) detail::Access::step(device(), now_);
+  }
+  void send(Command c) override {
+    Wrench w{};
+    w.force[axis_] = value_of(c, 1.0, device().contract().max_force);
+    write("servo_cf", w);
+  }
+
+ protected:
+  explicit HapticRig(std::size_t axis) : axis_(axis) {}
+
+ private:
+  std::size_t axis_;
+  TimeNs now_ = 1'000'000'000;
 };
 
 struct Driver {

@@ -32,9 +32,9 @@ class PortRefusing : public FalconTransport {
   std::unique_ptr<SimTransport> inner_;
 };
 
-class FalconRig : public Rig {
+class FalconRig : public HapticRig {
  public:
-  FalconRig() {
+  FalconRig() : HapticRig(2) {
     FalconConfig c;
     c.start_enabled = false;
     auto sim = std::make_unique<SimTransport>(SimFirmwareConfig{});
@@ -46,16 +46,6 @@ class FalconRig : public Rig {
     wire(*device_, {"servo_cf", "state_command"});
   }
   Device& device() override { return *device_; }
-  void cycle(int n) override {
-    for (int i = 0; i < n; ++i, now_ += period()) detail::Access::step(*device_, now_);
-  }
-  void send(Command c) override {
-    const double v = c == Command::good         ? 1.0
-                     : c == Command::not_finite ? NAN
-                     : c == Command::infinite   ? INFINITY
-                                                : 2 * device_->device_config().max_force;
-    write("servo_cf", Wrench{{0, 0, v}, {0, 0, 0}});
-  }
   double output() const override { return firmware_->motor_torque().norm(); }
   bool safe() const override { return firmware_->motor_torque().isZero(); }
   // Answers stop coming (the device keeps taking commands): the driver must give up.
@@ -72,7 +62,6 @@ class FalconRig : public Rig {
   std::unique_ptr<FalconDevice> device_;
   SimFalconFirmware* firmware_ = nullptr;
   PortRefusing* port_ = nullptr;
-  TimeNs now_ = 1'000'000'000;
 };
 
 INSTANTIATE_TEST_SUITE_P(FalconDevice, DeviceConformance,

@@ -10,9 +10,9 @@
 namespace saw::conformance {
 namespace {
 
-class SimRig : public Rig {
+class SimRig : public HapticRig {
  public:
-  SimRig() {
+  SimRig() : HapticRig(0) {
     drivers::SimDeviceConfig c;
     c.start_enabled = false;
     device_ = std::make_unique<drivers::SimHapticDevice>(
@@ -20,23 +20,12 @@ class SimRig : public Rig {
     wire(*device_, {"servo_cf", "state_command"});
   }
   Device& device() override { return *device_; }
-  void cycle(int n) override {
-    for (int i = 0; i < n; ++i, now_ += period()) detail::Access::step(*device_, now_);
-  }
-  void send(Command c) override {
-    const double v = c == Command::good         ? 1.0
-                     : c == Command::not_finite ? NAN
-                     : c == Command::infinite   ? INFINITY
-                                                : 2 * device_->device_config().max_force;
-    write("servo_cf", Wrench{{v, 0, 0}, {0, 0, 0}});
-  }
   double output() const override { return device_->applied_force().norm(); }
   bool safe() const override { return device_->applied_force().isZero(); }
   bool break_hardware() override { return false; }
 
  private:
   std::unique_ptr<drivers::SimHapticDevice> device_;
-  TimeNs now_ = 1'000'000'000;
 };
 
 INSTANTIATE_TEST_SUITE_P(SimHapticDevice, DeviceConformance,

@@ -177,6 +177,7 @@ TEST(FalconDevice, HomingLostFaultsAndAnEnableHomesAgain) {
   rig.force(0, 0, 1);
   rig.cycle();
   ASSERT_EQ(rig.state(), OperatingStateValue::fault);
+  EXPECT_FALSE(rig.homed()) << "is_homed says what the device knows: not homed any more";
   EXPECT_EQ(rig.device->fault().source_name(), "homing");
   const auto reason = rig.device->device_status().reason;
   EXPECT_NE(std::string(reason.data()).find("homing lost"), std::string::npos) << reason.data();
@@ -190,6 +191,7 @@ TEST(FalconDevice, HomingLostFaultsAndAnEnableHomesAgain) {
   EXPECT_LT(rig.cycle_until([&] { return !rig.device->homing(); }), 2000);
   rig.cycle(2);
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
+  EXPECT_TRUE(rig.homed());
   EXPECT_TRUE(rig.sim->homed(0) && rig.sim->homed(1) && rig.sim->homed(2));
   EXPECT_EQ(rig.device->device_status().faults, 1u);
 }

@@ -76,8 +76,12 @@ void FalconDevice::close() noexcept { transport_->close(); }
 
 Outcome FalconDevice::enable() {
   consecutive_missed_ = 0;  // out of FAULT: the next exchanges say whether it is back
-  // Homing was lost (the fault said so): the counts may be relative again, so home again.
-  if (operating_state().is_homed && !homed_ && !homing()) start_homing();
+  // Homing was lost (the fault said so, and is_homed went false): the counts may be relative
+  // again, so home again.
+  if (homing_lost_ && !homing()) {
+    homing_lost_ = false;
+    start_homing();
+  }
   return Outcome::done();
 }
 
@@ -126,7 +130,9 @@ Outcome FalconDevice::measure(const DeviceReport& r) noexcept {
     // The firmware no longer says every arm is homed (while the bit is held): its counts may
     // have restarted from wherever the arms are, and a force from them would push blindly.
     homed_ = false;
+    homing_lost_ = true;
     measured_ = false;
+    lose_homing();
     return Outcome::failed(FaultCode::device_error,
                            "homing lost: the Falcon no longer reports its arms homed", "homing", r.status);
   }

@@ -212,6 +212,9 @@ class Device : public Task {
   void button(Button b, bool pressed) noexcept;
   // From open() or a cycle: start homing (busy until home() is done).
   void start_homing() noexcept;
+  // From a cycle: the hardware lost its reference (a Falcon no longer reports its arms homed):
+  // is_homed is false until the next homing is done; said as an operating_state event.
+  void lose_homing() noexcept;
   // From a cycle: a fault the driver sees outside its hardware calls.
   void raise(const Outcome& why) noexcept;
   // In FAULT: what is known now about the same fault replaces what was said (a silent node seen

@@ -86,9 +86,10 @@ class FalconDevice : public Device {
   Eigen::Vector3d x_ = Eigen::Vector3d::Zero(), origin_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d j_ = Eigen::Matrix3d::Zero();
   bool measured_ = false;
-  bool homed_seen_ = false;  // the firmware reported every arm homed while homing
-  bool homed_ = false;       // homed, and the firmware has said so in every report since
-  TimeNs last_report_ = 0;   // cycle time of the last report measured (the velocity's interval)
+  bool homed_seen_ = false;   // the firmware reported every arm homed while homing
+  bool homed_ = false;        // homed, and the firmware has said so in every report since
+  bool homing_lost_ = false;  // until the next enable homes it again
+  TimeNs last_report_ = 0;    // cycle time of the last report measured (the velocity's interval)
   int consecutive_missed_ = 0;
 
   // State-table sources.
