@@ -182,11 +182,15 @@ bool CanopenArm::accepts(ServoMode m) const noexcept {
 
 void CanopenArm::enter_safe_state(SafeReason why) {
   enable_sent_ = false;
-  // A fault the base raised itself (a stale command, an enable that never completed) in
-  // CANopen's terms.
-  if (why == SafeReason::fault && reason_ == FaultReason::none)
-    reason_ = device_status().fault.code == FaultCode::input_stale ? FaultReason::command_stale
-                                                                   : FaultReason::enable_timeout;
+  // A fault the base raised itself, in CANopen's terms where there are some: a stale command,
+  // an enable that never completed. Any other (a throw caught) keeps none: the base's reason says it.
+  if (why == SafeReason::fault && reason_ == FaultReason::none) {
+    const DeviceStatus& d = device_status();
+    if (d.fault.code == FaultCode::input_stale && d.fault.source_name() == "commands")
+      reason_ = FaultReason::command_stale;
+    else if (d.reason_text() == "enable timed out")
+      reason_ = FaultReason::enable_timeout;
+  }
   switch (why) {
     case SafeReason::fault:  // on the drives' quick-stop ramp; the master goes on watching
       return target_all(cia402::Target::quick_stop);
