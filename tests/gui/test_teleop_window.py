@@ -87,22 +87,25 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         qtbot.mouseRelease(panel.clutch, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "ENABLED", timeout=LONG)
 
-        # Recording what the window reads to CSV: every sample, in order.
+        # Recording what the window reads (a recorder process: MCAP and CSV): every sample, in order.
         record = os.path.join(shots, "record")
         slave_cp = f"rt/{d.slave}/measured_cp"
         w.toggle_recording(record, topics=[slave_cp, f"rt/{d.teleop}/tracking_error"])
+        qtbot.waitUntil(lambda: live.recording()["ready"], timeout=LONG)
         start = live.count(slave_cp)
         qtbot.waitUntil(lambda: live.count(slave_cp) > start + 500, timeout=LONG)
-        files = w.toggle_recording()
-        assert "recorded" in w.statusBar().currentMessage()
+        summary = w.toggle_recording()
+        assert "recorded" in w.statusBar().currentMessage(), w.statusBar().currentMessage()
         w.statusBar().clearMessage()  # (it names a local path: not for the screenshots)
         csv_path = os.path.join(record, slave_cp.replace("/", "_") + ".csv")
-        assert sorted(files) == sorted([csv_path, os.path.join(record, f"rt_{d.teleop}_tracking_error.csv")]), files
+        assert sorted(summary["files"]) == sorted([os.path.join(record, "recording.mcap"), csv_path,
+                                                   os.path.join(record, f"rt_{d.teleop}_tracking_error.csv")])
         with open(csv_path) as f:
             rows = list(csv.reader(f))
         assert rows[0] == ["source_time_s", "pose.position.x", "pose.position.y", "pose.position.z"], rows[0]
         times = [float(r[0]) for r in rows[1:]]
-        assert len(times) >= 500 and all(b > a for a, b in zip(times, times[1:])), len(times)
+        assert len(times) == summary["topics"][slave_cp]["samples"] >= 500, (len(times), summary)
+        assert all(b > a for a, b in zip(times, times[1:])), "in order"
         figure(f"recorded {len(times)} samples of {slave_cp} over {times[-1] - times[0]:.2f} s")
         png = w.save_plots(os.path.join(shots, "plots.png"))
         with open(png, "rb") as f:
