@@ -63,6 +63,10 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         w.tabs.setCurrentWidget(w.teleop)
         panel = w.teleop
         assert (panel.master, panel.slave) == (d.master, d.slave)
+        # The teleoperation publishes no read-back of its settings: the panel shows none (no
+        # hard-coded 1.0 / 300 / 3.0 the system may not have), and says the bounds it wants.
+        for e in (panel.scale, panel.gain_m, panel.gain_s, panel.lim_m, panel.lim_s):
+            assert e.text() == "" and e.placeholderText().startswith("within ["), (e.text(), e.placeholderText())
         qtbot.mouseClick(panel.disable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)
         qtbot.mouseClick(panel.enable, QtCore.Qt.MouseButton.LeftButton)
@@ -144,6 +148,19 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         save(w, shots, "component")
         # The teleoperation's view logs the gateway's refusal of the other peer's gain.
         w.picker.setCurrentText(d.teleop)
+        # No form pre-fills a value outside its bounds, nor one the component does not publish (a
+        # set_gains of 0, 0 would decouple the slave).
+        for name, v in w.views.items():
+            for f in v.forms.values():
+                if (name, f.endpoint.name) == (d.slave, "servo_cf"):
+                    continue  # (typed into above)
+                for field, edit in getattr(f, "fields", {}).items():
+                    text = edit.currentText() if hasattr(edit, "currentText") else edit.text()
+                    if f.source is None and not hasattr(edit, "currentText"):
+                        assert text == "", (name, f.endpoint.name, field, text)
+                    if text and f.limits and f.cls is not msgs.StringStamped:
+                        assert all(f.limits[0] <= float(x) <= f.limits[1] for x in text.split()), (name, field, text)
+        assert w.views[d.teleop].forms["set_gains"].fields["master"].text() == ""
         qtbot.waitUntil(lambda: "set_gains rejected" in w.views[d.teleop].log.toPlainText(), timeout=LONG)
 
         # Task health: each exported task's own cycles and overruns, and a histogram of the wake-up
