@@ -139,7 +139,7 @@ class Series:
 class Live:
     """The system as the registry and the watched topics show it, kept up to date off the caller's thread."""
 
-    def __init__(self, domain: int = 0, window: float = 10.0, period: float = 0.005):
+    def __init__(self, domain: int = 0, window: float = 10.0, period: float = 0.02):
         self.client = Client(domain)
         self.domain = domain
         self.window, self.period = window, period

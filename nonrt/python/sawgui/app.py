@@ -94,7 +94,11 @@ class MainWindow(QtWidgets.QMainWindow):
                 self.teleop = TeleopPanel(self.live, t[0])
                 self.tabs.insertTab(1, self.teleop, "Teleoperation")
         current = self.tabs.currentWidget()
-        self.system.refresh()  # cheap, and FAULT must show whatever tab is open
+        # The FAULT banner, above every tab, at every tick; the system tree while it is shown.
+        if current is self.system:
+            self.system.refresh()
+        else:
+            self.system.refresh_banner()
         if current is self.components and self.stack.currentWidget() is not None:
             self.stack.currentWidget().refresh()
         elif current is not self.system and hasattr(current, "refresh"):

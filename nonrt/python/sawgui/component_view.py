@@ -5,7 +5,7 @@ from PySide6 import QtWidgets
 from sawdds import msgs, values
 
 from . import model
-from .widgets import Outcome, Plot, clock, newest, units_of
+from .widgets import PLOT_POINTS, Outcome, Plot, clock, newest, units_of
 
 
 class CommandForm(QtWidgets.QGroupBox):
@@ -184,7 +184,7 @@ class ComponentView(QtWidgets.QWidget):
             self.table.item(i, 3).setText("; ".join(f"{k.split('.')[-1]} mean {v[3]:.4g} [{v[1]:.4g}, {v[2]:.4g}]"
                                                     for k, v in list(st.items())[:3]))
         self.table.resizeColumnsToContents()
-        drawn = [self.live.series(e.topic) for e in self.plotted]
+        drawn = [self.live.series(e.topic, PLOT_POINTS) for e in self.plotted]
         t_end = newest(*drawn)  # one time axis for the view's plots
         for plot, e, series in zip(self.plots, self.plotted, drawn):
             if plot.units != units_of(e):

@@ -83,8 +83,9 @@ def teleop_sides(live, teleop: str):
 def teleop_topics(live, teleop: str) -> list:
     """What the teleoperation panel reads."""
     master, slave = teleop_sides(live, teleop)
-    wanted = [(teleop, "tracking_error"), (teleop, "fault"), (teleop, "slave_force"), (slave, "measured_cp"),
-              (master, "measured_cp"), (master, "clutch")]
+    # What it draws and says; not the forces (1 kHz it would decode and never show).
+    wanted = [(teleop, "tracking_error"), (teleop, "fault"), (slave, "measured_cp"), (master, "measured_cp"),
+              (master, "clutch")]
     return [e.topic for c, n in wanted if c for e in [endpoint(live, c, n)] if e is not None and e.topic]
 
 

@@ -8,6 +8,25 @@ from .widgets import clock
 COLUMNS = ["name", "host", "interfaces", "state", "since", "reason"]
 
 
+def banner_lines(gws, comps):
+    """(FAULT lines, gone lines): each component in FAULT (still said once its gateway has gone: the
+    last word it had), and each gone with its gateway without one."""
+    faults, gone = [], []
+    for g, gw in sorted(gws.items()):
+        for c in gw["components"]:
+            comp = comps.get(c)
+            if comp is None or comp["gateway"] != g:
+                continue
+            if comp["gone_at"] and comp["state"] != "FAULT":
+                gone.append(f"{c}: gone with its gateway at {clock(comp['gone_at'])} "
+                            f"(last state {comp['state'] or 'unknown'})")
+            if comp["state"] == "FAULT":
+                why = comp["fault_reason"].removeprefix("FAULT: ")
+                faults.append(f"{c}: FAULT at {clock(comp['fault_time'])}: {why}"
+                              + (f" (gateway gone at {clock(comp['gone_at'])})" if comp["gone_at"] else ""))
+    return faults, gone
+
+
 def set_banner(banner, faults, gone):
     """A FAULT in red (a component gone without one in dark grey), above everything; hidden when none."""
     banner.setVisible(bool(faults or gone))
@@ -50,7 +69,6 @@ class SystemView(QtWidgets.QWidget):
     def refresh(self):
         gws, comps = self.live.gateways(), self.live.components()
         self.empty.setVisible(not gws)
-        faults, gone = [], []
         shown = set()
         for g, gw in sorted(gws.items()):
             gi = self._item(("g", g), None)
@@ -71,13 +89,6 @@ class SystemView(QtWidgets.QWidget):
                 if comp["gone_at"]:
                     reason = "gone with its gateway" + (f", after FAULT: {reason}" if reason else "")
                 self._fill(ci, [c, comp["host"], ", ".join(comp["interfaces"]), st, since, reason], st)
-                if comp["gone_at"] and comp["state"] != "FAULT":
-                    gone.append(f"{c}: gone with its gateway at {clock(comp['gone_at'])} "
-                                f"(last state {comp['state'] or 'unknown'})")
-                if comp["state"] == "FAULT":  # still said once its gateway has gone: the last word it had
-                    why = comp["fault_reason"].removeprefix("FAULT: ")
-                    faults.append(f"{c}: FAULT at {clock(comp['fault_time'])}: {why}"
-                                  + (f" (gateway gone at {clock(comp['gone_at'])})" if comp["gone_at"] else ""))
         # A component served by another gateway now (saw-rt restarted) leaves the old one's branch.
         for key in [k for k in self._items if k[0] == "c" and k not in shown]:
             it = self._items.pop(key)
@@ -86,8 +97,14 @@ class SystemView(QtWidgets.QWidget):
             self.tree.resizeColumnToContents(i)
         # FAULT in red; a component gone without a FAULT (its gateway vanished) in dark grey: both said
         # above everything, neither shown as its last state frozen.
-        self.faults, self.gone = faults, gone
-        set_banner(self.banner, faults, gone)
+        self.refresh_banner(gws, comps)
+
+    def refresh_banner(self, gws=None, comps=None):
+        """The FAULT banner alone (cheap: the window calls it at every tick, whichever tab is open)."""
+        gws = self.live.gateways() if gws is None else gws
+        comps = self.live.components() if comps is None else comps
+        self.faults, self.gone = banner_lines(gws, comps)
+        set_banner(self.banner, self.faults, self.gone)
 
     def _fill(self, item, texts, state):
         for i, t in enumerate(texts):

@@ -7,7 +7,7 @@ from PySide6 import QtWidgets
 from sawdds import msgs, values
 
 from . import model
-from .widgets import Outcome, Plot, StateBadge, clock, newest
+from .widgets import PLOT_POINTS, Outcome, Plot, StateBadge, clock, newest
 
 
 class TeleopPanel(QtWidgets.QWidget):
@@ -152,7 +152,7 @@ class TeleopPanel(QtWidgets.QWidget):
             self.fault.setStyleSheet("QLabel { color: #d01010; font-weight: bold; font-size: 14px; }")
         elif state == "GONE":
             self.fault.setText(f"the gateway serving {self.teleop} left at {clock(comp.get('gone_at'))}")
-        drawn = [self.live.series(self._topic(c, n)) for c, n in
+        drawn = [self.live.series(self._topic(c, n), PLOT_POINTS) for c, n in
                  ((self.teleop, "tracking_error"), (self.slave, "measured_cp"), (self.master, "measured_cp"))]
         t_end = newest(*drawn)  # one time axis for the three plots
         for plot, series in zip((self.error_plot, self.slave_plot, self.master_plot), drawn):

@@ -7,6 +7,9 @@ from PySide6 import QtCore, QtWidgets
 
 from .model import state_color
 
+# Points a curve draws of its 10 s (about one per pixel of a plot's width): drawing lines is what a
+# redraw costs most once the text is cached.
+PLOT_POINTS = 600
 PALETTE = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"]
 
 
@@ -56,6 +59,12 @@ class Plot(pg.PlotWidget):
         self.setMinimumHeight(160)
         self.setMinimumWidth(120)  # a long title must not push the plot out of its cell
         self.setXRange(-10, 0, padding=0)
+        self.getViewBox().disableAutoRange()
+        # An axis, its labels and the title are drawn once into a pixmap and then only copied, until
+        # they change: redrawn text is most of what a redraw costs (measured: tools/gui_perf.py).
+        for name in ("left", "bottom"):
+            self.getAxis(name).setCacheMode(QtWidgets.QGraphicsItem.CacheMode.DeviceCoordinateCache)
+        self.getPlotItem().titleLabel.setCacheMode(QtWidgets.QGraphicsItem.CacheMode.DeviceCoordinateCache)
 
     def set_units(self, units: str):
         self.units = units
@@ -71,9 +80,22 @@ class Plot(pg.PlotWidget):
             if n not in self.curves:
                 # One number (std_msgs "data"): the title says what it is, no legend.
                 label = None if names == ["data"] else ".".join(n.split(".")[-2:]) if n.count(".") > 1 else n
-                self.curves[n] = self.plot([], [], pen=pg.mkPen(PALETTE[len(self.curves) % len(PALETTE)], width=2),
+                self.curves[n] = self.plot([], [], pen=pg.mkPen(PALETTE[len(self.curves) % len(PALETTE)], width=1),
                                            name=label, connect="finite")
             self.curves[n].setData(xs, rows[:, i] * scale, connect="finite")
+        self._fit_y(rows * scale)
+
+    def _fit_y(self, ys):
+        """Moves the y range only when the curves leave it or fill less than a third of it: the
+        axis (its text, the costly part of a redraw) is redrawn then, not at every frame."""
+        finite = ys[np.isfinite(ys)]
+        if not finite.size:
+            return
+        lo, hi = float(finite.min()), float(finite.max())
+        (vlo, vhi) = self.getViewBox().viewRange()[1]
+        span = max(hi - lo, abs(hi) * 1e-3, 1e-9)
+        if lo < vlo or hi > vhi or span < (vhi - vlo) / 3:
+            self.setYRange(lo - 0.15 * span, hi + 0.15 * span, padding=0)
 
 
 class StateBadge(QtWidgets.QLabel):
