@@ -51,13 +51,15 @@ def summary(xs):
 
 
 def measure(args) -> dict:
-    sys.path.insert(0, args.source)
     sys.path.insert(0, os.path.join(ROOT, "tests", "gui"))
+    from conftest import Deployment  # (it puts this tree's nonrt/python first: --source goes before it)
+    sys.path.insert(0, args.source)
     from PySide6 import QtCore, QtWidgets
     from PySide6.QtTest import QTest
-    from conftest import Deployment
     from sawdds.live import Live
     from sawgui.app import MainWindow
+    import sawgui
+    assert sawgui.__file__.startswith(args.source), (sawgui.__file__, args.source)
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
     d = Deployment(args.saw_rt)

@@ -71,7 +71,10 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)
         qtbot.mouseClick(panel.enable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "ENABLED", timeout=LONG)
-        # The slave follows the master one to one: over the master's 2 s cycle, as far as it.
+        # The slave follows the master one to one: over the master's 2 s cycle (once the plots hold
+        # one), as far as it.
+        master_cp = panel._topic(d.master, "measured_cp")
+        qtbot.waitUntil(lambda: live.count(master_cp) > 2500, timeout=LONG)
         qtbot.waitUntil(lambda: 0.8 < ratio(panel) < 1.25, timeout=LONG)
         before = ratio(panel)
 
@@ -83,6 +86,7 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         after = ratio(panel)
         figure(f"slave/master x excursion over 2 s: {before:.2f} at scale 1, {after:.2f} at scale 2 "
                f"(slave {peak_to_peak_x(panel.slave_plot, 2.0) * 1e3:.1f} mm)")
+        qtbot.waitUntil(lambda: live.count(master_cp) > 8000, timeout=LONG)  # (a screenshot with 8 s drawn)
         save(w, shots, "teleop")
 
         # Clutch, held: the teleoperation pauses; released: it resumes.

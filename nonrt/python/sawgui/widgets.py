@@ -83,6 +83,9 @@ class Plot(pg.PlotWidget):
                 self.curves[n] = self.plot([], [], pen=pg.mkPen(PALETTE[len(self.curves) % len(PALETTE)], width=1),
                                            name=label, connect="finite")
             self.curves[n].setData(xs, rows[:, i] * scale, connect="finite")
+        legend = self.getPlotItem().legend
+        if legend is not None and legend.isVisible() != bool(legend.items):
+            legend.setVisible(bool(legend.items))  # (no empty box over a single, titled curve)
         self._fit_y(rows * scale)
 
     def _fit_y(self, ys):
