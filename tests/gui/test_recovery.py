@@ -2,7 +2,7 @@
 banner whichever tab is open (and the status bar says it), a tab that shows its state the moment
 it is opened (never "(no state yet)"), the system tree after saw-rt is started again (its
 components under the new gateway, none left under the dead one), and the lines that were true
-only while the gateway was gone ("no live gateway", an old refusal) cleared once it is back."""
+only while the gateway was gone ("no live gateway", an old refusal) cleared once it is back, on the panel and in a component's forms."""
 from PySide6 import QtCore, QtWidgets
 
 from conftest import figure
@@ -46,6 +46,11 @@ def test_fault_on_every_tab_and_the_tree_and_messages_after_a_restart(qtbot, dep
         qtbot.mouseClick(panel.enable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: "no live gateway" in panel.outcome.text(), timeout=LONG)
         qtbot.waitUntil(lambda: panel.badge.state == "FAULT (gone)", timeout=LONG)
+        w.tabs.setCurrentWidget(w.components)
+        w.picker.setCurrentText(d.slave)
+        form = w.views[d.slave].forms["state_command"]
+        qtbot.mouseClick(form.button, QtCore.Qt.MouseButton.LeftButton)
+        qtbot.waitUntil(lambda: "no live gateway" in form.outcome.text(), timeout=LONG)
 
         d.restart_rt()
         w.tabs.setCurrentWidget(w.system)
@@ -62,6 +67,9 @@ def test_fault_on_every_tab_and_the_tree_and_messages_after_a_restart(qtbot, dep
         assert panel.badge.state == "ENABLED"
         qtbot.waitUntil(lambda: "no live gateway" not in panel.outcome.text(), timeout=LONG)
         assert panel.refusal.text() == "", panel.refusal.text()
+        w.tabs.setCurrentWidget(w.components)
+        qtbot.waitUntil(lambda: form.outcome.text() == "", timeout=LONG)
+        w.tabs.setCurrentWidget(panel)
         # and a command goes through again.
         qtbot.mouseClick(panel.disable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)

@@ -112,7 +112,14 @@ class ComponentView(QtWidgets.QWidget):
         self.table = QtWidgets.QTableWidget(len(self.reads), 4)
         self.table.setHorizontalHeaderLabels(["read", "value", "samples", "statistics (all samples)"])
         self.table.verticalHeader().hide()
-        self.table.horizontalHeader().setStretchLastSection(True)
+        # Name and count as wide as they need; value and statistics share the rest (elided, never
+        # pushed out of sight behind a scroll bar).
+        header = self.table.horizontalHeader()
+        for j, mode in enumerate((QtWidgets.QHeaderView.ResizeMode.ResizeToContents,
+                                  QtWidgets.QHeaderView.ResizeMode.Stretch,
+                                  QtWidgets.QHeaderView.ResizeMode.ResizeToContents,
+                                  QtWidgets.QHeaderView.ResizeMode.Stretch)):
+            header.setSectionResizeMode(j, mode)
         self.table.setWordWrap(False)
         for i, e in enumerate(self.reads):
             self.table.setItem(i, 0, QtWidgets.QTableWidgetItem(e.name))
@@ -152,6 +159,7 @@ class ComponentView(QtWidgets.QWidget):
         lay = QtWidgets.QVBoxLayout(self)
         lay.addWidget(split)
         self._logged = {}
+        self.served = None  # (gateway, alive): a failure said to a gateway since gone is cleared on its return
 
     def _default_plots(self) -> list:
         numeric = [e for e in self.reads if e.topic and e.dds_type not in (
@@ -183,7 +191,6 @@ class ComponentView(QtWidgets.QWidget):
             st = self.live.statistics(e.topic)
             self.table.item(i, 3).setText("; ".join(f"{k.split('.')[-1]} mean {v[3]:.4g} [{v[1]:.4g}, {v[2]:.4g}]"
                                                     for k, v in list(st.items())[:3]))
-        self.table.resizeColumnsToContents()
         drawn = [self.live.series(e.topic, PLOT_POINTS) for e in self.plotted]
         t_end = newest(*drawn)  # one time axis for the view's plots
         for plot, e, series in zip(self.plots, self.plotted, drawn):
@@ -201,7 +208,13 @@ class ComponentView(QtWidgets.QWidget):
         self._logged["error"] = total
         for _, line in sorted(lines):
             self.log.appendPlainText(line)
+        comp = self.live.components().get(self.component, {})
+        served = (comp.get("gateway"), comp.get("gone_at") is None)
+        back = self.served is not None and served != self.served and served[1]
+        self.served = served
         for f in self.forms.values():
             if hasattr(f, "outcome"):
+                if back:
+                    f.outcome.clear_stale()
                 f.outcome.check_errors(self.live, self.component)
                 f.fill(self.live)
