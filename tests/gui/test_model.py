@@ -112,3 +112,25 @@ def test_a_form_starts_from_the_published_value_and_nothing_else():
     setpoint = endpoint("setpoint_cp", "read", "geometry_msgs::msg::dds_::PoseStamped_", "rt/a/setpoint_cp")
     assert model.read_back(FakeLive([cp, setpoint], {}), "a", cp) is setpoint
     assert model.placeholder((0, 10000)) == "within [0, 10000]"
+
+
+def test_a_batch_becomes_one_message_not_one_per_sample(monkeypatch):
+    """What keeps the reader thread off the interpreter lock: a batch of 1 kHz samples is decoded
+    by numpy, and only its newest sample becomes a Python message."""
+    e = types.SimpleNamespace(dds_type="geometry_msgs::msg::dds_::PoseStamped_", kind="read", component_name="c")
+    s = Series(e, window=10.0)
+    made = []
+    real = msgs.PoseStamped.deserialize.__func__
+    monkeypatch.setattr(msgs.PoseStamped, "deserialize",
+                        classmethod(lambda cls, data, **kw: made.append(1) or real(cls, data, **kw)))
+    p = msgs.PoseStamped()
+    batch = []
+    for i in range(1000):
+        p.pose.position.x = i * 1e-3
+        batch.append((p.serialize(), 100 + i * 1e-3))
+    s.add_raw(batch[:500])
+    s.add_raw(batch[500:])
+    assert len(made) == 3, len(made)  # the layout's first sample, then each batch's newest
+    assert s.count == 1000 and s.last.pose.position.x == 0.999
+    names, _, rows = s.names, *s.window_arrays(10**6)
+    assert names[0] == "pose.position.x" and rows[-1][0] == 0.999 and len(rows) == 1000

@@ -67,10 +67,14 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         # hard-coded 1.0 / 300 / 3.0 the system may not have), and says the bounds it wants.
         for e in (panel.scale, panel.gain_m, panel.gain_s, panel.lim_m, panel.lim_s):
             assert e.text() == "" and e.placeholderText().startswith("within ["), (e.text(), e.placeholderText())
+        clicked = time.monotonic()
         qtbot.mouseClick(panel.disable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)
+        shown_ms = (time.monotonic() - clicked) * 1e3
         qtbot.mouseClick(panel.enable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "ENABLED", timeout=LONG)
+        figure(f"Disable clicked, DISABLED shown on the panel {shown_ms:.0f} ms later (tools/gui_perf.py measures "
+               "it with an independent DDS monitor; docs/performance.md)")
         # The slave follows the master one to one: over the master's 2 s cycle (once the plots hold
         # one), as far as it.
         master_cp = panel._topic(d.master, "measured_cp")
