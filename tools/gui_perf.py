@@ -62,6 +62,7 @@ def measure(args) -> dict:
     assert sawgui.__file__.startswith(args.source), (sawgui.__file__, args.source)
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
+    app.setApplicationName("gui_perf")
     d = Deployment(args.saw_rt)
     live = Live(d.domain)
     w = MainWindow(live, d.domain, "lo")

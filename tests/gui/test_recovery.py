@@ -2,8 +2,9 @@
 banner whichever tab is open (and the status bar says it), a tab that shows its state the moment
 it is opened (never "(no state yet)"), the system tree after saw-rt is started again (its
 components under the new gateway, none left under the dead one), and the lines that were true
-only while the gateway was gone ("no live gateway", an old refusal) cleared once it is back, on the panel and in a component's forms."""
-from PySide6 import QtCore, QtWidgets
+only while the gateway was gone ("no live gateway", an old refusal) cleared once it is back, on
+the panel and in a component's forms."""
+from PySide6 import QtCore
 
 from conftest import figure
 from sawdds import Client, msgs
