@@ -78,7 +78,8 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         # The slave follows the master one to one: over the master's 2 s cycle (once the plots hold
         # one), as far as it.
         master_cp = panel._topic(d.master, "measured_cp")
-        qtbot.waitUntil(lambda: live.count(master_cp) > 2500, timeout=LONG)
+        qtbot.waitUntil(lambda: len(live.series(master_cp)[1]) and live.series(master_cp)[1][-1]
+                        - live.series(master_cp)[1][0] > 2.5, timeout=LONG)
         qtbot.waitUntil(lambda: 0.8 < ratio(panel) < 1.25, timeout=LONG)
         before = ratio(panel)
 
@@ -90,7 +91,9 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         after = ratio(panel)
         figure(f"slave/master x excursion over 2 s: {before:.2f} at scale 1, {after:.2f} at scale 2 "
                f"(slave {peak_to_peak_x(panel.slave_plot, 2.0) * 1e3:.1f} mm)")
-        qtbot.waitUntil(lambda: live.count(master_cp) > 8000, timeout=LONG)  # (a screenshot with 8 s drawn)
+        # (a screenshot with 8 s drawn)
+        qtbot.waitUntil(lambda: len(live.series(master_cp)[1]) and live.series(master_cp)[1][-1]
+                        - live.series(master_cp)[1][0] > 8, timeout=LONG)
         save(w, shots, "teleop")
 
         # Clutch, held: the teleoperation pauses; released: it resumes.
@@ -110,8 +113,12 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         assert "recorded" in w.statusBar().currentMessage(), w.statusBar().currentMessage()
         w.statusBar().clearMessage()  # (it names a local path: not for the screenshots)
         csv_path = os.path.join(record, slave_cp.replace("/", "_") + ".csv")
+        # (each component's period_statistics comes along: the recorder checks its rows against it)
         assert sorted(summary["files"]) == sorted([os.path.join(record, "recording.mcap"), csv_path,
-                                                   os.path.join(record, f"rt_{d.teleop}_tracking_error.csv")])
+                                                   os.path.join(record, f"rt_{d.teleop}_tracking_error.csv")] +
+                                                  [os.path.join(record, f"rt_{c}_period_statistics.csv")
+                                                   for c in (d.slave, d.teleop)]), summary["files"]
+        assert "upstream_missed" in summary["topics"][slave_cp], summary["topics"][slave_cp]
         with open(csv_path) as f:
             rows = list(csv.reader(f))
         assert rows[0] == ["source_time_s", "pose.position.x", "pose.position.y", "pose.position.z"], rows[0]

@@ -6,7 +6,9 @@ Its readers keep every sample until taken (KEEP_ALL): none is overwritten while 
 busy. What DDS itself lost on the way (a best-effort sample that never arrived: a gap in the
 writer's sequence numbers) is counted by Cyclone DDS as "sample lost", and a sample the reader
 refused for want of resources as "sample rejected"; both are in the summary, with the longest
-silence between two samples of each topic.
+silence between two samples of each topic. A state topic is also checked against the RT task's
+own cycle counter: its component's period_statistics is recorded alongside (added if not named),
+and the rows the task ran that never reached the recording are counted ("upstream_missed").
 
 usage: python -m sawdds.record --domain N --out DIR --topic rt/... [--topic ...] [--seconds S]
 Prints "ready" once every topic's reader has matched its gateway's writer, and on SIGINT,
@@ -154,7 +156,16 @@ def main(argv=None) -> int:
             print(f"sawdds.record: {topic}: {e.dds_type} is not a type sawdds knows", file=sys.stderr)
             return 1
         endpoints.append(e)
-    mcap_path = os.path.join(args.out, "recording.mcap")
+    # A state topic is checked against its task's cycle counter: the component's period_statistics
+    # is recorded too when it has one (and the recording did not name it).
+    named = {e.topic for e in endpoints}
+    for m in client.manifests(timeout=0).values():
+        for e in m.endpoints:
+            if (e.name == "period_statistics" and e.kind == "read" and e.topic and e.topic not in named
+                    and any(x.component_name == e.component_name and x.kind == "read" for x in endpoints)):
+                endpoints.append(e)
+                named.add(e.topic)
+        mcap_path = os.path.join(args.out, "recording.mcap")
     out = open(mcap_path, "wb")
     writer = Writer(out, compression=CompressionType.LZ4)
     writer.start(profile="ros2", library="sawdds.record")
