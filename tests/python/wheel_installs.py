@@ -88,8 +88,12 @@ class TheWheelIsPureAndInstalls(unittest.TestCase):
             names = z.namelist()
         self.assertEqual([n for n in names if n.endswith(COMPILED)], [])
         for package in PACKAGES:
-            source = sorted(f"{package}/{p.name}" for p in (SOURCE / package).glob("*.py"))
-            self.assertEqual(sorted(n for n in names if n.startswith(f"{package}/")), source)
+            source = [f"{package}/{p.name}" for p in (SOURCE / package).glob("*.py")]
+            # and the message types' IDL, from which sawdds.msgs makes its classes
+            source += [f"{package}/{p.relative_to(SOURCE / package).as_posix()}"
+                       for p in (SOURCE / package).glob("idl/*/msg/*.idl")]
+            self.assertEqual(sorted(n for n in names if n.startswith(f"{package}/")), sorted(source))
+        self.assertIn("sawdds/idl/geometry_msgs/msg/PoseStamped.idl", names)
 
     def test_metadata_pins_cyclonedds_and_the_gui_as_the_tools_venv_does(self):
         pins = [line.split("#")[0].strip() for line in (ROOT / "tools" / "requirements.txt").read_text().splitlines()]
