@@ -40,7 +40,7 @@ void print_security(const ParticipantConfig& dds) {
 }
 
 SecurityCommands::SecurityCommands(CLI::App& app) {
-  security_ = app.add_subcommand("security", "DDS Security keystores: init, enroll, check");
+  security_ = app.add_subcommand("security", "DDS Security keystores: init, enroll, revoke, check");
   security_->require_subcommand(1);
   init_ = security_->add_subcommand("init", "create a keystore (identity and permissions CAs, governance)");
   init_->add_option("dir", dir_, "keystore directory")->required();
@@ -56,6 +56,10 @@ SecurityCommands::SecurityCommands(CLI::App& app) {
   enroll_->add_option("--expires", days_, "days until the certificate expires")->check(CLI::Range(1, 36500));
   enroll_->add_option("--component", components_,
                       "limit the grant to this component (repeatable; default all)");
+  revoke_ = security_->add_subcommand(
+      "revoke", "revoke an enclave's certificate: the keystore's crl.pem, linked into every enclave");
+  revoke_->add_option("dir", dir_, "keystore directory")->required();
+  revoke_->add_option("name", name_, "enclave name")->required();
   check_ =
       security_->add_subcommand("check", "check an enclave as saw-gateway and sawctl do before using it");
   check_->add_option("enclave", dir_, "KEYSTORE/enclaves/NAME")->required();
@@ -78,6 +82,12 @@ int SecurityCommands::run() const {
       const security::Enclave e = security::load_enclave(dir);
       std::printf("enclave %s: %s, role %s, expires %s\n", dir.c_str(), e.subject.c_str(), role_.c_str(),
                   utc_date(e.not_after).c_str());
+    } else if (revoke_->parsed()) {
+      const std::string subject = security::revoke(dir_, name_);
+      std::printf(
+          "revoked %s: %s/public/crl.pem, linked as crl.pem into every enclave (copy it to hosts "
+          "that hold copies of enclaves)\n",
+          subject.c_str(), dir_.c_str());
     } else if (check_->parsed()) {
       const security::Enclave e = security::load_enclave(dir_);
       std::printf("enclave %s: %s, valid until %s\n", e.dir.c_str(), e.subject.c_str(),
