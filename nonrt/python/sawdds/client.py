@@ -22,7 +22,7 @@ from cyclonedds.pub import DataWriter  # noqa: E402
 from cyclonedds.sub import DataReader  # noqa: E402
 from cyclonedds.topic import Topic  # noqa: E402
 
-from . import msgs  # noqa: E402
+from . import msgs, security  # noqa: E402
 
 XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 
@@ -75,6 +75,8 @@ def error_qos(depth: int = 16):
 
 class Client:
     def __init__(self, domain: int = 0):
+        # ROS_SECURITY_ENABLE=true: the enclave's security, or SecurityError, never plaintext.
+        security.secure_environment()
         self.participant = DomainParticipant(domain)
         self._topics = {}
         self._topic_lock = threading.Lock()
