@@ -10,6 +10,11 @@ integer"); when Cyclone DDS starts, it offers ECDH+prime256v1-CEUM, which both e
 a gateway enrolled without care is reached by about half of the names; `sawctl security enroll
 --role gateway` gives the gateway a subject that no peer's GUID exceeds in practice.
 
+Then revocation (`sawctl security revoke`, crl.pem as ROS 2 reads it): a revoked peer reads nothing
+from the restarted gateway even though it does not check the CRL itself; a peer configured as
+sawdds configures it (<CRL>) keeps reading, and reads nothing once the gateway itself is revoked;
+sawctl and saw-gateway refuse a revoked enclave.
+
 usage: cyclone_secure_names.py SAW_RT SAW_GATEWAY SAWCTL SAW_CYCLONE_PEER SECURITY_PLUGIN_DIR
 """
 import os
@@ -19,9 +24,11 @@ import subprocess
 import sys
 import tempfile
 
-from harness import check, exit_code  # noqa: E402
+from harness import check, exit_code  # noqa: E402  (puts the tree's sawdds on the path)
 from cyclone_secure_peer import cyclone_uri  # noqa: E402
 import sros2_keystore  # noqa: E402
+from sawdds import security  # noqa: E402
+from sawdds.client import LOOPBACK_URI  # noqa: E402  (the tools venv's python: sawdds needs cyclonedds)
 
 NAMES = ["/viewer", "/operator", "/patient", "/talker", "/listener", "/console", "/gui", "/monitor", "/lab/console",
          "/lab/viewer", "/or1/surgeon", "/or1/assistant", "/nurse", "/recorder", "/dashboard", "/teleop_ui",
@@ -51,22 +58,62 @@ def main(saw_rt, saw_gateway, sawctl, peer, plugins):
                 f"  - {{name: {name}, type: sim_haptic_device, task: {{period: 1ms, priority: 80}}, "
                 f"params: {{model: omni}}}}\nexports:\n  - {{component: {name}, provided: arm}}\n")
     rt = subprocess.Popen([saw_rt, yaml], stdout=subprocess.DEVNULL)
-    gw = subprocess.Popen([saw_gateway, "--attach", name, "--domain", str(domain), "--wait", "10", "--enclave",
-                           os.path.join(ks, "enclaves", "gateway")], stdout=subprocess.PIPE, text=True)
+    gateway_args = ["--attach", name, "--domain", str(domain), "--wait", "10", "--enclave",
+                    os.path.join(ks, "enclaves", "gateway")]
+    gw = subprocess.Popen([saw_gateway, *gateway_args], stdout=subprocess.PIPE, text=True)
+
+    def restart(old):
+        old.send_signal(signal.SIGTERM)
+        old.wait(timeout=20)
+        return subprocess.Popen([saw_gateway, *gateway_args], stdout=subprocess.PIPE, text=True)
+
+    def uri(enclave, crl):
+        """CYCLONEDDS_URI for `enclave`: with its crl.pem as sawdds configures it, or without (a peer
+        that does not check revocation itself)."""
+        if not crl:
+            return cyclone_uri(plugins, enclave)
+        return security.secure_uri(LOOPBACK_URI, enclave, env={"SAWDDS_SECURITY_PLUGINS": plugins})
+
+    def peer_read(cyclonedds_uri):
+        p = subprocess.run([peer, "read", str(domain), name, "3", "8"], capture_output=True, text=True, timeout=60,
+                           env=dict(os.environ, CYCLONEDDS_URI=cyclonedds_uri))
+        out = (p.stdout + p.stderr).strip()
+        return p.returncode, [line for line in out.splitlines() if "handshake" in line or "received" in line]
+
     reached = []
     try:
         check("endpoints" in gw.stdout.readline(), "the secure gateway started")
         # Started one after the other, so that a refused handshake is not hidden by another's traffic.
         for n in NAMES:
-            env = dict(os.environ, CYCLONEDDS_URI=cyclone_uri(plugins, os.path.join(ks, "enclaves", n.lstrip("/"))))
-            p = subprocess.run([peer, "read", str(domain), name, "3", "8"], capture_output=True, text=True,
-                               timeout=60, env=env)
-            out = (p.stdout + p.stderr).strip()
-            why = [line for line in out.splitlines() if "handshake" in line or "received" in line][-1:]
-            check(p.returncode == 0, f"Cyclone DDS peer {n} reads measured_cp from the gateway: {why}")
-            if p.returncode == 0:
+            rc, out = peer_read(uri(os.path.join(ks, "enclaves", n.lstrip("/")), crl=False))
+            check(rc == 0, f"Cyclone DDS peer {n} reads measured_cp from the gateway: {out[-1:]}")
+            if rc == 0:
                 reached.append(n)
         print(f"figure: {len(reached)} of {len(NAMES)} enclave names reached the gateway", flush=True)
+
+        # Revocation: the gateway reads the keystore's crl.pem (linked into its enclave) when it starts.
+        r = subprocess.run([sawctl, "security", "revoke", ks, "/viewer"], capture_output=True, text=True, timeout=60)
+        check(r.returncode == 0 and os.path.islink(os.path.join(ks, "enclaves", "viewer", "crl.pem")),
+              f"sawctl security revoke /viewer: {(r.stdout + r.stderr).strip()}")
+        gw = restart(gw)
+        check("endpoints" in gw.stdout.readline(), "the gateway started again, with the CRL")
+        rc, out = peer_read(uri(os.path.join(ks, "enclaves", "viewer"), crl=False))
+        check(rc == 1 and "received 0 " in " ".join(out),
+              f"a revoked /viewer that ignores the CRL itself still reads nothing from the gateway: {out[-1:]}")
+        rc, out = peer_read(uri(os.path.join(ks, "enclaves", "operator"), crl=True))
+        check(rc == 0, f"/operator, given the CRL as sawdds gives it (<CRL>), still reads: {out[-1:]}")
+        r = subprocess.run([sawctl, "echo", f"rt/{name}/measured_cp", "-n", "1", "--domain", str(domain),
+                            "--timeout", "5", "--enclave", os.path.join(ks, "enclaves", "viewer")],
+                           capture_output=True, text=True, timeout=60)
+        check(r.returncode == 1 and "was revoked" in r.stderr, f"sawctl refuses the revoked enclave: {r.stderr.strip()}")
+        # And the other way: a peer given the CRL refuses a revoked gateway (Cyclone DDS honours <CRL>).
+        subprocess.run([sawctl, "security", "revoke", ks, "gateway"], capture_output=True, timeout=60, check=True)
+        rc, out = peer_read(uri(os.path.join(ks, "enclaves", "operator"), crl=True))
+        check(rc == 1 and "certificate revoked" in " ".join(out), f"a Cyclone DDS peer given the CRL reads nothing from a revoked "
+              f"gateway: {out[-1:]}")
+        r = subprocess.run([saw_gateway, *gateway_args], capture_output=True, text=True, timeout=60)
+        check(r.returncode == 1 and "was revoked" in r.stderr,
+              f"saw-gateway refuses to start with its revoked enclave: {r.stderr.strip()}")
     finally:
         gw.send_signal(signal.SIGTERM)
         gw.wait(timeout=20)
