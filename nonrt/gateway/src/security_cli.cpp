@@ -34,6 +34,16 @@ void print_security(const ParticipantConfig& dds) {
     const security::Enclave e = security::load_enclave(*dir);
     std::printf("  DDS Security with enclave %s (%s, valid until %s)\n", e.dir.c_str(), e.subject.c_str(),
                 utc_date(e.not_after).c_str());
+    if (!e.peers_start_handshake)
+      std::printf(
+          "  warning: this certificate was not enrolled with `sawctl security enroll --role gateway`: "
+          "Cyclone DDS "
+          "peers (sawgui, sawdds, ROS 2 on rmw_cyclonedds) whose subject hashes higher than %s, about half "
+          "of "
+          "them, cannot authenticate (Fast DDS 2.9 would start their handshake with a key encoding Cyclone "
+          "DDS "
+          "0.10 refuses; docs/security.md)\n",
+          e.subject.c_str());
   } else {
     std::printf("  DDS without security (no enclave)\n");
   }

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "handshake_order.hpp"
 #include "openssl.hpp"
 
 namespace saw::security {
@@ -55,6 +56,7 @@ void check_certificate(Enclave& e, system_clock::time_point now) {
   ossl::Cert cert = ossl::read_cert(e.certificate);
   e.subject = ossl::subject(cert.get());
   e.not_after = ossl::not_after(cert.get());
+  e.peers_start_handshake = ossl::order_bits(cert.get()) >= ossl::kOrderBits;
   if (now > e.not_after)
     throw std::runtime_error("certificate " + e.subject + " expired on " + utc(e.not_after));
   if (now < ossl::not_before(cert.get()))

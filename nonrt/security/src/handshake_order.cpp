@@ -64,6 +64,14 @@ int order_bits(const std::string& common_name, const std::string& serial) {
   return leading_ones(md);
 }
 
+int order_bits(X509* cert) {
+  unsigned char md[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  if (X509_NAME_digest(X509_get_subject_name(cert), EVP_sha256(), md, &len) != 1)
+    throw std::runtime_error(last_error("SHA-256 of the subject"));
+  return leading_ones(md);
+}
+
 std::string high_order_serial(const std::string& common_name) {
   static constexpr char hex[] = "0123456789ABCDEF";
   std::string serial(kSerialChars, '0');

@@ -1,6 +1,8 @@
 // Handshake order: a certificate subject chosen so that its holder never starts a DDS Security handshake.
 #pragma once
 
+#include <openssl/x509.h>
+
 #include <string>
 
 namespace saw::security::ossl {
@@ -19,5 +21,7 @@ std::string high_order_serial(const std::string& common_name);
 
 // The number of leading one bits of SHA-256 of the DER encoding of CN=common_name[, serialNumber=serial].
 int order_bits(const std::string& common_name, const std::string& serial);
+// The same of a certificate's subject as it is encoded (as DDS Security hashes it).
+int order_bits(X509* cert);
 
 }  // namespace saw::security::ossl

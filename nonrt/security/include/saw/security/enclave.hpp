@@ -19,6 +19,10 @@ struct Enclave {
   // Domain ids (inclusive ranges) the governance protects and the permissions grant.
   std::vector<std::pair<int, int>> governance_domains, permission_domains;
   std::optional<std::filesystem::path> crl;  // crl.pem when the enclave has one (ROS 2 reads it too)
+  // Whether a Fast DDS 2.9 participant with this certificate lets (practically) every Cyclone DDS
+  // peer start the handshake, as `sawctl security enroll --role gateway` makes it. When false,
+  // Cyclone DDS 0.10 peers whose subject hashes higher (about half) cannot authenticate with it.
+  bool peers_start_handshake = false;
 };
 
 // Loads and checks DIR as an enclave at time `now`: every file present; the certificate valid
