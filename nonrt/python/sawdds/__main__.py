@@ -28,7 +28,7 @@ def main(argv=None):
         return 2
     try:
         if enclave is not None:
-            check_enclave(enclave)  # named as given, as sawctl names it
+            check_enclave(enclave, domain=0)  # named as given, as sawctl names it; Client() is in domain 0
             os.environ["CYCLONEDDS_URI"] = secure_uri(os.environ["CYCLONEDDS_URI"], os.path.abspath(enclave))
         c = Client()
     except SecurityError as e:

@@ -10,6 +10,9 @@ PyPI's cyclonedds wheel has none; then joining a secure domain is an error that 
 """
 import glob
 import os
+import re
+
+from . import enclave_check
 
 # In the order the C++ check looks for them, so that the first missing one is named alike.
 ENCLAVE_FILES = ("identity_ca.cert.pem", "cert.pem", "key.pem", "permissions_ca.cert.pem", "governance.p7s",
@@ -43,15 +46,23 @@ def resolve_enclave(enclave=None, env=None):
     return path
 
 
-def check_enclave(path):
-    """Raises SecurityError "enclave DIR: ..." when DIR is not a directory or lacks one of an SROS2
-    enclave's six files (the first missing one named), as the C++ programs say it. Certificates,
-    signatures and revocation are checked by Cyclone DDS's plugins when the participant starts."""
+def check_enclave(path, domain=None):
+    """Raises SecurityError "enclave DIR: ..." as the C++ programs say it when DIR is not a
+    directory, lacks one of an SROS2 enclave's six files (the first missing one named), has a
+    certificate that is expired, not yet valid, not the identity CA's, revoked by its crl.pem, or
+    not its key's, documents not signed by its permissions CA (these with the `openssl` command,
+    sawdds.enclave_check), or, given `domain`, does not cover that domain."""
     if not os.path.isdir(path):
         raise SecurityError(f"enclave {path}: no such directory")
     for f in ENCLAVE_FILES:
         if not os.path.isfile(os.path.join(path, f)):
             raise SecurityError(f"enclave {path}: missing {f}")
+    try:
+        enclave_check.check_certificates(path)
+        if domain is not None:
+            enclave_check.check_domain(path, domain)
+    except enclave_check.EnclaveError as e:
+        raise SecurityError(f"enclave {path}: {e}") from None
 
 
 def plugin_dir(env=None):
@@ -109,14 +120,22 @@ def secure_uri(uri, enclave, env=None):
     return uri.replace("</Domain>", xml + "</Domain>", 1)
 
 
-def secure_environment(env=None):
-    """When ROS 2's environment enables security, CYCLONEDDS_URI (in `env`, os.environ by default)
-    with the enclave's <Security> added, unless it already has one. Every sawdds participant starts
-    through here, so a program using sawdds obeys ROS_SECURITY_* as the C++ programs do. Raises
-    SecurityError as resolve_enclave and secure_uri do."""
+def secure_environment(domain, env=None):
+    """Before a participant in `domain` starts: when ROS 2's environment enables security,
+    CYCLONEDDS_URI (in `env`, os.environ by default) gets the enclave's <Security>, unless it has
+    one already (sawgui --enclave, sawdds --enclave); either way the enclave must cover the domain.
+    Every sawdds participant starts through here, so a program using sawdds obeys ROS_SECURITY_*
+    as the C++ programs do. Raises SecurityError as resolve_enclave and secure_uri do."""
     env = os.environ if env is None else env
-    enclave = resolve_enclave(None, env)
     uri = env.get("CYCLONEDDS_URI", "")
-    if enclave is None or "<Security>" in uri:
-        return
-    env["CYCLONEDDS_URI"] = secure_uri(uri, enclave, env)
+    if "<Security>" not in uri:
+        enclave = resolve_enclave(None, env)
+        if enclave is None:
+            return
+        uri = env["CYCLONEDDS_URI"] = secure_uri(uri, enclave, env)
+    m = re.search(r"<Governance>file:(.*?)/governance\.p7s</Governance>", uri)
+    if m and os.path.isfile(os.path.join(m.group(1), "permissions.p7s")):
+        try:
+            enclave_check.check_domain(m.group(1), domain)
+        except enclave_check.EnclaveError as e:
+            raise SecurityError(f"enclave {m.group(1)}: {e}") from None
