@@ -208,7 +208,7 @@ TEST(Keystore, AGatewaysSubjectIsOrderedForCycloneDdsPeersAndOtherRolesKeepTheir
   EXPECT_NE(gateway.subject.find(",CN=/gateway"), std::string::npos) << gateway.subject;
   EXPECT_TRUE(gateway.peers_start_handshake);
   EXPECT_EQ(viewer.subject, "CN=/viewer");
-  EXPECT_FALSE(viewer.peers_start_handshake);  // CN=/viewer's hash does not begin with 24 one bits
+  EXPECT_FALSE(viewer.peers_start_handshake);  // CN=/viewer's hash does not begin with 22 one bits
   EXPECT_NE(
       read(gateway.dir / "permissions.xml").find("<subject_name>" + gateway.subject + "</subject_name>"),
       std::string::npos);
