@@ -105,12 +105,13 @@ def main(saw_rt, saw_gateway, sawctl, peer, plugins):
         r = subprocess.run([sawctl, "echo", f"rt/{name}/measured_cp", "-n", "1", "--domain", str(domain),
                             "--timeout", "5", "--enclave", os.path.join(ks, "enclaves", "viewer")],
                            capture_output=True, text=True, timeout=60)
-        check(r.returncode == 1 and "was revoked" in r.stderr, f"sawctl refuses the revoked enclave: {r.stderr.strip()}")
+        check(r.returncode == 1 and "was revoked" in r.stderr,
+              f"sawctl refuses the revoked enclave: {r.stderr.strip()}")
         # And the other way: a peer given the CRL refuses a revoked gateway (Cyclone DDS honours <CRL>).
         subprocess.run([sawctl, "security", "revoke", ks, "gateway"], capture_output=True, timeout=60, check=True)
         rc, out = peer_read(uri(os.path.join(ks, "enclaves", "operator"), crl=True))
-        check(rc == 1 and "certificate revoked" in " ".join(out), f"a Cyclone DDS peer given the CRL reads nothing from a revoked "
-              f"gateway: {out[-1:]}")
+        check(rc == 1 and "certificate revoked" in " ".join(out),
+              f"a Cyclone DDS peer given the CRL reads nothing from a revoked gateway: {out[-1:]}")
         r = subprocess.run([saw_gateway, *gateway_args], capture_output=True, text=True, timeout=60)
         check(r.returncode == 1 and "was revoked" in r.stderr,
               f"saw-gateway refuses to start with its revoked enclave: {r.stderr.strip()}")

@@ -156,7 +156,8 @@ def create_enclave(ks, name, domain):
     subject = "/CN=" + name.replace("/", "\\/")  # the name's '/' are part of the value, not RDN separators
     _openssl("req", "-new", "-config", cnf, "-key", key, "-subj", subject, "-out", csr)
     _openssl("x509", "-req", "-in", csr, "-CA", os.path.join(ks, "public", "identity_ca.cert.pem"), "-CAkey",
-             os.path.join(ks, "private", "identity_ca.key.pem"), "-set_serial", str(int.from_bytes(os.urandom(19), "big")),
+             os.path.join(ks, "private", "identity_ca.key.pem"),
+             "-set_serial", str(int.from_bytes(os.urandom(19), "big")),
              "-days", "3650", "-sha256", "-extfile", cnf, "-extensions", "leaf", "-out", cert)
     os.remove(csr)
     os.remove(cnf)

@@ -73,7 +73,8 @@ def invalid_enclaves_refused_alike(env):
         cases = [("another keystore's certificate", e("foreign"), "is not accepted by the enclave's identity CA"),
                  ("a revoked certificate", e("revoked"), "was revoked on"),
                  ("another certificate's key", e("wrongkey"), "key.pem is not the key of cert.pem"),
-                 ("tampered permissions", e("tampered"), "permissions.p7s is not signed by the enclave's permissions CA"),
+                 ("tampered permissions", e("tampered"),
+                  "permissions.p7s is not signed by the enclave's permissions CA"),
                  ("a domain the governance does not cover", os.path.join(sros2, "enclaves", "viewer"),
                   "domain 0 is not in the governance's domains 3")]
         for what, enclave, want in cases:
@@ -100,7 +101,7 @@ with tempfile.TemporaryDirectory() as ks:
           "an enclave missing a file is refused, naming the file")
     open(os.path.join(enclave, "permissions.p7s"), "w").close()
     if shutil.which("openssl"):
-        check(raises(lambda: security.check_enclave(enclave), f"cert.pem: not a PEM certificate"),
+        check(raises(lambda: security.check_enclave(enclave), "cert.pem: not a PEM certificate"),
               "with the openssl command, the files' contents are checked too")
 
     check(security.resolve_enclave("x/y", env={}) == os.path.abspath("x/y"), "--enclave wins")
