@@ -49,6 +49,8 @@ def main(saw_rt, saw_gateway, sawctl, peer, plugins):
     r = subprocess.run([sawctl, "security", "enroll", ks, "gateway", "--role", "gateway"], capture_output=True,
                        text=True, timeout=60)
     check(r.returncode == 0, f"sawctl enrols the gateway into the SROS2-made keystore: {(r.stdout + r.stderr).strip()}")
+    subprocess.run([sawctl, "security", "enroll", ks, "console", "--role", "monitor"], capture_output=True, timeout=60,
+                   check=True)
     if r.returncode != 0:
         shutil.rmtree(tmp)
         return exit_code()
@@ -113,11 +115,21 @@ def main(saw_rt, saw_gateway, sawctl, peer, plugins):
                            capture_output=True, text=True, timeout=60)
         check(r.returncode == 1 and "was revoked" in r.stderr,
               f"sawctl refuses the revoked enclave: {r.stderr.strip()}")
-        # And the other way: a peer given the CRL refuses a revoked gateway (Cyclone DDS honours <CRL>).
+
+        def sawctl_reads():
+            r = subprocess.run([sawctl, "echo", f"rt/{name}/measured_cp", "-n", "1", "--domain", str(domain),
+                                "--timeout", "20", "--enclave", os.path.join(ks, "enclaves", "console")],
+                               capture_output=True, text=True, timeout=80)
+            return r.returncode, (r.stdout + r.stderr).strip()[-300:]
+        rc, out = sawctl_reads()
+        check(rc == 0, f"sawctl (Fast DDS, enclave /console enrolled by sawctl) reads from the gateway: {out!r}")
+        # And the other way: peers given the CRL refuse a revoked gateway, Cyclone DDS (<CRL>) and Fast DDS.
         subprocess.run([sawctl, "security", "revoke", ks, "gateway"], capture_output=True, timeout=60, check=True)
         rc, out = peer_read(uri(os.path.join(ks, "enclaves", "operator"), crl=True))
         check(rc == 1 and "certificate revoked" in " ".join(out),
               f"a Cyclone DDS peer given the CRL reads nothing from a revoked gateway: {out[-1:]}")
+        rc, out = sawctl_reads()
+        check(rc != 0, f"nor does sawctl, whose Fast DDS participant is given the CRL: {out!r}")
         r = subprocess.run([saw_gateway, *gateway_args], capture_output=True, text=True, timeout=60)
         check(r.returncode == 1 and "was revoked" in r.stderr,
               f"saw-gateway refuses to start with its revoked enclave: {r.stderr.strip()}")
