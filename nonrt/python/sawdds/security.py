@@ -59,10 +59,13 @@ def check_enclave(path, domain=None):
             raise SecurityError(f"enclave {path}: missing {f}")
     try:
         enclave_check.check_certificates(path)
-        if domain is not None:
-            enclave_check.check_domain(path, domain)
     except enclave_check.EnclaveError as e:
         raise SecurityError(f"enclave {path}: {e}") from None
+    if domain is not None:
+        try:
+            enclave_check.check_domain(path, domain)
+        except enclave_check.EnclaveError as e:  # named as its absolute path, as saw::security::check_domain does
+            raise SecurityError(f"enclave {os.path.abspath(path)}: {e}") from None
 
 
 def plugin_dir(env=None):
