@@ -270,4 +270,17 @@ TEST(Keystore, AFailedEnrolmentLeavesNothingAndAFailedReenrolmentKeepsTheOldEncl
   EXPECT_EQ(in_lab, std::vector<std::string>{"console"});
 }
 
+TEST(Keystore, ReenrollingAnEnclaveKeepsTheEnclavesInsideIt) {
+  TempKeystore ks("nested");
+  const fs::path lab = ks.enroll("lab", Role::monitor), console = ks.enroll("lab/console", Role::operator_);
+  const std::string cert = read(lab / "cert.pem"), inner = read(console / "cert.pem");
+  ks.enroll("lab", Role::operator_);
+  EXPECT_NE(read(lab / "cert.pem"), cert);
+  EXPECT_EQ(read(console / "cert.pem"), inner);
+  EXPECT_NO_THROW(saw::security::load_enclave(lab));
+  EXPECT_NO_THROW(saw::security::load_enclave(console));
+  for (const auto& f : fs::directory_iterator(ks.dir / "enclaves"))
+    EXPECT_NE(f.path().filename().string().front(), '.') << f.path();
+}
+
 }  // namespace

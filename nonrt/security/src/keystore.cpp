@@ -162,26 +162,28 @@ fs::path enroll(const fs::path& dir, const std::string& name, const EnrollOption
   const fs::path enclave = dir / "enclaves" / rel;
   if (rel == "governance.xml" || rel == "governance.p7s")
     throw std::invalid_argument("enclave name '" + name + "' is a keystore file's name");
-  // Made in a temporary folder and renamed into place: a failed enrolment leaves nothing behind
-  // (not even the parent folders of lab/console), and a replaced enclave is never half-written.
+  // Made in a staging folder beside its place, then renamed into it: a failed enrolment leaves
+  // nothing behind (not even the parent folders of lab/console) and an enclave being replaced
+  // keeps its old files until the new ones are all made. A replaced enclave's files are renamed
+  // over one by one, as it may hold other enclaves' folders (lab and lab/console).
   const std::vector<fs::path> created = missing_folders(enclave.parent_path());
   const fs::path staging = enclave.parent_path() / ("." + enclave.filename().string() + ".enrolling");
-  const fs::path previous = enclave.parent_path() / ("." + enclave.filename().string() + ".replaced");
   try {
     fs::create_directories(enclave.parent_path());
     fs::remove_all(staging);
     fs::create_directory(staging);
     write_enclave(dir, rel, staging, o);
-    fs::remove_all(previous);
-    if (fs::exists(enclave)) fs::rename(enclave, previous);
-    fs::rename(staging, enclave);
-    fs::remove_all(previous);
   } catch (...) {
     std::error_code ec;
     fs::remove_all(staging, ec);
-    if (!fs::exists(enclave, ec) && fs::exists(previous, ec)) fs::rename(previous, enclave, ec);
     for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, ec);  // only if empty
     throw;
+  }
+  if (!fs::exists(enclave)) {
+    fs::rename(staging, enclave);
+  } else {
+    for (const auto& f : fs::directory_iterator(staging)) fs::rename(f.path(), enclave / f.path().filename());
+    fs::remove(staging);
   }
   return enclave;
 }
