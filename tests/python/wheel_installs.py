@@ -124,7 +124,7 @@ class TheWheelIsPureAndInstalls(unittest.TestCase):
             with self.subTest(command=command):
                 r = run(*command, cwd=self.tmp.name)
                 self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
-                self.assertIn("usage: sawdds list", r.stdout)
+                self.assertIn("usage: sawdds [--enclave DIR] list", r.stdout)
         gui = self.venv / ("Scripts" if os.name == "nt" else "bin") / ("sawgui.exe" if os.name == "nt" else "sawgui")
         for command in ([gui, "--help"], [self.python, "-I", "-m", "sawgui", "--help"]):
             with self.subTest(command=command):
