@@ -68,6 +68,13 @@ struct Case {
   const char* expect;  // regex the message must match
 };
 
+// Each case's edit of the good file fails with a message matching its pattern.
+void expect_error(const Case& c) {
+  const auto message = error_of(c.from, c.to);
+  EXPECT_TRUE(std::regex_search(message, std::regex(c.expect)))
+      << "message: " << message << "\nexpected: " << c.expect;
+}
+
 TEST(Deployment, EveryErrorNamesFileLineColumnAndKey) {
   const Case cases[] = {
       {"type: teleop", "type: telop",
@@ -96,11 +103,7 @@ TEST(Deployment, EveryErrorNamesFileLineColumnAndKey) {
       {"task: {period: 1ms}\n    params: {gains", "task: {period: 1ms, offset: 1ms}\n    params: {gains",
        R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.offset': the phase must be at least 0 and less than the period)"},
   };
-  for (const auto& c : cases) {
-    const auto message = error_of(c.from, c.to);
-    EXPECT_TRUE(std::regex_search(message, std::regex(c.expect)))
-        << "message: " << message << "\nexpected: " << c.expect;
-  }
+  for (const auto& c : cases) expect_error(c);
 }
 
 // The human-like hand (reaches with dwells, tremor) and the virtual wall of the simulated device.
@@ -120,11 +123,7 @@ TEST(Deployment, HandAndWallParametersAreCheckedLikeTheRest) {
       {hand.c_str(), "wall: {normal: [1, 0, 0], stifness: 10}",
        R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.wall\.stifness': unknown parameter)"},
   };
-  for (const auto& c : cases) {
-    const auto message = error_of(c.from, c.to);
-    EXPECT_TRUE(std::regex_search(message, std::regex(c.expect)))
-        << "message: " << message << "\nexpected: " << c.expect;
-  }
+  for (const auto& c : cases) expect_error(c);
   std::string text = good;
   text.replace(text.find(hand), hand.size(),
                "hand: {type: reach, targets: [[0.02, 0, 0], [0, 0.02, 0]], reach_time: 0.6, dwell: 0.3, "
