@@ -107,3 +107,23 @@ TEST(JointState, NamesAreBoundedTerminatedAndGivenForAllJointsOrNone) {
 }
 
 }  // namespace
+
+// Declared limits mean one thing wherever they are checked (the bridge, the gateway, sawctl):
+// every floating-point number of the value, and an integer value itself, but not a struct's
+// counts.
+TEST(ValueCheck, LimitsBoundEveryQuantityButNotACount) {
+  const saw::Limits l{-2, 2};
+  saw::Pose p;
+  p.position = {1, -1, 0.5};
+  EXPECT_TRUE(saw::check_value(p, &l));
+  const saw::Limits tight{-0.5, 0.5};  // the position fits; the identity quaternion's w = 1 does not
+  p.position = {0.1, 0.1, 0.1};
+  EXPECT_FALSE(saw::check_value(p, &tight)) << "a pose's orientation is bounded as much as its position";
+  EXPECT_TRUE(saw::check_value(std::int64_t{2}, &l));
+  EXPECT_FALSE(saw::check_value(std::int64_t{3}, &l)) << "an integer argument is a quantity";
+  saw::JointState j;
+  j.size = 6;  // more joints than the bound: a count, not bounded
+  EXPECT_TRUE(saw::check_value(j, &l));
+  j.position[4] = 2.5;
+  EXPECT_FALSE(saw::check_value(j, &l));
+}

@@ -187,7 +187,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
       } else {
         auto* r = dds_.subscriber->create_datareader(dds_.topic(info.topic, *m),
                                                      DdsContext::reader_qos(Flow::command));
-        commands_.push_back({c.get(), m, r, std::vector<std::byte>(std::max<std::size_t>(m->size(), 1)), {}});
+        commands_.push_back({c.get(), m, r, std::vector<std::byte>(std::max<std::size_t>(m->size(), 1))});
       }
     }
     endpoints_.push_back(std::move(info));
@@ -294,17 +294,7 @@ void Attachment::wait_for_acknowledgments(TimeNs deadline) {
 
 bool Attachment::within_limits(CommandIn& c, std::string& why) {
   if (!c.command->limits) return true;
-  const Limits& l = *c.command->limits;
-  c.numbers.clear();
-  c.mapping->numbers(c.value.data(), c.numbers);
-  for (const double x : c.numbers)
-    if (!(x >= l.min && x <= l.max)) {
-      char b[160];
-      std::snprintf(b, sizeof b, "%g is outside [%g, %g], the range the component declares", x, l.min, l.max);
-      why = b;
-      return false;
-    }
-  return true;
+  return gateway::within_limits(*c.mapping, c.value.data(), *c.command->limits, why);
 }
 
 bool Attachment::publish_state(StateOut& s, bool only_if_changed) {

@@ -59,7 +59,6 @@ class Attachment {
     const Mapping* mapping;
     fdds::DataReader* reader;
     std::vector<std::byte> value;
-    std::vector<double> numbers;  // the value's numbers, for its declared limits
   };
 
   void run();

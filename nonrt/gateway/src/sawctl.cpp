@@ -169,15 +169,10 @@ int call(Session& s, const std::string& topic, const std::vector<std::string>& w
     std::fprintf(stderr, "sawctl: %s takes %s: %s\n", topic.c_str(), label(*e).c_str(), why.c_str());
     return 2;
   }
-  if (e->limited()) {  // the bounds the component declares, as the gateway checks them
-    std::vector<double> numbers;
-    m->numbers(value.data(), numbers);
-    for (const double x : numbers)
-      if (!(x >= e->limit_min() && x <= e->limit_max())) {
-        std::fprintf(stderr, "sawctl: %s: %g is outside [%g, %g], the range the component declares\n",
-                     topic.c_str(), x, e->limit_min(), e->limit_max());
-        return 2;
-      }
+  // The bounds the component declares, checked as the gateway and the bridge check them.
+  if (e->limited() && !within_limits(*m, value.data(), saw::Limits{e->limit_min(), e->limit_max()}, why)) {
+    std::fprintf(stderr, "sawctl: %s: %s\n", topic.c_str(), why.c_str());
+    return 2;
   }
   auto* w = s.ctx.publisher->create_datawriter(s.ctx.topic(topic, *m), DdsContext::writer_qos(Flow::command));
   if (w == nullptr) return refused("write", topic);

@@ -2,6 +2,7 @@
 
 #include <fastcdr/exceptions/Exception.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -157,6 +158,9 @@ class Typed final : public Mapping {
   void numbers(const void* value, std::vector<double>& out) const override {
     if constexpr (requires(const Rt& r, std::vector<double>& o) { Conv::each(r, o); })
       Conv::each(*static_cast<const Rt*>(value), out);
+  }
+  bool check(const void* value, const Limits& limits) const override {
+    return saw::check_value(*static_cast<const Rt*>(value), &limits);
   }
 
   bool from_text(std::string_view text, void* value, std::string& why) const override {
@@ -646,6 +650,23 @@ const std::vector<std::unique_ptr<Mapping>>& mappings() {
 }
 
 }  // namespace
+
+bool within_limits(const Mapping& m, const void* value, const Limits& limits, std::string& why) {
+  if (m.check(value, limits)) return true;
+  std::vector<double> shown;
+  m.numbers(value, shown);
+  char b[160];
+  const auto outside = std::find_if(shown.begin(), shown.end(),
+                                    [&](double x) { return !(x >= limits.min && x <= limits.max); });
+  if (outside != shown.end())
+    std::snprintf(b, sizeof b, "%g is outside [%g, %g], the range the component declares", *outside,
+                  limits.min, limits.max);
+  else
+    std::snprintf(b, sizeof b, "a number of the value is outside [%g, %g], the range the component declares",
+                  limits.min, limits.max);
+  why = b;
+  return false;
+}
 
 const Mapping* find_mapping(std::string_view saw_type) {
   for (const auto& m : mappings())

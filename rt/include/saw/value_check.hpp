@@ -11,7 +11,8 @@
 namespace saw {
 
 // Bounds a component declares for every number in a write command's argument (Pose: its
-// position and orientation alike). Enforced where values enter from another process (the
+// position and orientation alike; an integer argument too, but not a struct's integer members,
+// which are counts). Enforced where values enter from another process (the
 // bridge's exporter, the DDS gateway); the component still validates what it receives.
 struct Limits {
   double min = 0, max = 0;
@@ -47,9 +48,11 @@ std::size_t member_offset(M T::*member) noexcept {
                                   reinterpret_cast<const std::byte*>(&probe));
 }
 
+// A struct's integer members are counts and indices (a JointState's size), not quantities: its
+// limits bound its floating-point numbers only; an integer value itself is bounded.
 template <class T, class M>
 bool check_member(const std::byte* bytes, M T::*member, const Limits* limits) noexcept {
-  return check_value_bytes<M>(bytes + member_offset(member), limits);
+  return check_value_bytes<M>(bytes + member_offset(member), std::is_integral_v<M> ? nullptr : limits);
 }
 
 }  // namespace detail
@@ -64,7 +67,11 @@ bool check_value_bytes(const std::byte* bytes, const Limits* limits) noexcept {
     if (!std::isfinite(v)) return false;
     return limits == nullptr || (v >= limits->min && v <= limits->max);
   } else if constexpr (std::is_integral_v<T>) {
-    return true;
+    if (limits == nullptr) return true;
+    T v;
+    std::memcpy(&v, bytes, sizeof v);
+    const auto x = static_cast<double>(v);
+    return x >= limits->min && x <= limits->max;
   } else if constexpr (std::is_enum_v<T>) {
     if constexpr (requires { enum_count(T{}); }) {
       std::underlying_type_t<T> u;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "saw/clock.hpp"
+#include "saw/value_check.hpp"
 
 namespace eprosima::fastdds::dds {
 class DataWriter;
@@ -40,13 +41,24 @@ class Mapping {
   // a valid rt value, validated as a sample from DDS would be (sawctl call).
   virtual bool from_text(std::string_view text, void* value, std::string& why) const = 0;
   virtual std::size_t size() const = 0;  // of the rt type
-  // Appends the numbers a declared range bounds (saw::Limits): every number of the value, but a
-  // pose's position only; nothing for states, buttons and booleans.
+  // The numbers of the value a person reads (a pose's position, not its quaternion); nothing for
+  // states, buttons and booleans. For messages: what bounds a value is within_limits() below.
   virtual void numbers(const void* value, std::vector<double>& out) const {
     (void)value;
     (void)out;
   }
+  // The rt value checked as the bridge's exporter checks it (saw::check_value: every number
+  // finite and within `limits`, a pose's orientation as much as its position).
+  virtual bool check(const void* value, const Limits& limits) const {
+    (void)value;
+    (void)limits;
+    return true;
+  }
 };
+
+// Whether `value` is within the bounds a component declares for a command: the one check both
+// the gateway and clients (sawctl) make, the bridge's; `why` names the first number outside.
+bool within_limits(const Mapping& m, const void* value, const Limits& limits, std::string& why);
 
 // The mapping for an rt type name (TypeInfo::name), or nullptr if it has none.
 const Mapping* find_mapping(std::string_view saw_type);
