@@ -305,17 +305,21 @@ TEST(CanopenArm, EnableRecoversAfterTheFaultIsReset) {
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
 }
 
-TEST(CanopenArm, AFaultThatPersistsMakesTheEnableTimeOut) {
+TEST(CanopenArm, AFaultThatPersistsEndsTheEnableInAFaultNamingItsErrorCode) {
   CanopenArmConfig c = arm_config(cia402::csp);
-  c.transition_timeout = 50 * ms;
+  c.transition_timeout = 500 * ms;
   ArmRig rig(c);
   rig.enable();
   rig.drives[1].raise_fault(0x5000);
   rig.cycle(5);
   rig.state_command(StateCommand::enable);  // the fault condition is still there
-  rig.cycle_until([&] { return rig.arm->fault_reason() == FaultReason::enable_timeout; }, 200);
-  EXPECT_EQ(rig.arm->fault_reason(), FaultReason::enable_timeout);
+  rig.cycle_until([&] { return rig.arm->fault_reason() == FaultReason::drive_fault; }, 200);
+  // Three reset edges (the default), then the fault with the drive's error code (0x603F).
+  EXPECT_EQ(rig.arm->fault_reason(), FaultReason::drive_fault);
   EXPECT_EQ(rig.arm->fault().source_name(), "shoulder_pitch");
+  EXPECT_EQ(rig.arm->fault().detail, 0x5000u);
+  EXPECT_EQ(rig.arm->status().fault_node, rig.arm->arm_config().joints[1].node);
+  EXPECT_EQ(rig.arm->master().control(1).fault_resets, 3);
 }
 
 TEST(CanopenArm, JointLimitsAndFollowingErrorFault) {

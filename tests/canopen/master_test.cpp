@@ -52,9 +52,16 @@ TEST(CanopenStartup, WritesThePdosTheHeartbeatTimeAndTheMode) {
   const AxisConfig axis = test_axis(3, cia402::cst);
   const auto planned = startup_writes(axis);
   ASSERT_GT(planned.size(), 20u);
-  // The PDO writes come first, then 0x1017 and 0x6060.
-  EXPECT_EQ(planned[planned.size() - 2].write.address, (ObjectAddress{0x1017, 0}));
-  EXPECT_EQ(planned[planned.size() - 2].write.value, 10u);
+  // The PDO writes come first, then 0x1017, 0x1016:01 (the master's node and heartbeat time, so
+  // that the drive notices a master that is gone), 0x6007 (what it then does) and 0x6060.
+  EXPECT_EQ(planned[planned.size() - 4].write.address, (ObjectAddress{0x1017, 0}));
+  EXPECT_EQ(planned[planned.size() - 4].write.value, 10u);
+  EXPECT_EQ(planned[planned.size() - 3].write.address, (ObjectAddress{0x1016, 1}));
+  EXPECT_EQ(planned[planned.size() - 3].write.value, (127u << 16) | 300u) << "node 127, 300 ms";
+  EXPECT_EQ(planned[planned.size() - 3].write.type, DataType::unsigned32);
+  EXPECT_EQ(planned[planned.size() - 2].write.address, cia402::object::abort_connection_option_code);
+  EXPECT_EQ(planned[planned.size() - 2].write.value, 3u) << "quick stop";
+  EXPECT_EQ(planned[planned.size() - 2].write.type, DataType::integer16);
   EXPECT_EQ(planned.back().write.address, cia402::object::modes_of_operation);
   EXPECT_EQ(planned.back().write.value, 10u) << "cyclic synchronous torque";
   EXPECT_EQ(planned[0].write.address, (ObjectAddress{0x1400, 1}));

@@ -41,7 +41,11 @@ TestDrive::TestDrive(RingNetwork& network, TestDriveConfig config)
   auto& d = dictionary_;
   d.add_value({0x1000, 0}, "device type", DataType::unsigned32, Access::ro, 0x00020192u);
   d.add_value({0x1001, 0}, "error register", DataType::unsigned8, Access::ro, 0u);
+  d.add_value({0x1016, 0}, "highest sub-index", DataType::unsigned8, Access::const_, 1u);
+  d.add_value({0x1016, 1}, "consumer heartbeat time", DataType::unsigned32, Access::rw, 0u);
   d.add_value({0x1017, 0}, "producer heartbeat time", DataType::unsigned16, Access::rw, 0u);
+  d.add_value(object::abort_connection_option_code, "abort connection option code", DataType::integer16,
+              Access::rw, 1);
   d.add_value(object::error_code, "error code", DataType::unsigned16, Access::ro, 0u);
   d.add_value(object::controlword, "controlword", DataType::unsigned16, Access::rww, 0u);
   d.add_value(object::statusword, "statusword", DataType::unsigned16, Access::rwr, 0u);

@@ -58,7 +58,7 @@ struct Axis {
   // Every RPDO slot of the controlword and of the mode's target gets the value: a drive applies
   // them in the order its RPDOs come, so a second mapping of either must not carry a stale one.
   std::vector<Slot> controlwords, targets;
-  Slot statusword, position, velocity, torque, mode_display;
+  Slot statusword, position, velocity, torque, mode_display, error_code;
   std::uint32_t tpdo_seen = 0;  // bit per TPDO: received at least once
   bool tpdo_this_cycle = false;
   cia402::Controller controller;
@@ -75,7 +75,11 @@ struct Axis {
 
 struct BusMaster::Impl {
   Impl(can::Bus& b, BusMasterConfig c)
-      : bus(b), config(c), sync(c.period, c.sync_overflow), queue(c.sdo_queue) {}
+      : bus(b),
+        config(c),
+        sync(c.period, c.sync_overflow),
+        heartbeat(c.node, c.heartbeat_period),
+        queue(c.sdo_queue) {}
 
   void route(std::uint32_t id, RouteEntry e, const std::string& who) {
     if (routes[id].route != Route::none)
@@ -103,6 +107,7 @@ struct BusMaster::Impl {
   std::array<RouteEntry, CAN_SFF_MASK + 1> routes{};
   HeartbeatConsumer heartbeats;
   SyncProducer sync;
+  HeartbeatProducer heartbeat;
   SdoQueue queue;
   MasterCounters counters;
   std::vector<can::Received> inbox;
@@ -131,9 +136,14 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
     : impl_(std::make_unique<Impl>(bus, config)) {
   if (axes.empty()) throw std::invalid_argument("a CANopen master needs at least one drive");
   if (axes.size() > 64) throw std::invalid_argument("at most 64 drives per bus");
+  if (config.heartbeat_period > 0 && !valid_node_id(config.node))
+    throw std::invalid_argument("the master's node-ID " + std::to_string(config.node) + " is not 1..127");
   impl_->axes.reserve(axes.size());
   for (std::size_t i = 0; i < axes.size(); ++i) {
     check(axes[i]);
+    if (config.heartbeat_period > 0 && axes[i].node == config.node)
+      throw std::invalid_argument("drive '" + axes[i].name + "': node " + std::to_string(config.node) +
+                                  " is the master's own node-ID (its heartbeat)");
     const std::string who = "drive '" + axes[i].name + "' (node " + std::to_string(axes[i].node) + ")";
     Axis& a = impl_->axes.emplace_back(std::move(axes[i]), config);
     const auto node = a.config.node;
@@ -165,14 +175,18 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
     a.velocity = find(t, cia402::object::velocity_actual_value);
     a.torque = find(t, cia402::object::torque_actual_value);
     a.mode_display = find(t, cia402::object::modes_of_operation_display);
+    a.error_code = find(t, cia402::object::error_code);
+    a.feedback.has_mode_display = a.mode_display.mapped();
+    a.feedback.has_error_code = a.error_code.mapped();
     a.feedback.has_velocity = a.velocity.mapped();
     a.feedback.has_torque = a.torque.mapped();
     if (a.tpdos.size() > 32) throw std::invalid_argument("at most 32 TPDOs per drive");
   }
   std::size_t rpdos = 0;
   for (const Axis& a : impl_->axes) rpdos += a.rpdos.size();
-  // The RPDOs, an SDO request, SYNC, room to spare, and an NMT command per node (shut_down()).
-  impl_->outbox.resize(rpdos + 4 + impl_->axes.size());
+  // The RPDOs, an SDO request, SYNC, the heartbeat, room to spare, and an NMT command per node
+  // (shut_down()).
+  impl_->outbox.resize(rpdos + 5 + impl_->axes.size());
   impl_->inbox.resize(64);
 }
 
@@ -312,6 +326,7 @@ void BusMaster::Impl::update_feedback(Axis& a, TimeNs now) noexcept {
   (void)a.read(a.statusword, fb.statusword);
   fb.state = cia402::decode_state(fb.statusword);
   (void)a.read(a.mode_display, fb.mode_display);
+  (void)a.read(a.error_code, fb.error_code);
   const DriveUnits& u = a.config.units;
   if (a.read(a.position, fb.position_counts)) fb.position = u.counts_to_position(fb.position_counts);
   std::int32_t velocity = 0;
@@ -333,6 +348,7 @@ void BusMaster::receive(TimeNs now) noexcept {
     m.started = true;
     m.first_cycle = now;
     m.sync.start(now);
+    m.heartbeat.start(now - m.config.heartbeat_period);  // the first one at once
   }
   ++m.counters.cycles;
   std::size_t total = 0;
@@ -412,6 +428,10 @@ void BusMaster::transmit(TimeNs now) noexcept {
   if (const auto s = m.sync.poll(now + m.config.period / 2)) {
     m.out(*s);
     ++m.counters.syncs;
+  }
+  if (const auto h = m.heartbeat.poll(now, NmtState::operational)) {
+    m.out(*h);
+    ++m.counters.heartbeats;
   }
   const std::size_t sent = m.bus.send(std::span<const can::Frame>(m.outbox.data(), m.out_count));
   m.counters.frames_sent += sent;

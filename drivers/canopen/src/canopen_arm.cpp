@@ -32,6 +32,9 @@ std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
     a.pdos = j.pdos.empty() ? default_pdo_mappings(c.mode, j.node) : j.pdos;
     a.heartbeat_period = c.heartbeat_period;
     a.heartbeat_timeout = c.heartbeat_timeout;
+    a.master_node = c.master_node;
+    a.master_timeout = c.master_heartbeat_timeout;
+    a.abort_connection = c.abort_connection;
     axes.push_back(std::move(a));
   }
   return axes;
@@ -139,6 +142,8 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
   BusMasterConfig m;
   m.period = task.period.count();
   m.controller.transition_timeout = config_.transition_timeout;
+  m.node = config_.master_node;
+  m.heartbeat_period = config_.master_heartbeat_period;
   master_ = std::make_unique<BusMaster>(bus_, m, axes_of(config_));
   if (config_.chain) kinematics_ = std::make_unique<ChainKinematics>(*config_.chain);
   setpoint_js_.size = static_cast<std::uint32_t>(n_);
@@ -181,7 +186,7 @@ bool CanopenArm::accepts(ServoMode m) const noexcept {
 }
 
 void CanopenArm::enter_safe_state(SafeReason why) {
-  enable_sent_ = false;
+  enable_sent_ = operation_sent_ = false;
   // A fault the base raised itself, in CANopen's terms where there are some: a stale command,
   // an enable that never completed. Any other (a throw caught) keeps none: the base's reason says it.
   if (why == SafeReason::fault && reason_ == FaultReason::none) {

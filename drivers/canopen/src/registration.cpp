@@ -140,6 +140,19 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
   c.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
   c.heartbeat_timeout = duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.heartbeat_period), 1ms, 600s);
   if (c.heartbeat_timeout <= c.heartbeat_period) hb.fail_at("timeout", "must be above the heartbeat period");
+  const Params master = p.child("master_heartbeat");
+  c.master_node = static_cast<std::uint8_t>(master.get_in_range("node", 1, 127, 127));
+  c.master_heartbeat_period = duration(master, "period", 100ms, 1ms, 65535ms);
+  c.master_heartbeat_timeout =
+      duration(master, "timeout", 3 * std::chrono::nanoseconds(c.master_heartbeat_period), 1ms, 65535ms);
+  if (c.master_heartbeat_timeout <= c.master_heartbeat_period)
+    master.fail_at("timeout", "must be above the master's heartbeat period");
+  c.abort_connection = p.get_enum<AbortConnection>("abort_connection",
+                                                   {{"none", AbortConnection::none},
+                                                    {"fault", AbortConnection::fault},
+                                                    {"disable_voltage", AbortConnection::disable_voltage},
+                                                    {"quick_stop", AbortConnection::quick_stop}},
+                                                   AbortConnection::quick_stop);
   c.command_timeout = duration(p, "command_timeout", 3 * period, period, 10s);
   c.on_command_timeout = p.get_enum<CommandTimeoutAction>(
       "on_command_timeout", {{"hold", CommandTimeoutAction::hold}, {"fault", CommandTimeoutAction::fault}},
@@ -198,6 +211,12 @@ CanopenSpec parse_arm(const ComponentContext& ctx, Params& p) {
   return s;
 }
 
+std::string hex(std::uint16_t v) {
+  char b[8];
+  std::snprintf(b, sizeof b, "0x%04X", v);
+  return b;
+}
+
 std::string summary_line(const CanopenStatus& s) {
   char b[512];
   std::string out;
@@ -210,14 +229,31 @@ std::string summary_line(const CanopenStatus& s) {
       static_cast<unsigned long long>(s.foreign_frames));
   out += b;
   if (s.faults != 0) {
-    std::snprintf(b, sizeof b, "\n%u faults; the last: %s (%s) on %s, detail 0x%04X, %.1f ms after start",
-                  s.faults, to_string(s.fault.code == FaultCode::none ? FaultReason::none : s.reason),
-                  std::string(to_string(s.fault.code)).c_str(), std::string(s.fault.source_name()).c_str(),
-                  s.fault.detail, static_cast<double>(s.fault.since_start_ns) * 1e-6);
+    const FaultReason reason = s.fault.code == FaultCode::none ? FaultReason::none : s.reason;
+    char node[16] = "";
+    if (s.fault_node != 0) std::snprintf(node, sizeof node, " (node %u)", s.fault_node);
+    std::snprintf(b, sizeof b, "\n%u faults; the last: %s (%s) on %s%s, detail 0x%04X, %.1f ms after start",
+                  s.faults, to_string(reason), std::string(to_string(s.fault.code)).c_str(),
+                  std::string(s.fault.source_name()).c_str(), node, s.fault.detail,
+                  static_cast<double>(s.fault.since_start_ns) * 1e-6);
     out += b;
-    const bool emcy_code =
-        s.reason == FaultReason::emcy || (s.reason == FaultReason::drive_fault && s.fault.detail != 0);
-    if (emcy_code) out += ": " + std::string(emcy_name(static_cast<std::uint16_t>(s.fault.detail)));
+    const auto code = static_cast<std::uint16_t>(s.fault.detail);
+    if (reason == FaultReason::emcy || (reason == FaultReason::drive_fault && code != 0))
+      out += ": error code " + hex(code) + ", " + std::string(emcy_name(code));
+    if (reason == FaultReason::enable_timeout)
+      out += ": stuck in " + std::string(cia402::to_string(cia402::decode_state(code)));
+    if (reason == FaultReason::mode_mismatch)
+      out += ": 0x6061 showed mode " + std::to_string(static_cast<std::int8_t>(s.fault.detail & 0xFF)) +
+             ", 0x6060 asked for " + std::to_string(static_cast<std::int8_t>((s.fault.detail >> 8) & 0xFF));
+    if (reason == FaultReason::nmt_left)
+      out += ": NMT state " + std::string(to_string(static_cast<NmtState>(s.fault.detail)));
+  }
+  if (s.warnings != 0) {
+    std::snprintf(b, sizeof b,
+                  "\n%llu warning EMCY (the drive stayed out of fault), the last: %s, %s from node %u",
+                  static_cast<unsigned long long>(s.warnings), hex(s.last_warning).c_str(),
+                  std::string(emcy_name(s.last_warning)).c_str(), s.last_warning_node);
+    out += b;
   }
   if (s.emcy != 0 || s.heartbeat_losses != 0 || s.bad_pdos != 0) {
     std::snprintf(b, sizeof b, "\n%llu EMCY, %llu heartbeat losses, %llu bad PDOs",

@@ -38,6 +38,14 @@ std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
   }
   const auto heartbeat_ms = static_cast<std::uint32_t>(axis.heartbeat_period / 1'000'000);
   out.push_back({{{0x1017, 0}, DataType::unsigned16, heartbeat_ms}, false});
+  if (axis.master_timeout > 0) {
+    const auto consumer_ms = static_cast<std::uint32_t>(axis.master_timeout / 1'000'000);
+    out.push_back(
+        {{{0x1016, 1}, DataType::unsigned32, std::uint32_t{axis.master_node} << 16 | consumer_ms}, false});
+  }
+  out.push_back({{cia402::object::abort_connection_option_code, DataType::integer16,
+                  static_cast<std::uint32_t>(static_cast<std::uint16_t>(axis.abort_connection))},
+                 false});
   out.push_back({{cia402::object::modes_of_operation, DataType::integer8,
                   static_cast<std::uint32_t>(static_cast<std::uint8_t>(axis.mode))},
                  false});

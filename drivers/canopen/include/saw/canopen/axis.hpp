@@ -13,6 +13,10 @@
 
 namespace saw::canopen {
 
+// CiA 402's abort connection option code (0x6007): what a drive does when it loses its master
+// (its heartbeat consumer fires, bus-off, ...) while it is driving.
+enum class AbortConnection : std::int16_t { none = 0, fault = 1, disable_voltage = 2, quick_stop = 3 };
+
 struct AxisConfig {
   std::string name;  // the joint's name: what faults and logs call it
   std::uint8_t node = 1;
@@ -25,6 +29,11 @@ struct AxisConfig {
   TimeNs heartbeat_period = 100'000'000;
   // ... and is lost when none came for this long (the master's consumer time; above the period).
   TimeNs heartbeat_timeout = 250'000'000;
+  // The drive watches the master's heartbeat (0x1016:01, written at start-up: the master's
+  // node-ID and this time; 0: not watched) and, once it is missing, does what 0x6007 says.
+  std::uint8_t master_node = 127;
+  TimeNs master_timeout = 300'000'000;
+  AbortConnection abort_connection = AbortConnection::quick_stop;
 };
 
 // The object that carries the mode's target: 0x607A (csp), 0x60FF (csv), 0x6071 (cst).
@@ -44,6 +53,9 @@ struct AxisFeedback {
   std::uint16_t statusword = 0;
   cia402::State state = cia402::State::unknown;
   std::int8_t mode_display = 0;  // 0x6061 when mapped, else 0
+  bool has_mode_display = false;
+  std::uint16_t error_code = 0;  // 0x603F when mapped, else 0
+  bool has_error_code = false;
   std::int32_t position_counts = 0;
   double position = 0, velocity = 0, torque = 0;
   bool has_velocity = false, has_torque = false;

@@ -19,6 +19,10 @@ struct BusMasterConfig {
   TimeNs sdo_timeout = 500'000'000;  // each response of a runtime SDO transfer
   std::size_t sdo_queue = 16;        // runtime SDO requests (and replies) in flight
   std::size_t max_frames = 256;      // frames read per cycle at most; the rest wait a cycle
+  // The master's own heartbeat (CiA 301), which the drives' consumers (0x1016) watch: its
+  // node-ID (no drive may have it) and period; 0: none.
+  std::uint8_t node = 127;
+  TimeNs heartbeat_period = 100'000'000;
   cia402::ControllerConfig controller;
 };
 
@@ -29,6 +33,7 @@ struct MasterCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t send_refused = 0;  // frames the bus did not take (full, down)
   std::uint64_t syncs = 0;
+  std::uint64_t heartbeats = 0;                // the master's own
   std::uint64_t foreign_frames = 0;            // frames for no drive of this master (another master's, ...)
   std::uint64_t receive_limited = 0;           // cycles that left frames for the next (max_frames)
   std::uint64_t emcy = 0;                      // EMCY messages, error resets included
@@ -43,7 +48,7 @@ struct MasterCounters {
 //   ...            the owner reads feedback() and health(), decides, and sets targets
 //   transmit(now)  each drive's CiA 402 controller on the statusword just read; RPDOs packed
 //                  and sent; a runtime SDO transfer stepped; SYNC last, so that every drive has
-//                  its RPDO before the SYNC that applies it.
+//                  its RPDO before the SYNC that applies it; the master's heartbeat when due.
 // receive() and transmit() neither allocate, lock, block, print nor throw. Construction and
 // start-up (StartupSequence, on the set-up thread) happen before the first cycle.
 class BusMaster {

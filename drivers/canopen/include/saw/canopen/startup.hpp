@@ -24,7 +24,9 @@ struct StartupWrite {
 };
 
 // What the start-up writes to one drive, in order: its PDOs (configuration_writes() each),
-// the producer heartbeat time 0x1017 (ms), the mode of operation 0x6060.
+// the producer heartbeat time 0x1017 (ms), the consumer heartbeat time 0x1016:01 (the master's
+// node-ID and time, ms; when master_timeout is not 0), the abort connection option code 0x6007,
+// the mode of operation 0x6060.
 std::vector<StartupWrite> startup_writes(const AxisConfig& axis);
 
 struct StartupConfig {
