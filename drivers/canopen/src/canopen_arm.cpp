@@ -35,6 +35,7 @@ std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
     a.master_node = c.master_node;
     a.master_timeout = c.master_heartbeat_timeout;
     a.abort_connection = c.abort_connection;
+    a.identity = j.identity;
     axes.push_back(std::move(a));
   }
   return axes;

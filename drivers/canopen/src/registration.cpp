@@ -44,12 +44,20 @@ cia402::Mode parse_mode(const Params& p) {
 // mapped, the others configured as not valid. `eds: file` instead: the file's PDOs (a DCF's
 // ParameterValues). Neither: the defaults for the mode.
 std::vector<PdoMapping> parse_pdos(const Params& p, cia402::Mode mode, std::uint8_t node,
-                                   const std::string& directory) {
+                                   const std::string& directory, std::optional<DriveIdentity>& identity) {
   if (p.has("pdo") && p.has("eds")) p.fail_at("eds", "give either pdo or eds, not both");
   if (p.has("eds")) {
     std::filesystem::path file = p.get<std::string>("eds");
     if (file.is_relative() && !directory.empty()) file = std::filesystem::path(directory) / file;
-    return eds_pdo_mappings(load_eds(file.string()), node);  // its errors name the EDS file and line
+    const Eds eds = load_eds(file.string());  // its errors name the EDS file and line
+    DriveIdentity id;
+    id.file = file.string();
+    const auto type = eds.value({0x1000, 0}, node);
+    id.device_type = type ? std::visit([](auto v) { return static_cast<std::uint32_t>(v); }, *type) : 0;
+    id.vendor_id = eds.device.vendor_number;
+    id.product_code = eds.device.product_number;
+    identity = id;
+    return eds_pdo_mappings(eds, node);
   }
   if (!p.has("pdo")) {
     p.mark_used("pdo");
@@ -115,7 +123,7 @@ JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode m
   c.following_error = j.get_in_range("following_error", 0, 1e3, 0);
   c.offset = j.get_in_range("offset", -1e6, 1e6, 0);
   const bool own_pdos = j.has("pdo") || j.has("eds");
-  c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory);
+  c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory, c.identity);
   if (kinematics != nullptr) {
     kinematics->type = type;
     kinematics->xyz = j.get_or<Vec3>("xyz", {0, 0, 0});

@@ -1,6 +1,7 @@
 #include "saw/canopen/startup.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <stdexcept>
 #include <thread>
 
@@ -15,6 +16,8 @@ std::string_view to_string(StartupPhase p) noexcept {
       return "NMT reset communication";
     case StartupPhase::boot:
       return "waiting for boot-up";
+    case StartupPhase::identify:
+      return "identity";
     case StartupPhase::configure:
       return "SDO configuration";
     case StartupPhase::start:
@@ -75,8 +78,9 @@ struct StartupSequence::Node {
   AxisConfig axis;
   SdoClient sdo;
   std::vector<StartupWrite> writes;
-  std::size_t next = 0;  // the write in flight (or the next one)
-  bool started = false;  // `next` was handed to the SDO client
+  std::size_t next = 0;        // the write in flight (or the next one)
+  bool started = false;        // `next` was handed to the SDO client
+  std::size_t identified = 0;  // identity objects read and found as expected
   bool booted = false;
   bool operational = false;
 
@@ -121,6 +125,57 @@ void StartupSequence::receive(TimeNs now) {
       }
     }
   }
+}
+
+namespace {
+std::string hex(std::uint32_t v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%08X", v);
+  return b;
+}
+}  // namespace
+
+// The drive is the one its EDS/DCF describes, before anything is written to it: a wrong file
+// or a wrong drive on the node would take PDO maps and a mode meant for another device.
+bool StartupSequence::identify(TimeNs now) {
+  struct Check {
+    ObjectAddress address;
+    const char* what;
+    std::uint32_t DriveIdentity::*expected;
+  };
+  static constexpr Check checks[] = {{{0x1000, 0}, "device type (0x1000)", &DriveIdentity::device_type},
+                                     {{0x1018, 1}, "vendor-ID (0x1018:01)", &DriveIdentity::vendor_id},
+                                     {{0x1018, 2}, "product code (0x1018:02)", &DriveIdentity::product_code}};
+  bool all_done = true;
+  for (auto& node : nodes_) {
+    Node& n = *node;
+    if (!n.axis.identity) continue;
+    const DriveIdentity& id = *n.axis.identity;
+    if (n.started && !n.sdo.busy()) {
+      const Check& c = checks[n.identified];
+      const SdoResult& r = n.sdo.result();
+      std::uint32_t value = 0;
+      if (r.status != SdoStatus::done || n.sdo.value(DataType::unsigned32, value) != Codec::ok) {
+        fail(n.who() + ": reading its " + c.what + " failed: " +
+             (r.status == SdoStatus::done ? std::string("not 4 bytes") : std::string(to_string(r.abort))));
+        return false;
+      }
+      if (value != id.*c.expected) {
+        fail(n.who() + ": " + c.what + " " + hex(value) + ", but " + id.file + " says " +
+             hex(id.*c.expected));
+        return false;
+      }
+      ++n.identified;
+      n.started = false;
+    }
+    if (!n.started && n.identified < std::size(checks)) {
+      (void)n.sdo.upload(checks[n.identified].address, now);
+      n.started = true;
+    }
+    while (auto f = n.sdo.poll(now)) send(*f);
+    all_done = all_done && n.identified >= std::size(checks);
+  }
+  return all_done;
 }
 
 bool StartupSequence::configure(TimeNs now) {
@@ -173,9 +228,9 @@ StartupPhase StartupSequence::step(TimeNs now) {
       bool all = true;
       for (auto& n : nodes_) all = all && n->booted;
       if (all) {
-        phase_ = StartupPhase::configure;
+        phase_ = StartupPhase::identify;
         phase_start_ = now;
-        (void)configure(now);
+        if (identify(now)) phase_ = StartupPhase::configure;
       } else if (in_phase > config_.boot_timeout) {
         for (auto& n : nodes_)
           if (!n->booted)
@@ -183,6 +238,9 @@ StartupPhase StartupSequence::step(TimeNs now) {
       }
       break;
     }
+    case StartupPhase::identify:
+      if (identify(now)) phase_ = StartupPhase::configure;
+      break;
     case StartupPhase::configure:
       if (configure(now)) phase_ = StartupPhase::start;
       break;

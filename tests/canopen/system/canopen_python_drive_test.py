@@ -44,7 +44,7 @@ sys.path.insert(0, HERE)
 from child_tools import check, fail, start_socketcand  # noqa: E402
 from python_drive import PythonDrive  # noqa: E402
 
-SAW_RT, SERVER, EDS = sys.argv[1:4]
+SAW_RT, SERVER, EDS = sys.argv[1], sys.argv[2], os.path.abspath(sys.argv[3])
 NODE = 5
 
 DEPLOYMENT = """
@@ -240,9 +240,16 @@ def identity():
     code = c.finish()
     lines = [line for line in c.err.splitlines() if line.strip()]
     c.expect(code == 1, f"saw-rt exited {code}")
-    c.expect(re.search(r"node 5.*vendor-ID 0x00001234.*0x000005A7", c.err), "the mismatch is not named")
+    c.expect(re.search(r"node 5.*vendor-ID \(0x1018:01\) 0x00001234, but .*sim_drive.eds says 0x000005A7", c.err),
+             "the mismatch is not named")
     c.expect(len(lines) == 1, f"{len(lines)} lines on stderr")
-    print("ok identity: start-up refused naming both vendor-IDs")
+    # The same drive with the EDS's identity starts.
+    c = Case("identity_ok", extra=f"      eds: {EDS}\n")
+    c.start(duration=3)
+    c.wait_for(lambda: enabled(c), 20, "the drive whose identity is the EDS's enabled")
+    code = c.finish()
+    c.expect(code == 0, f"saw-rt exited {code}")
+    print("ok identity: start-up refused naming both vendor-IDs; the right drive starts")
 
 
 CASES = [kill9, boot_fault, stuck_fault, stuck_enable, wrong_mode, pre_op, warning, error_emcy, identity]

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,13 @@ namespace saw::canopen {
 // CiA 402's abort connection option code (0x6007): what a drive does when it loses its master
 // (its heartbeat consumer fires, bus-off, ...) while it is driving.
 enum class AbortConnection : std::int16_t { none = 0, fault = 1, disable_voltage = 2, quick_stop = 3 };
+
+// What a drive must say it is (0x1000, 0x1018:01, 0x1018:02), as its EDS/DCF says: checked at
+// start-up, before anything is written to it.
+struct DriveIdentity {
+  std::string file;  // the EDS/DCF that says so (named in the error)
+  std::uint32_t device_type = 0, vendor_id = 0, product_code = 0;
+};
 
 struct AxisConfig {
   std::string name;  // the joint's name: what faults and logs call it
@@ -34,6 +42,7 @@ struct AxisConfig {
   std::uint8_t master_node = 127;
   TimeNs master_timeout = 300'000'000;
   AbortConnection abort_connection = AbortConnection::quick_stop;
+  std::optional<DriveIdentity> identity;  // nullopt: not checked (no EDS given)
 };
 
 // The object that carries the mode's target: 0x607A (csp), 0x60FF (csv), 0x6071 (cst).

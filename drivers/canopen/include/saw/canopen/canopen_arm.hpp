@@ -36,7 +36,8 @@ struct JointConfig {
   double max_torque = 0;       // servo_jf's and servo_cf's bound per joint; 0: the rated torque at the joint
   double following_error = 0;  // csp: |target − position| that faults; 0: not checked
   double offset = 0;           // the joint's position when the drive reads 0: joint = drive position + offset
-  std::vector<PdoMapping> pdos;  // what the start-up configures; empty: default_pdo_mappings()
+  std::vector<PdoMapping> pdos;           // what the start-up configures; empty: default_pdo_mappings()
+  std::optional<DriveIdentity> identity;  // from its EDS/DCF: checked at start-up
 };
 
 enum class CommandTimeoutAction : std::uint8_t { hold, fault };

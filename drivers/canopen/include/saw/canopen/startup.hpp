@@ -1,4 +1,4 @@
-// The start-up of the drives on one bus: NMT reset, boot-ups, SDO configuration, NMT start.
+// The start-up of the drives on one bus: NMT reset, boot-ups, identity, SDO configuration, NMT start.
 #pragma once
 
 #include <cstdint>
@@ -35,7 +35,7 @@ struct StartupConfig {
   TimeNs operational_timeout = 2'000'000'000;  // from NMT start to an operational heartbeat
 };
 
-enum class StartupPhase : std::uint8_t { reset, boot, configure, start, operational, done, failed };
+enum class StartupPhase : std::uint8_t { reset, boot, identify, configure, start, operational, done, failed };
 std::string_view to_string(StartupPhase p) noexcept;
 
 // The sequence as a stepped machine: step() reads what the bus has, sends what is due and says
@@ -61,6 +61,7 @@ class StartupSequence {
   void receive(TimeNs now);
   void fail(const std::string& what);
   void send(const can::Frame& f);
+  bool identify(TimeNs now);
   bool configure(TimeNs now);
 
   can::Bus& bus_;
