@@ -252,8 +252,9 @@ void BusMaster::Impl::on_emcy(Axis& a, const can::Frame& f) noexcept {
   if (e->is_reset()) return;
   ++a.health.emcy_count;
   a.health.last_emcy = e->code;
-  // The names are literals: the RT log keeps their pointers.
-  saw::log(LogLevel::error, bus.name().c_str(), "EMCY from node {}: error code {} ({}), error register {}",
+  // The names are literals: the RT log keeps their pointers. Whether it is an error or a warning
+  // is the component's to say (the drive's statusword decides): here it is what was heard.
+  saw::log(LogLevel::info, bus.name().c_str(), "EMCY from node {}: error code {:x} ({}), error register {:x}",
            unsigned{a.config.node}, unsigned{e->code}, emcy_name(e->code).data(),
            unsigned{e->error_register});
 }
