@@ -2,6 +2,7 @@
 // enabled, CSP following, the order of a cycle's frames, heartbeat and EMCY, runtime SDO.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "rig.hpp"
@@ -47,6 +48,22 @@ struct MasterRig {
   BusMaster master;
   TimeNs now = 0;
 };
+
+TEST(CanopenStartup, TheDeploymentsOwnWritesComeBeforeTheMode) {
+  AxisConfig axis = test_axis(3, cia402::csp);
+  axis.writes = {{cia402::object::interpolation_time_period_value, DataType::unsigned8, 10},
+                 {cia402::object::interpolation_time_period_index, DataType::integer8, 0xFD}};
+  axis.master_timeout = 0;  // a drive not told to watch the master: no 0x1016 write
+  const auto planned = startup_writes(axis);
+  ASSERT_GE(planned.size(), 4u);
+  EXPECT_EQ(planned[planned.size() - 3].write.address, cia402::object::interpolation_time_period_value);
+  EXPECT_EQ(planned[planned.size() - 2].write.address, cia402::object::interpolation_time_period_index);
+  EXPECT_EQ(std::get<std::int64_t>(startup_value(planned[planned.size() - 2].write)), -3);
+  EXPECT_EQ(planned.back().write.address, cia402::object::modes_of_operation);
+  EXPECT_TRUE(std::none_of(planned.begin(), planned.end(), [](const StartupWrite& w) {
+    return w.write.address == ObjectAddress{0x1016, 1};
+  }));
+}
 
 TEST(CanopenStartup, WritesThePdosTheHeartbeatTimeAndTheMode) {
   const AxisConfig axis = test_axis(3, cia402::cst);

@@ -77,6 +77,21 @@ TestDrive::TestDrive(RingNetwork& network, TestDriveConfig config)
     return SdoAbort::none;
   });
   server_ = std::make_unique<SdoServer>(SdoServerConfig{SdoChannel::of_node(config.node)}, dictionary_);
+  defaults_ = dictionary_;
+  nmt_.boot();
+}
+
+void TestDrive::reboot() {
+  dictionary_ = defaults_;
+  (void)dictionary_.set(object::position_actual_value, static_cast<std::int32_t>(std::lround(position_)));
+  drive_ = cia402::Drive{};
+  fault_ = false;
+  velocity_ = 0;
+  rpdos_.clear();
+  tpdos_.clear();
+  rpdo_objects_.clear();
+  tpdo_objects_.clear();
+  nmt_ = NmtNode(config_.node);
   nmt_.boot();
 }
 

@@ -69,6 +69,7 @@ Outcome CanopenArm::read() {
 // operation enabled only once every drive shows the mode asked for in 0x6061.
 Outcome CanopenArm::enable() {
   const TimeNs t = now();
+  if (const Outcome o = reconfigure_rebooted(); !o.is_done()) return o;
   for (std::size_t i = 0; i < n_; ++i)
     if (!master_->feedback(i).valid) return Outcome::pending();
   if (!enable_sent_) {
@@ -115,6 +116,40 @@ Outcome CanopenArm::enable() {
     if (master_->feedback(i).state != cia402::State::operation_enabled) return Outcome::pending();
   enable_sent_ = operation_sent_ = false;
   return Outcome::done();
+}
+
+// A drive that rebooted lost its PDO maps, heartbeat and mode: the enable runs its configuration
+// again (the start-up's writes, NMT start) before anything else.
+Outcome CanopenArm::reconfigure_rebooted() noexcept {
+  bool busy = false;
+  for (std::size_t i = 0; i < n_; ++i) {
+    if (!rebooted_[i]) continue;
+    const JointConfig& j = config_.joints[i];
+    if (!reconfiguring_[i]) {
+      master_->reconfigure(i, now());
+      reconfiguring_[i] = true;
+    }
+    const Reconfiguration& r = master_->reconfiguration(i);
+    switch (r.state) {
+      case Reconfiguration::State::idle:
+      case Reconfiguration::State::busy:
+        busy = true;
+        break;
+      case Reconfiguration::State::done:
+        rebooted_[i] = reconfiguring_[i] = false;
+        saw::log(LogLevel::info, name().c_str(), "{} (node {}) configured again after its reboot",
+                 j.name.c_str(), unsigned{j.node});
+        break;
+      case Reconfiguration::State::failed:
+        reconfiguring_[i] = false;  // the next enable tries again
+        saw::log(LogLevel::error, name().c_str(), "{} (node {}): configuring it again failed at {:x}:{}: {}",
+                 j.name.c_str(), unsigned{j.node}, unsigned{r.object.index}, unsigned{r.object.subindex},
+                 r.object.index == 0 ? "no operational heartbeat" : to_string(r.abort).data());
+        return failure(FaultReason::node_rebooted, FaultCode::device_lost, i,
+                       static_cast<std::uint32_t>(r.abort));
+    }
+  }
+  return busy ? Outcome::pending() : Outcome::done();
 }
 
 // One drive during an enable: a fault its resets did not clear, or a transition that never came.
@@ -225,11 +260,19 @@ Outcome CanopenArm::check_axis(std::size_t i) noexcept {
   const TimeNs t = now();
   if (h.boot_ups != boot_ups_seen_[i]) {
     boot_ups_seen_[i] = h.boot_ups;
-    rebooted_[i] = true;  // its PDOs and mode are gone: only a new start-up brings them back
+    rebooted_[i] = true;  // its PDOs and mode are gone: the next enable configures it again
+    reconfiguring_[i] = false;
   }
   const bool drive_fault = f.state == cia402::State::fault || f.state == cia402::State::fault_reaction_active;
   if (const Outcome o = check_emcy(i, drive_fault); o.is_failed()) return o;
-  if (rebooted_[i]) return failure(FaultReason::node_rebooted, FaultCode::device_lost, i);
+  if (rebooted_[i]) {
+    if (enabling()) return Outcome::done();  // the enable configures it again (its checks after)
+    if (says())
+      saw::log(LogLevel::error, name().c_str(),
+               "{} (node {}) rebooted (boot-up seen): its configuration is gone", j.name.c_str(),
+               unsigned{j.node});
+    return failure(FaultReason::node_rebooted, FaultCode::device_lost, i);
+  }
   if (h.heartbeat_lost) {
     // A drive that went silent altogether faults first for its TPDOs (they come every cycle);
     // once its heartbeat is overdue too, the fault says what is known now: the node is gone.
@@ -249,7 +292,7 @@ Outcome CanopenArm::check_axis(std::size_t i) noexcept {
                j.name.c_str(), unsigned{j.node}, to_string(h.nmt_state).data());
     return failure(FaultReason::nmt_left, FaultCode::device_lost, i, static_cast<std::uint32_t>(h.nmt_state));
   }
-  const TimeNs age = t - (f.valid ? f.last_received : start_time_);
+  const TimeNs age = t - (f.valid ? f.last_received : std::max(start_time_, f.watch_from));
   if (age > config_.feedback_timeout)
     return failure(FaultReason::feedback_stale, FaultCode::input_stale, i, 0, age);
   // A drive in fault while no reset is under way (an enable resets it, and has its own timeout).

@@ -9,6 +9,7 @@
 #include "saw/canopen/heartbeat.hpp"
 #include "saw/canopen/nmt.hpp"
 #include "saw/canopen/sdo_client.hpp"
+#include "saw/canopen/startup.hpp"
 #include "saw/canopen/sync.hpp"
 #include "saw/log.hpp"
 
@@ -31,6 +32,14 @@ struct RouteEntry {
 };
 
 constexpr std::size_t sdo_capacity = 256;
+
+// One start-up write, encoded at construction: the cycle only sends it.
+struct EncodedWrite {
+  ObjectAddress address;
+  std::array<std::uint8_t, 8> bytes{};
+  std::size_t size = 0;
+  bool optional = false;
+};
 
 struct Axis {
   Axis(AxisConfig c, const BusMasterConfig& master)
@@ -69,6 +78,12 @@ struct Axis {
   double setpoint = 0;
   TimeNs previous_time = 0;
   std::int32_t previous_counts = 0;
+  // Re-configuration (a drive that rebooted).
+  std::vector<EncodedWrite> writes;
+  Reconfiguration reconfig;
+  std::size_t reconfig_next = 0;
+  bool reconfig_started = false, reconfig_starting = false;
+  TimeNs reconfig_since = 0;
 };
 
 }  // namespace
@@ -92,6 +107,7 @@ struct BusMaster::Impl {
   void heartbeat_events(TimeNs now) noexcept;
   void update_feedback(Axis& a, TimeNs now) noexcept;
   void service_sdo(TimeNs now) noexcept;
+  void step_reconfiguration(Axis& a, TimeNs now) noexcept;
   void out(const can::Frame& f) noexcept {
     if (out_count < outbox.size()) outbox[out_count++] = f;
   }
@@ -154,6 +170,17 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
     for (std::size_t p = 0; p < a.tpdos.size(); ++p)
       impl_->route(a.tpdos[p].layout().cob_id(), {Route::tpdo, index, static_cast<std::uint8_t>(p)}, who);
     impl_->heartbeats.watch(node, a.config.heartbeat_timeout);
+    for (const StartupWrite& w : startup_writes(a.config)) {
+      EncodedWrite e;
+      e.address = w.write.address;
+      e.size = size_of(w.write.type);
+      e.optional = w.optional;
+      if (e.size > e.bytes.size() ||
+          encode(w.write.type, startup_value(w.write), std::span(e.bytes.data(), e.size)) != Codec::ok)
+        throw std::invalid_argument(who + ": value " + std::to_string(w.write.value) + " does not fit " +
+                                    to_string(w.write.address));
+      a.writes.push_back(e);
+    }
   }
   // Slots by address: the mapping order is the layout's slot order.
   for (Axis& a : impl_->axes) {
@@ -184,9 +211,9 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
   }
   std::size_t rpdos = 0;
   for (const Axis& a : impl_->axes) rpdos += a.rpdos.size();
-  // The RPDOs, an SDO request, SYNC, the heartbeat, room to spare, and an NMT command per node
-  // (shut_down()).
-  impl_->outbox.resize(rpdos + 5 + impl_->axes.size());
+  // The RPDOs, an SDO request, SYNC, the heartbeat, room to spare, an NMT command per node
+  // (shut_down()), and per drive a re-configuration's SDO request and NMT start.
+  impl_->outbox.resize(rpdos + 5 + 3 * impl_->axes.size());
   impl_->inbox.resize(64);
 }
 
@@ -425,6 +452,7 @@ void BusMaster::transmit(TimeNs now) noexcept {
     for (const PdoPacker& p : a.rpdos) m.out(p.frame());
   }
   m.service_sdo(now);
+  for (Axis& a : m.axes) m.step_reconfiguration(a, now);
   // Half a period of slack: a cycle that wakes a little early still sends its SYNC.
   if (const auto s = m.sync.poll(now + m.config.period / 2)) {
     m.out(*s);
@@ -437,6 +465,59 @@ void BusMaster::transmit(TimeNs now) noexcept {
   const std::size_t sent = m.bus.send(std::span<const can::Frame>(m.outbox.data(), m.out_count));
   m.counters.frames_sent += sent;
   m.counters.send_refused += m.out_count - sent;
+}
+
+void BusMaster::reconfigure(std::size_t i, TimeNs now) noexcept {
+  Axis& a = impl_->axes[i];
+  a.reconfig = {};
+  a.reconfig.state = Reconfiguration::State::busy;
+  a.reconfig_next = 0;
+  a.reconfig_started = a.reconfig_starting = false;
+  a.reconfig_since = now;
+  a.tpdo_seen = 0;  // its TPDOs, once it sends them again, decide
+  a.feedback.valid = false;
+}
+
+const Reconfiguration& BusMaster::reconfiguration(std::size_t i) const noexcept {
+  return impl_->axes[i].reconfig;
+}
+
+void BusMaster::Impl::step_reconfiguration(Axis& a, TimeNs now) noexcept {
+  if (a.reconfig.state != Reconfiguration::State::busy) return;
+  const auto index = static_cast<int>(&a - axes.data());
+  if (a.reconfig_starting) {
+    if (a.health.nmt_state == NmtState::operational) {
+      a.reconfig.state = Reconfiguration::State::done;
+      a.feedback.watch_from = now;
+    } else if (now - a.reconfig_since > 2'000'000'000) {
+      a.reconfig.state = Reconfiguration::State::failed;  // no operational heartbeat within 2 s
+    }
+    return;
+  }
+  if (sdo_axis == index) return;  // a runtime transfer on its channel: next cycle
+  if (a.reconfig_started && !a.sdo.busy()) {
+    const EncodedWrite& w = a.writes[a.reconfig_next];
+    const SdoResult& r = a.sdo.result();
+    const bool missing = r.abort == SdoAbort::no_object || r.abort == SdoAbort::no_subindex;
+    if (r.status != SdoStatus::done && !(w.optional && missing)) {
+      a.reconfig.state = Reconfiguration::State::failed;
+      a.reconfig.object = w.address;
+      a.reconfig.abort = r.abort;
+      return;
+    }
+    ++a.reconfig_next;
+    a.reconfig_started = false;
+  }
+  if (!a.reconfig_started && a.reconfig_next < a.writes.size()) {
+    const EncodedWrite& w = a.writes[a.reconfig_next];
+    a.reconfig_started = a.sdo.download(w.address, std::span(w.bytes.data(), w.size), now);
+  }
+  while (const auto f = a.sdo.poll(now)) out(*f);
+  if (!a.reconfig_started && a.reconfig_next >= a.writes.size()) {
+    out(nmt_frame(NmtCommand::start, a.config.node));
+    a.reconfig_starting = true;
+    a.reconfig_since = now;
+  }
 }
 
 void BusMaster::shut_down(std::uint16_t controlword, TimeNs now) noexcept {

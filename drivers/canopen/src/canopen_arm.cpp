@@ -36,6 +36,7 @@ std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
     a.master_timeout = c.master_heartbeat_timeout;
     a.abort_connection = c.abort_connection;
     a.identity = j.identity;
+    a.writes = j.writes;
     axes.push_back(std::move(a));
   }
   return axes;

@@ -90,6 +90,43 @@ std::vector<PdoMapping> parse_pdos(const Params& p, cia402::Mode mode, std::uint
   return maps;
 }
 
+// `sdo: ["0x60C2:01:u8=10", "interpolation...", ...]`: the deployment's own start-up writes, an
+// object as a PDO entry is written (a known name, an address, with a type) and its value.
+std::vector<SdoWrite> parse_writes(const Params& p) {
+  std::vector<SdoWrite> out;
+  if (!p.has("sdo")) {
+    p.mark_used("sdo");
+    return out;
+  }
+  for (const std::string& text : p.get<std::vector<std::string>>("sdo")) {
+    const auto eq = text.find('=');
+    if (eq == std::string::npos) p.fail_at("sdo", "'" + text + "' is not <object>=<value> (0x60C2:01:u8=10)");
+    PdoEntry entry;
+    long long value = 0;
+    try {
+      entry = parse_pdo_entry(text.substr(0, eq));
+      std::size_t used = 0;
+      value = std::stoll(text.substr(eq + 1), &used, 0);
+      if (used != text.size() - eq - 1)
+        throw std::invalid_argument("'" + text.substr(eq + 1) + "' is not a number");
+    } catch (const std::exception& e) {
+      p.fail_at("sdo", "'" + text + "': " + e.what());
+    }
+    if (size_of(entry.type) > 4 || type_class(entry.type) == TypeClass::real)
+      p.fail_at("sdo", "'" + text + "': only integers of up to 32 bits");
+    std::uint8_t bytes[8];
+    const Number n = type_class(entry.type) == TypeClass::signed_integer
+                         ? Number{std::int64_t{value}}
+                         : Number{static_cast<std::uint64_t>(value)};
+    if (value < 0 && type_class(entry.type) != TypeClass::signed_integer)
+      p.fail_at("sdo", "'" + text + "': a negative value for an unsigned object");
+    if (encode(entry.type, n, std::span(bytes, size_of(entry.type))) != Codec::ok)
+      p.fail_at("sdo", "'" + text + "': the value does not fit " + std::string(to_string(entry.type)));
+    out.push_back({entry.address, entry.type, static_cast<std::uint32_t>(value)});
+  }
+  return out;
+}
+
 // A joint's drive: node, units, limits, and (arm) its place in the chain.
 JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode mode, const Params& shared,
                         const std::string& directory, ChainJoint* kinematics) {
@@ -124,6 +161,9 @@ JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode m
   c.offset = j.get_in_range("offset", -1e6, 1e6, 0);
   const bool own_pdos = j.has("pdo") || j.has("eds");
   c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory, c.identity);
+  c.writes = parse_writes(shared);
+  if (&j != &shared)
+    for (const SdoWrite& w : parse_writes(j)) c.writes.push_back(w);
   if (kinematics != nullptr) {
     kinematics->type = type;
     kinematics->xyz = j.get_or<Vec3>("xyz", {0, 0, 0});

@@ -49,15 +49,14 @@ std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
   out.push_back({{cia402::object::abort_connection_option_code, DataType::integer16,
                   static_cast<std::uint32_t>(static_cast<std::uint16_t>(axis.abort_connection))},
                  false});
+  for (const SdoWrite& w : axis.writes) out.push_back({w, false});
   out.push_back({{cia402::object::modes_of_operation, DataType::integer8,
                   static_cast<std::uint32_t>(static_cast<std::uint8_t>(axis.mode))},
                  false});
   return out;
 }
 
-namespace {
-// Values are kept as 32 bits; a signed object's (the mode) is its two's complement.
-Number write_value(const SdoWrite& w) {
+Number startup_value(const SdoWrite& w) noexcept {
   if (type_class(w.type) != TypeClass::signed_integer) return std::uint64_t{w.value};
   switch (size_of(w.type)) {
     case 1:
@@ -68,7 +67,6 @@ Number write_value(const SdoWrite& w) {
       return std::int64_t{static_cast<std::int32_t>(w.value)};
   }
 }
-}  // namespace
 
 struct StartupSequence::Node {
   Node(const AxisConfig& a, TimeNs sdo_timeout)
@@ -199,8 +197,7 @@ bool StartupSequence::configure(TimeNs now) {
       const SdoWrite& w = n.writes[n.next].write;
       std::uint8_t bytes[8];
       const std::span<std::uint8_t> span(bytes, size_of(w.type));
-      // Values are kept as 32 bits; a signed object's (the mode) is its two's complement.
-      const Number value = write_value(w);
+      const Number value = startup_value(w);
       if (encode(w.type, value, span) != Codec::ok || !n.sdo.download(w.address, span, now)) {
         fail(n.who() + ": value " + std::to_string(w.value) + " does not fit " + to_string(w.address));
         return false;

@@ -9,7 +9,7 @@ deployment (`canopen_drive`, CSP, 10 ms) on the same bus. Each case is what a re
                consumer (0x1016, written by the master at start-up) sees the master gone and
                stops it as 0x6007 says (quick stop by default)
   boot_fault   the drive is in FAULT when the master starts: a fault reset (rising edge of bit 7)
-               clears it and the drive is enabled
+               clears it and the drive is enabled (and the deployment's SDO writes reached it)
   stuck_fault  the same, but the fault stays: a bounded number of resets, then FAULT naming the
                node and the error code (0x603F)
   stuck_enable the drive never leaves "switched on": FAULT naming that state
@@ -152,11 +152,13 @@ def kill9():
 
 
 def boot_fault():
-    c = Case("boot_fault", boot_fault=0x2310)
+    # With a deployment-level SDO write (the interpolation period, 10 ms as the task's).
+    c = Case("boot_fault", extra='      sdo: ["0x60C2:01:u8=10", "0x60C2:02:i8=-3"]\n', boot_fault=0x2310)
     c.start(duration=4)
     c.wait_for(lambda: enabled(c), 20, "the drive reset and enabled")
     code = c.finish()
     c.expect(code == 0, f"saw-rt exited {code}")
+    c.expect((c.drive._get(0x60C2, 1), c.drive._get(0x60C2, 2)) == (10, -3), "0x60C2 not written")
     c.expect(c.drive.fault_resets >= 1, "no fault reset edge")
     c.expect(re.search(r"^\s*axis: ENABLED", c.out, re.M), "the drive did not end ENABLED")
     print(f"ok boot_fault: {c.drive.fault_resets} fault reset edge(s), then enabled")

@@ -43,6 +43,9 @@ struct AxisConfig {
   TimeNs master_timeout = 300'000'000;
   AbortConnection abort_connection = AbortConnection::quick_stop;
   std::optional<DriveIdentity> identity;  // nullopt: not checked (no EDS given)
+  // The deployment's own SDO writes (0x60C2 interpolation period, vendor objects), written at
+  // start-up after 0x6007 and before 0x6060, in this order.
+  std::vector<SdoWrite> writes;
 };
 
 // The object that carries the mode's target: 0x607A (csp), 0x60FF (csv), 0x6071 (cst).
@@ -56,7 +59,8 @@ void check(const AxisConfig& a);
 // maps 0x606C, else the difference of positions; torque is the joint's effort (through the gear)
 // when 0x6077 is mapped, else 0.
 struct AxisFeedback {
-  bool valid = false;        // every TPDO arrived at least once
+  bool valid = false;        // every TPDO arrived at least once (since the start, or a re-configuration)
+  TimeNs watch_from = 0;     // not valid: stale counts from here (a re-configuration's end), or the start
   bool fresh = false;        // a TPDO arrived since the last cycle
   TimeNs last_received = 0;  // when the last TPDO arrived (the cycle's time)
   std::uint16_t statusword = 0;

@@ -8,6 +8,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
 #include "saw/canopen/cia402_controller.hpp"
+#include "saw/canopen/sdo.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/clock.hpp"
 
@@ -24,6 +25,14 @@ struct BusMasterConfig {
   std::uint8_t node = 127;
   TimeNs heartbeat_period = 100'000'000;
   cia402::ControllerConfig controller;
+};
+
+// A drive's configuration run again from the cycle (a drive that rebooted): the start-up's SDO
+// writes through its SDO channel, then NMT start and an operational heartbeat.
+struct Reconfiguration {
+  enum class State : std::uint8_t { idle, busy, done, failed } state = State::idle;
+  ObjectAddress object{};           // failed: the write refused (0x0000: no operational heartbeat)
+  SdoAbort abort = SdoAbort::none;  // ... and why
 };
 
 // Figures since construction; each only grows.
@@ -85,6 +94,10 @@ class BusMaster {
   // voltage, or quick stop) and the setpoints as set, one SYNC so that the drives take them at
   // once, then NMT enter pre-operational for every node. Sent before it returns.
   void shut_down(std::uint16_t controlword, TimeNs now) noexcept;
+  // Starts re-running drive i's configuration (a drive that rebooted), stepped by transmit();
+  // its feedback counts as not received until its TPDOs come again.
+  void reconfigure(std::size_t i, TimeNs now) noexcept;
+  const Reconfiguration& reconfiguration(std::size_t i) const noexcept;
   // The controller's answer of the last transmit().
   const cia402::ControllerOutput& control(std::size_t i) const noexcept;
 

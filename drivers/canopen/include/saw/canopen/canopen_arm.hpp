@@ -37,6 +37,7 @@ struct JointConfig {
   double following_error = 0;  // csp: |target − position| that faults; 0: not checked
   double offset = 0;           // the joint's position when the drive reads 0: joint = drive position + offset
   std::vector<PdoMapping> pdos;           // what the start-up configures; empty: default_pdo_mappings()
+  std::vector<SdoWrite> writes;           // the deployment's own SDO writes (AxisConfig::writes)
   std::optional<DriveIdentity> identity;  // from its EDS/DCF: checked at start-up
 };
 
@@ -134,6 +135,7 @@ class CanopenArm : public Device {
                   TimeNs age = 0) noexcept;
   Outcome check_emcy(std::size_t i, bool drive_fault) noexcept;
   Outcome check_enabling(std::size_t i) noexcept;
+  Outcome reconfigure_rebooted() noexcept;
   std::uint16_t error_code(std::size_t i) const noexcept;
   bool says() const noexcept;  // a new fault (not one already raised) is worth a log line
   void target_all(cia402::Target t) noexcept;
@@ -160,6 +162,7 @@ class CanopenArm : public Device {
   std::array<int, JointState::max_joints> emcy_tpdos_{};
   std::array<std::uint32_t, JointState::max_joints> boot_ups_seen_{};
   std::array<bool, JointState::max_joints> rebooted_{};
+  std::array<bool, JointState::max_joints> reconfiguring_{};  // this enable re-runs its configuration
 
   // State-table sources.
   JointState setpoint_js_{};

@@ -26,8 +26,11 @@ struct StartupWrite {
 // What the start-up writes to one drive, in order: its PDOs (configuration_writes() each),
 // the producer heartbeat time 0x1017 (ms), the consumer heartbeat time 0x1016:01 (the master's
 // node-ID and time, ms; when master_timeout is not 0), the abort connection option code 0x6007,
-// the mode of operation 0x6060.
+// the deployment's writes (AxisConfig::writes), the mode of operation 0x6060.
 std::vector<StartupWrite> startup_writes(const AxisConfig& axis);
+// A write's value as its type encodes it (values are kept as 32 bits; a signed object's is its
+// two's complement).
+Number startup_value(const SdoWrite& w) noexcept;
 
 struct StartupConfig {
   TimeNs boot_timeout = 2'000'000'000;         // from NMT reset communication to every boot-up
