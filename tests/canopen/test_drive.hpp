@@ -39,9 +39,9 @@ class TestDrive {
   // A fault condition (the drive goes to fault) with an EMCY of `code`; cleared, it may be reset.
   void raise_fault(std::uint16_t code) noexcept;
   void clear_fault() noexcept;
-  // A power cycle: the dictionary back to its defaults (PDOs, heartbeat, mode), the state
-  // machine to its start, and a boot-up message. Test code: it may allocate.
-  void reboot();
+  // A power cycle: what the master configures back to the defaults (PDOs not valid, no
+  // heartbeat, consumer or mode), the state machine to its start, and a boot-up message.
+  void reboot() noexcept;
   // An EMCY that is a warning: the drive goes on as it was.
   void warn(std::uint16_t code, std::uint8_t error_register) noexcept {
     (void)emcy_.raise(code, error_register);
@@ -82,7 +82,6 @@ class TestDrive {
   TestDriveConfig config_;
   RingPort& port_;
   LocalDictionary dictionary_;
-  LocalDictionary defaults_;
   std::unique_ptr<SdoServer> server_;
   NmtNode nmt_;
   cia402::Drive drive_;
