@@ -314,7 +314,16 @@ TEST(CanopenArm, AFaultThatPersistsEndsTheEnableInAFaultNamingItsErrorCode) {
   rig.drives[1].raise_fault(0x5000);
   rig.cycle(5);
   rig.state_command(StateCommand::enable);  // the fault condition is still there
-  rig.cycle_until([&] { return rig.arm->fault_reason() == FaultReason::drive_fault; }, 200);
+  bool said_enabled = false, said_busy = false;
+  rig.cycle_until(
+      [&] {
+        said_enabled = said_enabled || rig.state() == OperatingStateValue::enabled;
+        said_busy = said_busy || rig.arm->operating_state().is_busy;
+        return rig.arm->fault_reason() == FaultReason::drive_fault;
+      },
+      200);
+  EXPECT_FALSE(said_enabled) << "a client (the teleoperation) waits while the drives are walked up";
+  EXPECT_TRUE(said_busy);
   // Three reset edges (the default), then the fault with the drive's error code (0x603F).
   EXPECT_EQ(rig.arm->fault_reason(), FaultReason::drive_fault);
   EXPECT_EQ(rig.arm->fault().source_name(), "shoulder_pitch");
