@@ -54,7 +54,14 @@ TEST(CanopenStartup, TheDeploymentsOwnWritesComeBeforeTheMode) {
   axis.writes = {{cia402::object::interpolation_time_period_value, DataType::unsigned8, 10},
                  {cia402::object::interpolation_time_period_index, DataType::integer8, 0xFD}};
   axis.master_timeout = 0;  // a drive not told to watch the master: no 0x1016 write
+  axis.abort_connection = AbortConnection::none;
   const auto planned = startup_writes(axis);
+  const auto abort_option = std::find_if(planned.begin(), planned.end(), [](const StartupWrite& w) {
+    return w.write.address == cia402::object::abort_connection_option_code;
+  });
+  ASSERT_NE(abort_option, planned.end());
+  EXPECT_TRUE(abort_option->optional) << "none: a drive without 0x6007 is fine";
+  EXPECT_EQ(abort_option->write.value, 0u);
   ASSERT_GE(planned.size(), 4u);
   EXPECT_EQ(planned[planned.size() - 3].write.address, cia402::object::interpolation_time_period_value);
   EXPECT_EQ(planned[planned.size() - 2].write.address, cia402::object::interpolation_time_period_index);

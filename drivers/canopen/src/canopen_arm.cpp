@@ -168,6 +168,10 @@ void CanopenArm::provide_interfaces() {
 }
 
 void CanopenArm::open() {
+  if (config_.master_heartbeat_timeout == 0)
+    saw::log(LogLevel::warning, name().c_str(),
+             "master_heartbeat.timeout is 0: the drives do not watch this master; killed, it leaves them as "
+             "they are");
   StartupSequence sequence(bus_, std::vector<AxisConfig>(axes_of(config_)), config_.startup);
   run_startup(sequence, config_.startup_pause);
 }

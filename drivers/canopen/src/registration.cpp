@@ -192,9 +192,10 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
   c.master_node = static_cast<std::uint8_t>(master.get_in_range("node", 1, 127, 127));
   c.master_heartbeat_period = duration(master, "period", 100ms, 1ms, 65535ms);
   c.master_heartbeat_timeout =
-      duration(master, "timeout", 3 * std::chrono::nanoseconds(c.master_heartbeat_period), 1ms, 65535ms);
-  if (c.master_heartbeat_timeout <= c.master_heartbeat_period)
-    master.fail_at("timeout", "must be above the master's heartbeat period");
+      duration(master, "timeout", 3 * std::chrono::nanoseconds(c.master_heartbeat_period), 0ms, 65535ms);
+  // 0: the drives are not told to watch the master (one without 0x1016); said at start-up.
+  if (c.master_heartbeat_timeout != 0 && c.master_heartbeat_timeout <= c.master_heartbeat_period)
+    master.fail_at("timeout", "must be above the master's heartbeat period (or 0: not watched)");
   c.abort_connection = p.get_enum<AbortConnection>("abort_connection",
                                                    {{"none", AbortConnection::none},
                                                     {"fault", AbortConnection::fault},

@@ -46,9 +46,10 @@ std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
     out.push_back(
         {{{0x1016, 1}, DataType::unsigned32, std::uint32_t{axis.master_node} << 16 | consumer_ms}, false});
   }
+  // "none" asks nothing of a drive: one without 0x6007 does nothing anyway.
   out.push_back({{cia402::object::abort_connection_option_code, DataType::integer16,
                   static_cast<std::uint32_t>(static_cast<std::uint16_t>(axis.abort_connection))},
-                 false});
+                 axis.abort_connection == AbortConnection::none});
   for (const SdoWrite& w : axis.writes) out.push_back({w, false});
   out.push_back({{cia402::object::modes_of_operation, DataType::integer8,
                   static_cast<std::uint32_t>(static_cast<std::uint8_t>(axis.mode))},
