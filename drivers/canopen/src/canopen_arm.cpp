@@ -120,8 +120,9 @@ DeviceConfig contract_of(const CanopenArmConfig& c) {
   d.command_timeout = c.command_timeout;
   d.fault_on_command_timeout = c.on_command_timeout == CommandTimeoutAction::fault;
   d.start_enabled = c.start_enabled;
-  // The drives' own transitions time out first (cia402::Progress::timeout, with the statusword).
-  d.enable_timeout = 2 * c.transition_timeout;
+  // The enable's own limits say more and come first: each transition (cia402::Progress::timeout,
+  // with the state), the fault resets, the mode display (transition_timeout after switched on).
+  d.enable_timeout = 4 * c.transition_timeout;
   for (const JointConfig& j : c.joints)
     d.joints.push_back({j.name, j.min, j.max, j.max_velocity, j.max_torque});
   return d;
