@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
+#include <cstring>
 
 namespace saw {
 
@@ -55,7 +56,15 @@ std::string format_log_record(const LogRecord& r) {
   std::string out = head;
   int next = 0;
   for (const char* p = r.format; *p != '\0'; ++p) {
-    if (p[0] == '{' && p[1] == '}' && next < LogRecord::max_args) {
+    // "{:x}": an unsigned number in hex, at least 4 digits (CANopen codes: 0x2310).
+    if (std::strncmp(p, "{:x}", 4) == 0 && next < LogRecord::max_args) {
+      const LogArg& a = r.args[next++];
+      char buf[32];
+      const std::uint64_t v = a.kind == LogArg::Kind::i64 ? static_cast<std::uint64_t>(a.i) : a.u;
+      std::snprintf(buf, sizeof buf, "0x%04" PRIX64, v);
+      out += buf;
+      p += 3;
+    } else if (p[0] == '{' && p[1] == '}' && next < LogRecord::max_args) {
       const LogArg& a = r.args[next++];
       char buf[64];
       switch (a.kind) {

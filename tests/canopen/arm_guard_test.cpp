@@ -1,5 +1,6 @@
 // A CanopenArm's cycle with three drives (bus master, CiA 402 controllers, KDL, checks, faults
-// and their recovery, the watchdog, runtime SDO) allocates, locks, waits and prints nothing:
+// and their recovery, the watchdog, runtime SDO, a warning EMCY, a drive leaving operational, the
+// master's heartbeat, a drive that rebooted configured again) allocates, locks, waits and prints nothing:
 // checked by the RT guard on every cycle, the in-process drives included.
 #include <gtest/gtest.h>
 
@@ -27,7 +28,7 @@ TEST(RtGuard, CanopenArmCycleWithThreeDrivesIsRtClean) {
   ArmRig rig(arm_config(cia402::cst), soft);  // set-up and start-up: not RT
   SdoQueue& sdo = rig.arm->master().sdo_queue();
 
-  constexpr int cycles = 3000;
+  constexpr int cycles = 4000;
   int enabled_cycles = 0, replies = 0, ok_replies = 0;
   // Each fault as it came: its cycle and reason (the array is written in the cycle, read after).
   std::array<std::pair<int, FaultReason>, 8> faults{};
@@ -49,6 +50,12 @@ TEST(RtGuard, CanopenArmCycleWithThreeDrivesIsRtClean) {
       if (i == 1400) rig.drives[1].set_heartbeat_silent(false);
       if (i == 1800) rig.network.state = saw::can::BusState::bus_off;
       if (i == 1805) rig.network.state = saw::can::BusState::error_active;
+      if (i == 3000) rig.drives[0].warn(0x4210, 0x09);  // a warning: no fault
+      if (i == 3100) rig.drives[1].set_nmt(NmtCommand::enter_pre_operational);
+      if (i == 3200) rig.drives[1].set_nmt(NmtCommand::start);
+      if (i == 3300) rig.state_command(StateCommand::enable);
+      if (i == 3500) rig.drives[2].reboot();  // configured again by the next enable, from the cycle
+      if (i == 3600) rig.state_command(StateCommand::enable);
       if (i % 100 == 50) {
         SdoRequest q;
         q.node = static_cast<std::uint8_t>(1 + (i / 100) % 3);
@@ -70,12 +77,20 @@ TEST(RtGuard, CanopenArmCycleWithThreeDrivesIsRtClean) {
   std::string history;
   for (std::uint32_t k = 0; k < seen; ++k)
     history += std::to_string(faults[k].first) + ": " + to_string(faults[k].second) + "; ";
-  EXPECT_EQ(rig.arm->status().faults, 3u) << "the drive fault, the lost heartbeat, bus-off: " << history;
+  EXPECT_EQ(rig.arm->status().faults, 5u)
+      << "the drive fault, the lost heartbeat, bus-off, the drive leaving operational, the reboot: "
+      << history;
+  EXPECT_EQ(faults[3].second, FaultReason::nmt_left) << history;
+  EXPECT_EQ(faults[4].second, FaultReason::node_rebooted) << history;
+  EXPECT_EQ(rig.drives[2].nmt_state(), saw::canopen::NmtState::operational);
+  EXPECT_EQ(rig.arm->status().warnings, 1u);
+  EXPECT_EQ(rig.arm->status().last_warning, 0x4210u);
+  EXPECT_GT(rig.arm->master().counters().heartbeats, 30u) << "the master's own, every 100 ms";
   EXPECT_GT(enabled_cycles, 2500);
   EXPECT_EQ(rig.arm->status().watchdog_trips, 1u);
   EXPECT_EQ(rig.arm->status().refused.not_finite, 1u);
-  EXPECT_EQ(replies, 30);
-  EXPECT_GE(ok_replies, 27) << "(a transfer may fail while the bus is off)";
+  EXPECT_EQ(replies, cycles / 100);
+  EXPECT_GE(ok_replies, cycles / 100 - 3) << "(a transfer may fail while the bus is off)";
   EXPECT_EQ(rig.arm->status().syncs, static_cast<std::uint64_t>(cycles));
   EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
   EXPECT_RT_CLEAN(counts);

@@ -2,6 +2,7 @@
 // refused commands, the watchdog, and every fault with its reason and the recovery from it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <thread>
 
@@ -305,17 +306,74 @@ TEST(CanopenArm, EnableRecoversAfterTheFaultIsReset) {
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
 }
 
-TEST(CanopenArm, AFaultThatPersistsMakesTheEnableTimeOut) {
+TEST(CanopenArm, AFaultThatPersistsEndsTheEnableInAFaultNamingItsErrorCode) {
   CanopenArmConfig c = arm_config(cia402::csp);
-  c.transition_timeout = 50 * ms;
+  c.transition_timeout = 500 * ms;
   ArmRig rig(c);
   rig.enable();
   rig.drives[1].raise_fault(0x5000);
   rig.cycle(5);
   rig.state_command(StateCommand::enable);  // the fault condition is still there
-  rig.cycle_until([&] { return rig.arm->fault_reason() == FaultReason::enable_timeout; }, 200);
-  EXPECT_EQ(rig.arm->fault_reason(), FaultReason::enable_timeout);
+  bool said_enabled = false, said_busy = false;
+  rig.cycle_until(
+      [&] {
+        said_enabled = said_enabled || rig.state() == OperatingStateValue::enabled;
+        said_busy = said_busy || rig.arm->operating_state().is_busy;
+        return rig.arm->fault_reason() == FaultReason::drive_fault;
+      },
+      200);
+  EXPECT_FALSE(said_enabled) << "a client (the teleoperation) waits while the drives are walked up";
+  EXPECT_TRUE(said_busy);
+  // Three reset edges (the default), then the fault with the drive's error code (0x603F).
+  EXPECT_EQ(rig.arm->fault_reason(), FaultReason::drive_fault);
   EXPECT_EQ(rig.arm->fault().source_name(), "shoulder_pitch");
+  EXPECT_EQ(rig.arm->fault().detail, 0x5000u);
+  EXPECT_EQ(rig.arm->status().fault_node, rig.arm->arm_config().joints[1].node);
+  EXPECT_EQ(rig.arm->master().control(1).fault_resets, 3);
+}
+
+TEST(CanopenArm, ADriveThatRebootedFaultsAndTheNextEnableConfiguresItAgain) {
+  ArmRig rig(arm_config(cia402::csp));
+  rig.enable();
+  ASSERT_EQ(rig.state(), OperatingStateValue::enabled);
+  rig.drives[1].reboot();  // its PDOs, heartbeat and mode are gone
+  rig.cycle_until([&] { return rig.state() == OperatingStateValue::fault; }, 50);
+  EXPECT_EQ(rig.arm->fault_reason(), FaultReason::node_rebooted);
+  EXPECT_EQ(rig.arm->fault().source_name(), "shoulder_pitch");
+  EXPECT_EQ(rig.drives[1].nmt_state(), NmtState::pre_operational);
+  rig.cycle(20);
+  EXPECT_EQ(rig.state(), OperatingStateValue::fault) << "it stays faulted until an enable";
+
+  const std::size_t before = rig.drives[1].writes().size();
+  rig.state_command(StateCommand::enable);
+  rig.cycle_until([&] { return rig.state() == OperatingStateValue::enabled; }, 2000);
+  EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
+  EXPECT_EQ(rig.drives[1].nmt_state(), NmtState::operational);
+  EXPECT_EQ(rig.drives[1].state(), cia402::State::operation_enabled);
+  // The start-up's writes again: the PDOs, 0x1017, 0x1016, 0x6007, 0x6060.
+  const auto& w = rig.drives[1].writes();
+  const auto written = [&](ObjectAddress a) {
+    return std::any_of(w.begin() + static_cast<std::ptrdiff_t>(before), w.end(),
+                       [&](const TestDrive::Write& x) { return x.address == a; });
+  };
+  EXPECT_TRUE(written({0x1600, 1}));
+  EXPECT_TRUE(written({0x1017, 0}));
+  EXPECT_TRUE(written({0x1016, 1}));
+  EXPECT_TRUE(written(cia402::object::modes_of_operation));
+  rig.cycle(100);
+  EXPECT_EQ(rig.state(), OperatingStateValue::enabled) << "its TPDOs and heartbeats came back";
+}
+
+TEST(CanopenArm, AnEmcyWhoseDriveStaysOutOfFaultIsAWarning) {
+  ArmRig rig(arm_config(cia402::csp));
+  rig.enable();
+  rig.drives[0].warn(0x4210, 0x09);
+  rig.cycle(20);
+  EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
+  EXPECT_EQ(rig.arm->status().warnings, 1u);
+  EXPECT_EQ(rig.arm->status().last_warning, 0x4210u);
+  EXPECT_EQ(rig.arm->status().last_warning_register, 0x09u);
+  EXPECT_EQ(rig.arm->status().last_warning_node, rig.arm->arm_config().joints[0].node);
 }
 
 TEST(CanopenArm, JointLimitsAndFollowingErrorFault) {

@@ -2,6 +2,7 @@
 // enabled, CSP following, the order of a cycle's frames, heartbeat and EMCY, runtime SDO.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "rig.hpp"
@@ -48,13 +49,43 @@ struct MasterRig {
   TimeNs now = 0;
 };
 
+TEST(CanopenStartup, TheDeploymentsOwnWritesComeBeforeTheMode) {
+  AxisConfig axis = test_axis(3, cia402::csp);
+  axis.writes = {{cia402::object::interpolation_time_period_value, DataType::unsigned8, 10},
+                 {cia402::object::interpolation_time_period_index, DataType::integer8, 0xFD}};
+  axis.master_timeout = 0;  // a drive not told to watch the master: no 0x1016 write
+  axis.abort_connection = AbortConnection::none;
+  const auto planned = startup_writes(axis);
+  const auto abort_option = std::find_if(planned.begin(), planned.end(), [](const StartupWrite& w) {
+    return w.write.address == cia402::object::abort_connection_option_code;
+  });
+  ASSERT_NE(abort_option, planned.end());
+  EXPECT_TRUE(abort_option->optional) << "none: a drive without 0x6007 is fine";
+  EXPECT_EQ(abort_option->write.value, 0u);
+  ASSERT_GE(planned.size(), 4u);
+  EXPECT_EQ(planned[planned.size() - 3].write.address, cia402::object::interpolation_time_period_value);
+  EXPECT_EQ(planned[planned.size() - 2].write.address, cia402::object::interpolation_time_period_index);
+  EXPECT_EQ(std::get<std::int64_t>(startup_value(planned[planned.size() - 2].write)), -3);
+  EXPECT_EQ(planned.back().write.address, cia402::object::modes_of_operation);
+  EXPECT_TRUE(std::none_of(planned.begin(), planned.end(), [](const StartupWrite& w) {
+    return w.write.address == ObjectAddress{0x1016, 1};
+  }));
+}
+
 TEST(CanopenStartup, WritesThePdosTheHeartbeatTimeAndTheMode) {
   const AxisConfig axis = test_axis(3, cia402::cst);
   const auto planned = startup_writes(axis);
   ASSERT_GT(planned.size(), 20u);
-  // The PDO writes come first, then 0x1017 and 0x6060.
-  EXPECT_EQ(planned[planned.size() - 2].write.address, (ObjectAddress{0x1017, 0}));
-  EXPECT_EQ(planned[planned.size() - 2].write.value, 10u);
+  // The PDO writes come first, then 0x1017, 0x1016:01 (the master's node and heartbeat time, so
+  // that the drive notices a master that is gone), 0x6007 (what it then does) and 0x6060.
+  EXPECT_EQ(planned[planned.size() - 4].write.address, (ObjectAddress{0x1017, 0}));
+  EXPECT_EQ(planned[planned.size() - 4].write.value, 10u);
+  EXPECT_EQ(planned[planned.size() - 3].write.address, (ObjectAddress{0x1016, 1}));
+  EXPECT_EQ(planned[planned.size() - 3].write.value, (127u << 16) | 300u) << "node 127, 300 ms";
+  EXPECT_EQ(planned[planned.size() - 3].write.type, DataType::unsigned32);
+  EXPECT_EQ(planned[planned.size() - 2].write.address, cia402::object::abort_connection_option_code);
+  EXPECT_EQ(planned[planned.size() - 2].write.value, 3u) << "quick stop";
+  EXPECT_EQ(planned[planned.size() - 2].write.type, DataType::integer16);
   EXPECT_EQ(planned.back().write.address, cia402::object::modes_of_operation);
   EXPECT_EQ(planned.back().write.value, 10u) << "cyclic synchronous torque";
   EXPECT_EQ(planned[0].write.address, (ObjectAddress{0x1400, 1}));

@@ -129,6 +129,24 @@ TEST(CanopenDeployment, ErrorsNameFileLineAndKey) {
   EXPECT_HAS(error_of("task: {period: 2ms}", "task: {period: 2ms}\n    params_x: 1"), "params_x");
   EXPECT_HAS(error_of("rated_torque: 1.2", "rated_torque: -1"),
              "key 'components[1].params.rated_torque': -1.000000 is out of range");
+  // The master's heartbeat, what the drives do without it, the deployment's own SDO writes.
+  EXPECT_HAS(
+      error_of("node: 9", "node: 9\n      master_heartbeat: {period: 100ms, timeout: 50ms}"),
+      "key 'components[1].params.master_heartbeat.timeout': must be above the master's heartbeat period");
+  EXPECT_HAS(error_of("node: 9", "node: 9\n      master_heartbeat: {node: 0}"),
+             "key 'components[1].params.master_heartbeat.node'");
+  EXPECT_HAS(error_of("node: 9", "node: 9\n      master_heartbeat: {node: 9}"),
+             "drive 'rail' (node 9): the master's node-ID is the drive's");
+  EXPECT_HAS(
+      error_of("node: 9", "node: 9\n      abort_connection: stop"),
+      "key 'components[1].params.abort_connection': 'stop' is not one of: none, fault, disable_voltage, "
+      "quick_stop");
+  EXPECT_HAS(error_of("node: 9", "node: 9\n      sdo: [\"0x60C2:01:u8=300\"]"),
+             "key 'components[1].params.sdo': '0x60C2:01:u8=300': the value does not fit");
+  EXPECT_HAS(error_of("node: 9", "node: 9\n      sdo: [\"0x60C2:01:u8\"]"),
+             "key 'components[1].params.sdo': '0x60C2:01:u8' is not <object>=<value>");
+  EXPECT_HAS(error_of("node: 9", "node: 9\n      sdo: [\"0x60C2:01:u8=1x\"]"),
+             "'0x60C2:01:u8=1x': '1x' is not a number");
 }
 
 TEST(CanopenDeployment, AnEdsGivesThePdos) {

@@ -6,6 +6,7 @@
 
 #include "saw/canopen/cia402.hpp"
 #include "saw/canopen/sync.hpp"
+#include "saw/rt_context.hpp"
 
 namespace saw::canopen::test {
 namespace {
@@ -41,7 +42,11 @@ TestDrive::TestDrive(RingNetwork& network, TestDriveConfig config)
   auto& d = dictionary_;
   d.add_value({0x1000, 0}, "device type", DataType::unsigned32, Access::ro, 0x00020192u);
   d.add_value({0x1001, 0}, "error register", DataType::unsigned8, Access::ro, 0u);
+  d.add_value({0x1016, 0}, "highest sub-index", DataType::unsigned8, Access::const_, 1u);
+  d.add_value({0x1016, 1}, "consumer heartbeat time", DataType::unsigned32, Access::rw, 0u);
   d.add_value({0x1017, 0}, "producer heartbeat time", DataType::unsigned16, Access::rw, 0u);
+  d.add_value(object::abort_connection_option_code, "abort connection option code", DataType::integer16,
+              Access::rw, 1);
   d.add_value(object::error_code, "error code", DataType::unsigned16, Access::ro, 0u);
   d.add_value(object::controlword, "controlword", DataType::unsigned16, Access::rww, 0u);
   d.add_value(object::statusword, "statusword", DataType::unsigned16, Access::rwr, 0u);
@@ -73,6 +78,29 @@ TestDrive::TestDrive(RingNetwork& network, TestDriveConfig config)
     return SdoAbort::none;
   });
   server_ = std::make_unique<SdoServer>(SdoServerConfig{SdoChannel::of_node(config.node)}, dictionary_);
+  nmt_.boot();
+}
+
+void TestDrive::reboot() noexcept {
+  for (std::uint16_t n = 0; n < 4; ++n)
+    for (const bool rx : {true, false}) {
+      const auto kind = rx ? PdoKind::rpdo : PdoKind::tpdo;
+      const std::uint32_t cob = default_pdo_cob_id(kind, static_cast<std::uint16_t>(n + 1), config_.node);
+      (void)dictionary_.set({static_cast<std::uint16_t>((rx ? 0x1400 : 0x1800) + n), 1}, cob | pdo_invalid);
+      (void)dictionary_.set({static_cast<std::uint16_t>((rx ? 0x1600 : 0x1A00) + n), 0}, std::uint8_t{0});
+    }
+  (void)dictionary_.set({0x1017, 0}, std::uint16_t{0});
+  (void)dictionary_.set({0x1016, 1}, std::uint32_t{0});
+  (void)dictionary_.set(object::modes_of_operation, std::int8_t{0});
+  (void)dictionary_.set(object::modes_of_operation_display, std::int8_t{0});
+  drive_ = cia402::Drive{};
+  fault_ = false;
+  velocity_ = 0;
+  rpdos_.clear();
+  tpdos_.clear();
+  rpdo_objects_.clear();
+  tpdo_objects_.clear();
+  nmt_ = NmtNode(config_.node);
   nmt_.boot();
 }
 
@@ -200,7 +228,14 @@ void TestDrive::step(TimeNs now) noexcept {
           break;
       }
       if (parse_nmt(f)) {
-        if (nmt_.state() == NmtState::operational && rpdos_.empty() && tpdos_.empty()) build_pdos();
+        if (nmt_.state() == NmtState::operational && rpdos_.empty() && tpdos_.empty()) {
+          // The drive's own set-up at NMT start (it allocates): another device's, not the master's
+          // RT path, also when the master's cycle steps it (a drive configured again mid-run).
+          const bool rt = saw::detail::in_rt_context;
+          saw::detail::in_rt_context = false;
+          build_pdos();
+          saw::detail::in_rt_context = rt;
+        }
         continue;
       }
       if (nmt_.state() == NmtState::stopped) continue;

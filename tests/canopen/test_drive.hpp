@@ -39,6 +39,15 @@ class TestDrive {
   // A fault condition (the drive goes to fault) with an EMCY of `code`; cleared, it may be reset.
   void raise_fault(std::uint16_t code) noexcept;
   void clear_fault() noexcept;
+  // A power cycle: what the master configures back to the defaults (PDOs not valid, no
+  // heartbeat, consumer or mode), the state machine to its start, and a boot-up message.
+  void reboot() noexcept;
+  // An EMCY that is a warning: the drive goes on as it was.
+  void warn(std::uint16_t code, std::uint8_t error_register) noexcept {
+    (void)emcy_.raise(code, error_register);
+  }
+  // The drive changes its own NMT state (its error behaviour, a local command): its heartbeat says so.
+  void set_nmt(NmtCommand command) noexcept { (void)nmt_.on_frame(nmt_frame(command, config_.node)); }
   // A silent drive sends nothing at all (unplugged); it still listens.
   void set_silent(bool silent) noexcept { silent_ = silent; }
   // Only its heartbeat stops (its PDOs go on).

@@ -131,6 +131,10 @@ TEST(Log, FormatsArgumentsAndCountsDrops) {
   ASSERT_TRUE(saw::log_ring().pop(r));
   const auto s = saw::format_log_record(r);
   EXPECT_NE(s.find("warning src: a -3 b 4 c 2.5 d text"), std::string::npos) << s;
+  ASSERT_TRUE(saw::log(saw::LogLevel::info, "src", "code {:x}, {:x} and {}", 0x2310u, 0x4u, 7));
+  ASSERT_TRUE(saw::log_ring().pop(r));
+  const auto hex = saw::format_log_record(r);
+  EXPECT_NE(hex.find("info src: code 0x2310, 0x0004 and 7"), std::string::npos) << hex;
   const auto dropped = saw::log_ring().dropped();
   std::size_t accepted = 0;
   for (std::size_t i = 0; i < saw::LogRing::capacity + 10; ++i)

@@ -33,6 +33,10 @@ const char* to_string(FaultReason r) noexcept {
       return "following error";
     case FaultReason::enable_timeout:
       return "enable timed out";
+    case FaultReason::mode_mismatch:
+      return "mode of operation not shown";
+    case FaultReason::nmt_left:
+      return "left NMT operational";
   }
   return "unknown";
 }
@@ -60,22 +64,110 @@ Outcome CanopenArm::read() {
   return check_health();
 }
 
+// Nothing is decided on a statusword not yet received (0 reads as "not ready to switch on"):
+// every drive's TPDOs first. Then fault resets (a bounded number of edges) and switched on;
+// operation enabled only once every drive shows the mode asked for in 0x6061.
 Outcome CanopenArm::enable() {
   const TimeNs t = now();
+  if (const Outcome o = reconfigure_rebooted(); !o.is_done()) return o;
+  for (std::size_t i = 0; i < n_; ++i)
+    if (!master_->feedback(i).valid) return Outcome::pending();
   if (!enable_sent_) {
     reason_ = FaultReason::none;
-    for (std::size_t i = 0; i < n_; ++i) master_->request_fault_reset(i, t);
-    target_all(cia402::Target::operation_enabled);
+    for (std::size_t i = 0; i < n_; ++i) {
+      master_->request_fault_reset(i, t);
+      emcy_pending_[i] = false;  // an EMCY before the reset is about the fault being reset
+    }
+    target_all(cia402::Target::switched_on);
     enable_sent_ = true;
+    operation_sent_ = false;
+    mode_wait_ = -1;
+    return Outcome::pending();
+  }
+  bool switched_on = true, modes = true;
+  for (std::size_t i = 0; i < n_; ++i) {
+    if (const Outcome o = check_enabling(i); o.is_failed()) return o;
+    const AxisFeedback& f = master_->feedback(i);
+    switched_on = switched_on && master_->control(i).progress == cia402::Progress::reached;
+    modes = modes && (!f.has_mode_display || f.mode_display == static_cast<std::int8_t>(config_.mode));
+  }
+  if (!operation_sent_) {
+    if (!switched_on) return Outcome::pending();
+    if (!modes) {
+      if (mode_wait_ < 0) mode_wait_ = t;
+      if (t - mode_wait_ <= config_.transition_timeout) return Outcome::pending();
+      for (std::size_t i = 0; i < n_; ++i) {
+        const AxisFeedback& f = master_->feedback(i);
+        if (!f.has_mode_display || f.mode_display == static_cast<std::int8_t>(config_.mode)) continue;
+        saw::log(LogLevel::error, name().c_str(),
+                 "{} (node {}): 0x6061 shows mode {}, 0x6060 asked for mode {} ({}): not enabled",
+                 config_.joints[i].name.c_str(), unsigned{config_.joints[i].node}, int{f.mode_display},
+                 static_cast<int>(config_.mode), cia402::to_string(config_.mode).data());
+        const auto detail = static_cast<std::uint32_t>(static_cast<std::uint8_t>(config_.mode)) << 8 |
+                            static_cast<std::uint8_t>(f.mode_display);
+        return failure(FaultReason::mode_mismatch, FaultCode::device_error, i, detail);
+      }
+    }
+    target_all(cia402::Target::operation_enabled);
+    operation_sent_ = true;
     return Outcome::pending();
   }
   for (std::size_t i = 0; i < n_; ++i)
-    if (master_->control(i).progress == cia402::Progress::timeout)
-      return failure(FaultReason::enable_timeout, FaultCode::device_error, i,
-                     master_->feedback(i).statusword);
-  for (std::size_t i = 0; i < n_; ++i)
     if (master_->feedback(i).state != cia402::State::operation_enabled) return Outcome::pending();
-  enable_sent_ = false;
+  enable_sent_ = operation_sent_ = false;
+  return Outcome::done();
+}
+
+// A drive that rebooted lost its PDO maps, heartbeat and mode: the enable runs its configuration
+// again (the start-up's writes, NMT start) before anything else.
+Outcome CanopenArm::reconfigure_rebooted() noexcept {
+  bool busy = false;
+  for (std::size_t i = 0; i < n_; ++i) {
+    if (!rebooted_[i]) continue;
+    const JointConfig& j = config_.joints[i];
+    if (!reconfiguring_[i]) {
+      master_->reconfigure(i, now());
+      reconfiguring_[i] = true;
+    }
+    const Reconfiguration& r = master_->reconfiguration(i);
+    switch (r.state) {
+      case Reconfiguration::State::idle:
+      case Reconfiguration::State::busy:
+        busy = true;
+        break;
+      case Reconfiguration::State::done:
+        rebooted_[i] = reconfiguring_[i] = false;
+        saw::log(LogLevel::info, name().c_str(), "{} (node {}) configured again after its reboot",
+                 j.name.c_str(), unsigned{j.node});
+        break;
+      case Reconfiguration::State::failed:
+        reconfiguring_[i] = false;  // the next enable tries again
+        saw::log(LogLevel::error, name().c_str(), "{} (node {}): configuring it again failed at {:x}:{}: {}",
+                 j.name.c_str(), unsigned{j.node}, unsigned{r.object.index}, unsigned{r.object.subindex},
+                 r.object.index == 0 ? "no operational heartbeat" : to_string(r.abort).data());
+        return failure(FaultReason::node_rebooted, FaultCode::device_lost, i,
+                       static_cast<std::uint32_t>(r.abort));
+    }
+  }
+  return busy ? Outcome::pending() : Outcome::done();
+}
+
+// One drive during an enable: a fault its resets did not clear, or a transition that never came.
+Outcome CanopenArm::check_enabling(std::size_t i) noexcept {
+  const cia402::ControllerOutput& c = master_->control(i);
+  const JointConfig& j = config_.joints[i];
+  if (c.progress == cia402::Progress::fault) {
+    const std::uint16_t code = error_code(i);
+    saw::log(LogLevel::error, name().c_str(),
+             "{} (node {}) stays in fault after {} fault resets: error code {:x} ({})", j.name.c_str(),
+             unsigned{j.node}, c.fault_resets, unsigned{code}, emcy_name(code).data());
+    return failure(FaultReason::drive_fault, FaultCode::device_error, i, code);
+  }
+  if (c.progress == cia402::Progress::timeout) {
+    saw::log(LogLevel::error, name().c_str(), "{} (node {}) stuck in {} for {} ms: not enabled",
+             j.name.c_str(), unsigned{j.node}, cia402::to_string(c.state).data(), c.in_state_for / 1'000'000);
+    return failure(FaultReason::enable_timeout, FaultCode::device_error, i, master_->feedback(i).statusword);
+  }
   return Outcome::done();
 }
 
@@ -106,10 +198,59 @@ void CanopenArm::read_feedback() noexcept {
 Outcome CanopenArm::failure(FaultReason reason, FaultCode code, std::size_t axis, std::uint32_t detail,
                             TimeNs age) noexcept {
   // The base keeps the first cause of a fault: so does the reason.
-  if (operating_state().state != OperatingStateValue::fault) reason_ = reason;
+  if (operating_state().state != OperatingStateValue::fault) {
+    reason_ = reason;
+    status_.fault_node = axis < n_ ? config_.joints[axis].node : 0;
+  }
   const std::string_view source =
       axis < n_ ? std::string_view(config_.joints[axis].name) : std::string_view("bus");
   return Outcome::failed(code, to_string(reason), source, detail, age);
+}
+
+bool CanopenArm::says() const noexcept { return operating_state().state != OperatingStateValue::fault; }
+
+// 0x603F when a TPDO maps it and it says something, else the newest EMCY's code.
+std::uint16_t CanopenArm::error_code(std::size_t i) const noexcept {
+  const AxisFeedback& f = master_->feedback(i);
+  return f.has_error_code && f.error_code != 0 ? f.error_code : master_->health(i).last_emcy;
+}
+
+// An EMCY is an error when the drive's statusword shows fault (CiA 402: a drive that faults
+// says so there) and a warning when the drive's next TPDOs do not: a temperature warning, a CAN
+// error-passive or overrun of a drive that goes on operating is logged and shown, not a FAULT.
+Outcome CanopenArm::check_emcy(std::size_t i, bool drive_fault) noexcept {
+  const AxisHealth& h = master_->health(i);
+  const AxisFeedback& f = master_->feedback(i);
+  const JointConfig& j = config_.joints[i];
+  if (h.emcy_count != emcy_seen_[i]) {
+    emcy_seen_[i] = h.emcy_count;
+    emcy_pending_[i] = true;
+    emcy_tpdos_[i] = 0;
+  }
+  if (!emcy_pending_[i] || enabling()) return Outcome::done();  // an enable resets faults
+  if (drive_fault) {
+    emcy_pending_[i] = false;
+    if (says())
+      saw::log(LogLevel::error, name().c_str(),
+               "{} (node {}): EMCY {:x} ({}), error register {:x}, the drive in {}", j.name.c_str(),
+               unsigned{j.node}, unsigned{h.last_emcy}, emcy_name(h.last_emcy).data(),
+               unsigned{h.error_register}, cia402::to_string(f.state).data());
+    return failure(FaultReason::emcy, FaultCode::device_error, i, h.last_emcy);
+  }
+  // The statusword of the SYNC after the EMCY, and one more: a drive's fault may lag its EMCY.
+  constexpr int settle_tpdos = 3;
+  if (f.fresh && ++emcy_tpdos_[i] >= settle_tpdos) {
+    emcy_pending_[i] = false;
+    ++status_.warnings;
+    status_.last_warning = h.last_emcy;
+    status_.last_warning_register = h.error_register;
+    status_.last_warning_node = j.node;
+    saw::log(LogLevel::warning, name().c_str(),
+             "{} (node {}): EMCY {:x} ({}), error register {:x}: a warning, the drive stays {}",
+             j.name.c_str(), unsigned{j.node}, unsigned{h.last_emcy}, emcy_name(h.last_emcy).data(),
+             unsigned{h.error_register}, cia402::to_string(f.state).data());
+  }
+  return Outcome::done();
 }
 
 Outcome CanopenArm::check_axis(std::size_t i) noexcept {
@@ -119,15 +260,19 @@ Outcome CanopenArm::check_axis(std::size_t i) noexcept {
   const TimeNs t = now();
   if (h.boot_ups != boot_ups_seen_[i]) {
     boot_ups_seen_[i] = h.boot_ups;
-    rebooted_[i] = true;  // its PDOs and mode are gone: only a new start-up brings them back
+    rebooted_[i] = true;  // its PDOs and mode are gone: the next enable configures it again
+    reconfiguring_[i] = false;
   }
-  if (h.emcy_count != emcy_seen_[i]) {
-    emcy_seen_[i] = h.emcy_count;
-    saw::log(LogLevel::error, name().c_str(), "{}: EMCY {} ({})", j.name.c_str(), unsigned{h.last_emcy},
-             emcy_name(h.last_emcy).data());
-    return failure(FaultReason::emcy, FaultCode::device_error, i, h.last_emcy);
+  const bool drive_fault = f.state == cia402::State::fault || f.state == cia402::State::fault_reaction_active;
+  if (const Outcome o = check_emcy(i, drive_fault); o.is_failed()) return o;
+  if (rebooted_[i]) {
+    if (enabling()) return Outcome::done();  // the enable configures it again (its checks after)
+    if (says())
+      saw::log(LogLevel::error, name().c_str(),
+               "{} (node {}) rebooted (boot-up seen): its configuration is gone", j.name.c_str(),
+               unsigned{j.node});
+    return failure(FaultReason::node_rebooted, FaultCode::device_lost, i);
   }
-  if (rebooted_[i]) return failure(FaultReason::node_rebooted, FaultCode::device_lost, i);
   if (h.heartbeat_lost) {
     // A drive that went silent altogether faults first for its TPDOs (they come every cycle);
     // once its heartbeat is overdue too, the fault says what is known now: the node is gone.
@@ -139,13 +284,24 @@ Outcome CanopenArm::check_axis(std::size_t i) noexcept {
     }
     return failure(FaultReason::heartbeat_lost, FaultCode::device_lost, i, 0, h.silent_for);
   }
-  const TimeNs age = t - (f.valid ? f.last_received : start_time_);
+  // A drive that leaves operational (its own error behaviour, another master's NMT command) no
+  // longer takes PDOs: that drive's fault at once, not a stale feedback 100 ms later.
+  if (h.heartbeat_seen && h.nmt_state != NmtState::operational && h.nmt_state != NmtState::initialising) {
+    if (says())
+      saw::log(LogLevel::error, name().c_str(), "{} (node {}) left operational: its heartbeat says {}",
+               j.name.c_str(), unsigned{j.node}, to_string(h.nmt_state).data());
+    return failure(FaultReason::nmt_left, FaultCode::device_lost, i, static_cast<std::uint32_t>(h.nmt_state));
+  }
+  const TimeNs age = t - (f.valid ? f.last_received : std::max(start_time_, f.watch_from));
   if (age > config_.feedback_timeout)
     return failure(FaultReason::feedback_stale, FaultCode::input_stale, i, 0, age);
   // A drive in fault while no reset is under way (an enable resets it, and has its own timeout).
-  const bool drive_fault = f.state == cia402::State::fault || f.state == cia402::State::fault_reaction_active;
-  if (drive_fault && !enabling())
-    return failure(FaultReason::drive_fault, FaultCode::device_error, i, h.last_emcy);
+  if (drive_fault && !enabling()) {
+    if (says())
+      saw::log(LogLevel::error, name().c_str(), "{} (node {}) in fault: error code {:x} ({})", j.name.c_str(),
+               unsigned{j.node}, unsigned{error_code(i)}, emcy_name(error_code(i)).data());
+    return failure(FaultReason::drive_fault, FaultCode::device_error, i, error_code(i));
+  }
   const OperatingStateValue st = operating_state().state;
   const bool powered = enabling() || st == OperatingStateValue::enabled || st == OperatingStateValue::paused;
   if (!powered || !f.valid) return Outcome::done();

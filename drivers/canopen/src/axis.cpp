@@ -40,6 +40,12 @@ void check(const AxisConfig& a) {
   if (a.heartbeat_period < ms || a.heartbeat_period > 65535 * ms)
     fail("heartbeat period must be 1 ms to 65.535 s (0x1017 holds milliseconds)");
   if (a.heartbeat_timeout <= a.heartbeat_period) fail("heartbeat timeout must be above the heartbeat period");
+  if (!valid_node_id(a.master_node)) fail("the master's node-ID must be 1..127");
+  if (a.master_node == a.node) fail("the master's node-ID is the drive's");
+  if (a.master_timeout < 0 || a.master_timeout > 65535 * ms)
+    fail("the master's heartbeat timeout must be 0 to 65.535 s (0x1016 holds milliseconds)");
+  if (static_cast<std::int16_t>(a.abort_connection) < 0 || static_cast<std::int16_t>(a.abort_connection) > 3)
+    fail("abort connection option code (0x6007) must be 0..3");
   for (const PdoMapping& m : a.pdos) {
     try {
       canopen::check(m);

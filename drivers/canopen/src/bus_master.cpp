@@ -1,118 +1,13 @@
 #include "saw/canopen/bus_master.hpp"
 
-#include <array>
 #include <stdexcept>
 #include <string>
 
-#include "saw/canopen/cob.hpp"
-#include "saw/canopen/emcy.hpp"
-#include "saw/canopen/heartbeat.hpp"
-#include "saw/canopen/nmt.hpp"
-#include "saw/canopen/sdo_client.hpp"
-#include "saw/canopen/sync.hpp"
+#include "bus_master_impl.hpp"
+#include "saw/canopen/startup.hpp"
 #include "saw/log.hpp"
 
 namespace saw::canopen {
-namespace {
-
-// Where a mapped object sits: which PDO of the axis, which slot of it; pdo < 0: not mapped.
-struct Slot {
-  int pdo = -1;
-  int slot = -1;
-  bool mapped() const noexcept { return pdo >= 0; }
-};
-
-// What an identifier is to this master.
-enum class Route : std::uint8_t { none, tpdo, emcy, heartbeat, sdo_response };
-struct RouteEntry {
-  Route route = Route::none;
-  std::uint8_t axis = 0;
-  std::uint8_t pdo = 0;
-};
-
-constexpr std::size_t sdo_capacity = 256;
-
-struct Axis {
-  Axis(AxisConfig c, const BusMasterConfig& master)
-      : config(std::move(c)),
-        controller(master.controller),
-        sdo(SdoClientConfig{SdoChannel::of_node(config.node), master.sdo_timeout, sdo_capacity}) {
-    for (const PdoMapping& m : config.pdos) {
-      if (!m.enabled) continue;
-      if (m.kind == PdoKind::rpdo)
-        rpdos.emplace_back(m);
-      else
-        tpdos.emplace_back(m);
-    }
-  }
-
-  template <class T>
-  bool read(Slot s, T& out) const noexcept {
-    return s.mapped() &&
-           tpdos[static_cast<std::size_t>(s.pdo)].get(static_cast<std::size_t>(s.slot), out) == Codec::ok;
-  }
-
-  AxisConfig config;
-  std::vector<PdoPacker> rpdos;
-  std::vector<PdoUnpacker> tpdos;
-  // Every RPDO slot of the controlword and of the mode's target gets the value: a drive applies
-  // them in the order its RPDOs come, so a second mapping of either must not carry a stale one.
-  std::vector<Slot> controlwords, targets;
-  Slot statusword, position, velocity, torque, mode_display;
-  std::uint32_t tpdo_seen = 0;  // bit per TPDO: received at least once
-  bool tpdo_this_cycle = false;
-  cia402::Controller controller;
-  cia402::ControllerOutput control;
-  SdoClient sdo;
-  AxisFeedback feedback;
-  AxisHealth health;
-  double setpoint = 0;
-  TimeNs previous_time = 0;
-  std::int32_t previous_counts = 0;
-};
-
-}  // namespace
-
-struct BusMaster::Impl {
-  Impl(can::Bus& b, BusMasterConfig c)
-      : bus(b), config(c), sync(c.period, c.sync_overflow), queue(c.sdo_queue) {}
-
-  void route(std::uint32_t id, RouteEntry e, const std::string& who) {
-    if (routes[id].route != Route::none)
-      throw std::invalid_argument(who + ": identifier " + std::to_string(id) + " is used twice on this bus");
-    routes[id] = e;
-  }
-  void on_frame(const can::Frame& f, TimeNs now) noexcept;
-  void on_tpdo(Axis& a, std::size_t pdo, const can::Frame& f, TimeNs now) noexcept;
-  void on_emcy(Axis& a, const can::Frame& f) noexcept;
-  void heartbeat_events(TimeNs now) noexcept;
-  void update_feedback(Axis& a, TimeNs now) noexcept;
-  void service_sdo(TimeNs now) noexcept;
-  void out(const can::Frame& f) noexcept {
-    if (out_count < outbox.size()) outbox[out_count++] = f;
-  }
-  Axis* by_node(std::uint8_t node) noexcept {
-    for (auto& a : axes)
-      if (a.config.node == node) return &a;
-    return nullptr;
-  }
-
-  can::Bus& bus;
-  BusMasterConfig config;
-  std::vector<Axis> axes;
-  std::array<RouteEntry, CAN_SFF_MASK + 1> routes{};
-  HeartbeatConsumer heartbeats;
-  SyncProducer sync;
-  SdoQueue queue;
-  MasterCounters counters;
-  std::vector<can::Received> inbox;
-  std::vector<can::Frame> outbox;
-  std::size_t out_count = 0;
-  bool started = false;
-  TimeNs first_cycle = 0;
-  int sdo_axis = -1;  // the axis running a runtime transfer
-  std::uint32_t sdo_tag = 0;
-};
 
 namespace {
 // The entries of the enabled mappings of one kind, in PDO order: the layouts' slot order.
@@ -131,9 +26,14 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
     : impl_(std::make_unique<Impl>(bus, config)) {
   if (axes.empty()) throw std::invalid_argument("a CANopen master needs at least one drive");
   if (axes.size() > 64) throw std::invalid_argument("at most 64 drives per bus");
+  if (config.heartbeat_period > 0 && !valid_node_id(config.node))
+    throw std::invalid_argument("the master's node-ID " + std::to_string(config.node) + " is not 1..127");
   impl_->axes.reserve(axes.size());
   for (std::size_t i = 0; i < axes.size(); ++i) {
     check(axes[i]);
+    if (config.heartbeat_period > 0 && axes[i].node == config.node)
+      throw std::invalid_argument("drive '" + axes[i].name + "': node " + std::to_string(config.node) +
+                                  " is the master's own node-ID (its heartbeat)");
     const std::string who = "drive '" + axes[i].name + "' (node " + std::to_string(axes[i].node) + ")";
     Axis& a = impl_->axes.emplace_back(std::move(axes[i]), config);
     const auto node = a.config.node;
@@ -144,6 +44,17 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
     for (std::size_t p = 0; p < a.tpdos.size(); ++p)
       impl_->route(a.tpdos[p].layout().cob_id(), {Route::tpdo, index, static_cast<std::uint8_t>(p)}, who);
     impl_->heartbeats.watch(node, a.config.heartbeat_timeout);
+    for (const StartupWrite& w : startup_writes(a.config)) {
+      EncodedWrite e;
+      e.address = w.write.address;
+      e.size = size_of(w.write.type);
+      e.optional = w.optional;
+      if (e.size > e.bytes.size() ||
+          encode(w.write.type, startup_value(w.write), std::span(e.bytes.data(), e.size)) != Codec::ok)
+        throw std::invalid_argument(who + ": value " + std::to_string(w.write.value) + " does not fit " +
+                                    to_string(w.write.address));
+      a.writes.push_back(e);
+    }
   }
   // Slots by address: the mapping order is the layout's slot order.
   for (Axis& a : impl_->axes) {
@@ -165,14 +76,18 @@ BusMaster::BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConf
     a.velocity = find(t, cia402::object::velocity_actual_value);
     a.torque = find(t, cia402::object::torque_actual_value);
     a.mode_display = find(t, cia402::object::modes_of_operation_display);
+    a.error_code = find(t, cia402::object::error_code);
+    a.feedback.has_mode_display = a.mode_display.mapped();
+    a.feedback.has_error_code = a.error_code.mapped();
     a.feedback.has_velocity = a.velocity.mapped();
     a.feedback.has_torque = a.torque.mapped();
     if (a.tpdos.size() > 32) throw std::invalid_argument("at most 32 TPDOs per drive");
   }
   std::size_t rpdos = 0;
   for (const Axis& a : impl_->axes) rpdos += a.rpdos.size();
-  // The RPDOs, an SDO request, SYNC, room to spare, and an NMT command per node (shut_down()).
-  impl_->outbox.resize(rpdos + 4 + impl_->axes.size());
+  // The RPDOs, an SDO request, SYNC, the heartbeat, room to spare, an NMT command per node
+  // (shut_down()), and per drive a re-configuration's SDO request and NMT start.
+  impl_->outbox.resize(rpdos + 5 + 3 * impl_->axes.size());
   impl_->inbox.resize(64);
 }
 
@@ -238,8 +153,9 @@ void BusMaster::Impl::on_emcy(Axis& a, const can::Frame& f) noexcept {
   if (e->is_reset()) return;
   ++a.health.emcy_count;
   a.health.last_emcy = e->code;
-  // The names are literals: the RT log keeps their pointers.
-  saw::log(LogLevel::error, bus.name().c_str(), "EMCY from node {}: error code {} ({}), error register {}",
+  // The names are literals: the RT log keeps their pointers. Whether it is an error or a warning
+  // is the component's to say (the drive's statusword decides): here it is what was heard.
+  saw::log(LogLevel::info, bus.name().c_str(), "EMCY from node {}: error code {:x} ({}), error register {:x}",
            unsigned{a.config.node}, unsigned{e->code}, emcy_name(e->code).data(),
            unsigned{e->error_register});
 }
@@ -312,6 +228,7 @@ void BusMaster::Impl::update_feedback(Axis& a, TimeNs now) noexcept {
   (void)a.read(a.statusword, fb.statusword);
   fb.state = cia402::decode_state(fb.statusword);
   (void)a.read(a.mode_display, fb.mode_display);
+  (void)a.read(a.error_code, fb.error_code);
   const DriveUnits& u = a.config.units;
   if (a.read(a.position, fb.position_counts)) fb.position = u.counts_to_position(fb.position_counts);
   std::int32_t velocity = 0;
@@ -333,6 +250,7 @@ void BusMaster::receive(TimeNs now) noexcept {
     m.started = true;
     m.first_cycle = now;
     m.sync.start(now);
+    m.heartbeat.start(now - m.config.heartbeat_period);  // the first one at once
   }
   ++m.counters.cycles;
   std::size_t total = 0;
@@ -408,10 +326,15 @@ void BusMaster::transmit(TimeNs now) noexcept {
     for (const PdoPacker& p : a.rpdos) m.out(p.frame());
   }
   m.service_sdo(now);
+  for (Axis& a : m.axes) m.step_reconfiguration(a, now);
   // Half a period of slack: a cycle that wakes a little early still sends its SYNC.
   if (const auto s = m.sync.poll(now + m.config.period / 2)) {
     m.out(*s);
     ++m.counters.syncs;
+  }
+  if (const auto h = m.heartbeat.poll(now, NmtState::operational)) {
+    m.out(*h);
+    ++m.counters.heartbeats;
   }
   const std::size_t sent = m.bus.send(std::span<const can::Frame>(m.outbox.data(), m.out_count));
   m.counters.frames_sent += sent;

@@ -32,6 +32,11 @@ std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
     a.pdos = j.pdos.empty() ? default_pdo_mappings(c.mode, j.node) : j.pdos;
     a.heartbeat_period = c.heartbeat_period;
     a.heartbeat_timeout = c.heartbeat_timeout;
+    a.master_node = c.master_node;
+    a.master_timeout = c.master_heartbeat_timeout;
+    a.abort_connection = c.abort_connection;
+    a.identity = j.identity;
+    a.writes = j.writes;
     axes.push_back(std::move(a));
   }
   return axes;
@@ -115,8 +120,9 @@ DeviceConfig contract_of(const CanopenArmConfig& c) {
   d.command_timeout = c.command_timeout;
   d.fault_on_command_timeout = c.on_command_timeout == CommandTimeoutAction::fault;
   d.start_enabled = c.start_enabled;
-  // The drives' own transitions time out first (cia402::Progress::timeout, with the statusword).
-  d.enable_timeout = 2 * c.transition_timeout;
+  // The enable's own limits say more and come first: each transition (cia402::Progress::timeout,
+  // with the state), the fault resets, the mode display (transition_timeout after switched on).
+  d.enable_timeout = 4 * c.transition_timeout;
   for (const JointConfig& j : c.joints)
     d.joints.push_back({j.name, j.min, j.max, j.max_velocity, j.max_torque});
   return d;
@@ -139,6 +145,8 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
   BusMasterConfig m;
   m.period = task.period.count();
   m.controller.transition_timeout = config_.transition_timeout;
+  m.node = config_.master_node;
+  m.heartbeat_period = config_.master_heartbeat_period;
   master_ = std::make_unique<BusMaster>(bus_, m, axes_of(config_));
   if (config_.chain) kinematics_ = std::make_unique<ChainKinematics>(*config_.chain);
   setpoint_js_.size = static_cast<std::uint32_t>(n_);
@@ -161,6 +169,10 @@ void CanopenArm::provide_interfaces() {
 }
 
 void CanopenArm::open() {
+  if (config_.master_heartbeat_timeout == 0)
+    saw::log(LogLevel::warning, name().c_str(),
+             "master_heartbeat.timeout is 0: the drives do not watch this master; killed, it leaves them as "
+             "they are");
   StartupSequence sequence(bus_, std::vector<AxisConfig>(axes_of(config_)), config_.startup);
   run_startup(sequence, config_.startup_pause);
 }
@@ -181,7 +193,7 @@ bool CanopenArm::accepts(ServoMode m) const noexcept {
 }
 
 void CanopenArm::enter_safe_state(SafeReason why) {
-  enable_sent_ = false;
+  enable_sent_ = operation_sent_ = false;
   // A fault the base raised itself, in CANopen's terms where there are some: a stale command,
   // an enable that never completed. Any other (a throw caught) keeps none: the base's reason says it.
   if (why == SafeReason::fault && reason_ == FaultReason::none) {

@@ -42,6 +42,7 @@ void Controller::set_target(Target t, TimeNs now) noexcept {
 void Controller::request_fault_reset(TimeNs now) noexcept {
   if (!reset_requested_) since_ = now;
   reset_requested_ = true;
+  resets_ = 0;
 }
 
 bool Controller::reached(State s) const noexcept {
@@ -68,6 +69,11 @@ std::uint16_t Controller::command_for(State s) noexcept {
     if (!reset_requested_) return disable_voltage_command;
     // The edge: low (if it is not already), then high for a while, then low again to retry.
     if ((last_ & fault_reset) == 0) {
+      if (resets_ >= config_.fault_reset_tries) {
+        reset_requested_ = false;  // given up: the fault stays, and progress says so
+        return disable_voltage_command;
+      }
+      ++resets_;
       reset_high_cycles_ = 1;
       return fault_reset;
     }
@@ -127,6 +133,7 @@ ControllerOutput Controller::update(std::uint16_t statusword, TimeNs now) noexce
   ControllerOutput out;
   out.state = s;
   out.in_state_for = now - since_;
+  out.fault_resets = resets_;
   if (s == State::unknown) {
     out.controlword = last_;
     out.progress = Progress::unknown_state;

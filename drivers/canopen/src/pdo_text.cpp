@@ -106,7 +106,11 @@ std::vector<PdoMapping> default_pdo_mappings(cia402::Mode mode, std::uint8_t nod
   const PdoEntry tpdo1[] = {PdoEntry::of(object::statusword, DataType::unsigned16),
                             PdoEntry::of(object::position_actual_value, DataType::integer32),
                             PdoEntry::of(object::torque_actual_value, DataType::integer16)};
-  const PdoEntry tpdo2[] = {PdoEntry::of(object::velocity_actual_value, DataType::integer32)};
+  // The mode display and the error code: the master enables a drive only in the mode it asked
+  // for, and names the error of a drive in fault.
+  const PdoEntry tpdo2[] = {PdoEntry::of(object::velocity_actual_value, DataType::integer32),
+                            PdoEntry::of(object::modes_of_operation_display, DataType::integer8),
+                            PdoEntry::of(object::error_code, DataType::unsigned16)};
   std::vector<PdoMapping> maps{make_pdo(PdoKind::rpdo, 1, node, rpdo1),
                                make_pdo(PdoKind::tpdo, 1, node, tpdo1),
                                make_pdo(PdoKind::tpdo, 2, node, tpdo2)};

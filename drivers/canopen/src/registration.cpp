@@ -44,12 +44,20 @@ cia402::Mode parse_mode(const Params& p) {
 // mapped, the others configured as not valid. `eds: file` instead: the file's PDOs (a DCF's
 // ParameterValues). Neither: the defaults for the mode.
 std::vector<PdoMapping> parse_pdos(const Params& p, cia402::Mode mode, std::uint8_t node,
-                                   const std::string& directory) {
+                                   const std::string& directory, std::optional<DriveIdentity>& identity) {
   if (p.has("pdo") && p.has("eds")) p.fail_at("eds", "give either pdo or eds, not both");
   if (p.has("eds")) {
     std::filesystem::path file = p.get<std::string>("eds");
     if (file.is_relative() && !directory.empty()) file = std::filesystem::path(directory) / file;
-    return eds_pdo_mappings(load_eds(file.string()), node);  // its errors name the EDS file and line
+    const Eds eds = load_eds(file.string());  // its errors name the EDS file and line
+    DriveIdentity id;
+    id.file = file.string();
+    const auto type = eds.value({0x1000, 0}, node);
+    id.device_type = type ? std::visit([](auto v) { return static_cast<std::uint32_t>(v); }, *type) : 0;
+    id.vendor_id = eds.device.vendor_number;
+    id.product_code = eds.device.product_number;
+    identity = id;
+    return eds_pdo_mappings(eds, node);
   }
   if (!p.has("pdo")) {
     p.mark_used("pdo");
@@ -80,6 +88,43 @@ std::vector<PdoMapping> parse_pdos(const Params& p, cia402::Mode mode, std::uint
       }
     }
   return maps;
+}
+
+// `sdo: ["0x60C2:01:u8=10", "interpolation...", ...]`: the deployment's own start-up writes, an
+// object as a PDO entry is written (a known name, an address, with a type) and its value.
+std::vector<SdoWrite> parse_writes(const Params& p) {
+  std::vector<SdoWrite> out;
+  if (!p.has("sdo")) {
+    p.mark_used("sdo");
+    return out;
+  }
+  for (const std::string& text : p.get<std::vector<std::string>>("sdo")) {
+    const auto eq = text.find('=');
+    if (eq == std::string::npos) p.fail_at("sdo", "'" + text + "' is not <object>=<value> (0x60C2:01:u8=10)");
+    PdoEntry entry;
+    long long value = 0;
+    try {
+      entry = parse_pdo_entry(text.substr(0, eq));
+      std::size_t used = 0;
+      value = std::stoll(text.substr(eq + 1), &used, 0);
+      if (used != text.size() - eq - 1)
+        throw std::invalid_argument("'" + text.substr(eq + 1) + "' is not a number");
+    } catch (const std::exception& e) {
+      p.fail_at("sdo", "'" + text + "': " + e.what());
+    }
+    if (size_of(entry.type) > 4 || type_class(entry.type) == TypeClass::real)
+      p.fail_at("sdo", "'" + text + "': only integers of up to 32 bits");
+    std::uint8_t bytes[8];
+    const Number n = type_class(entry.type) == TypeClass::signed_integer
+                         ? Number{std::int64_t{value}}
+                         : Number{static_cast<std::uint64_t>(value)};
+    if (value < 0 && type_class(entry.type) != TypeClass::signed_integer)
+      p.fail_at("sdo", "'" + text + "': a negative value for an unsigned object");
+    if (encode(entry.type, n, std::span(bytes, size_of(entry.type))) != Codec::ok)
+      p.fail_at("sdo", "'" + text + "': the value does not fit " + std::string(to_string(entry.type)));
+    out.push_back({entry.address, entry.type, static_cast<std::uint32_t>(value)});
+  }
+  return out;
 }
 
 // A joint's drive: node, units, limits, and (arm) its place in the chain.
@@ -115,7 +160,10 @@ JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode m
   c.following_error = j.get_in_range("following_error", 0, 1e3, 0);
   c.offset = j.get_in_range("offset", -1e6, 1e6, 0);
   const bool own_pdos = j.has("pdo") || j.has("eds");
-  c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory);
+  c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory, c.identity);
+  c.writes = parse_writes(shared);
+  if (&j != &shared)
+    for (const SdoWrite& w : parse_writes(j)) c.writes.push_back(w);
   if (kinematics != nullptr) {
     kinematics->type = type;
     kinematics->xyz = j.get_or<Vec3>("xyz", {0, 0, 0});
@@ -140,6 +188,20 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
   c.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
   c.heartbeat_timeout = duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.heartbeat_period), 1ms, 600s);
   if (c.heartbeat_timeout <= c.heartbeat_period) hb.fail_at("timeout", "must be above the heartbeat period");
+  const Params master = p.child("master_heartbeat");
+  c.master_node = static_cast<std::uint8_t>(master.get_in_range("node", 1, 127, 127));
+  c.master_heartbeat_period = duration(master, "period", 100ms, 1ms, 65535ms);
+  c.master_heartbeat_timeout =
+      duration(master, "timeout", 3 * std::chrono::nanoseconds(c.master_heartbeat_period), 0ms, 65535ms);
+  // 0: the drives are not told to watch the master (one without 0x1016); said at start-up.
+  if (c.master_heartbeat_timeout != 0 && c.master_heartbeat_timeout <= c.master_heartbeat_period)
+    master.fail_at("timeout", "must be above the master's heartbeat period (or 0: not watched)");
+  c.abort_connection = p.get_enum<AbortConnection>("abort_connection",
+                                                   {{"none", AbortConnection::none},
+                                                    {"fault", AbortConnection::fault},
+                                                    {"disable_voltage", AbortConnection::disable_voltage},
+                                                    {"quick_stop", AbortConnection::quick_stop}},
+                                                   AbortConnection::quick_stop);
   c.command_timeout = duration(p, "command_timeout", 3 * period, period, 10s);
   c.on_command_timeout = p.get_enum<CommandTimeoutAction>(
       "on_command_timeout", {{"hold", CommandTimeoutAction::hold}, {"fault", CommandTimeoutAction::fault}},
@@ -198,6 +260,12 @@ CanopenSpec parse_arm(const ComponentContext& ctx, Params& p) {
   return s;
 }
 
+std::string hex(std::uint16_t v) {
+  char b[8];
+  std::snprintf(b, sizeof b, "0x%04X", v);
+  return b;
+}
+
 std::string summary_line(const CanopenStatus& s) {
   char b[512];
   std::string out;
@@ -210,14 +278,31 @@ std::string summary_line(const CanopenStatus& s) {
       static_cast<unsigned long long>(s.foreign_frames));
   out += b;
   if (s.faults != 0) {
-    std::snprintf(b, sizeof b, "\n%u faults; the last: %s (%s) on %s, detail 0x%04X, %.1f ms after start",
-                  s.faults, to_string(s.fault.code == FaultCode::none ? FaultReason::none : s.reason),
-                  std::string(to_string(s.fault.code)).c_str(), std::string(s.fault.source_name()).c_str(),
-                  s.fault.detail, static_cast<double>(s.fault.since_start_ns) * 1e-6);
+    const FaultReason reason = s.fault.code == FaultCode::none ? FaultReason::none : s.reason;
+    char node[16] = "";
+    if (s.fault_node != 0) std::snprintf(node, sizeof node, " (node %u)", s.fault_node);
+    std::snprintf(b, sizeof b, "\n%u faults; the last: %s (%s) on %s%s, detail 0x%04X, %.1f ms after start",
+                  s.faults, to_string(reason), std::string(to_string(s.fault.code)).c_str(),
+                  std::string(s.fault.source_name()).c_str(), node, s.fault.detail,
+                  static_cast<double>(s.fault.since_start_ns) * 1e-6);
     out += b;
-    const bool emcy_code =
-        s.reason == FaultReason::emcy || (s.reason == FaultReason::drive_fault && s.fault.detail != 0);
-    if (emcy_code) out += ": " + std::string(emcy_name(static_cast<std::uint16_t>(s.fault.detail)));
+    const auto code = static_cast<std::uint16_t>(s.fault.detail);
+    if (reason == FaultReason::emcy || (reason == FaultReason::drive_fault && code != 0))
+      out += ": error code " + hex(code) + ", " + std::string(emcy_name(code));
+    if (reason == FaultReason::enable_timeout)
+      out += ": stuck in " + std::string(cia402::to_string(cia402::decode_state(code)));
+    if (reason == FaultReason::mode_mismatch)
+      out += ": 0x6061 showed mode " + std::to_string(static_cast<std::int8_t>(s.fault.detail & 0xFF)) +
+             ", 0x6060 asked for " + std::to_string(static_cast<std::int8_t>((s.fault.detail >> 8) & 0xFF));
+    if (reason == FaultReason::nmt_left)
+      out += ": NMT state " + std::string(to_string(static_cast<NmtState>(s.fault.detail)));
+  }
+  if (s.warnings != 0) {
+    std::snprintf(b, sizeof b,
+                  "\n%llu warning EMCY (the drive stayed out of fault), the last: %s, %s from node %u",
+                  static_cast<unsigned long long>(s.warnings), hex(s.last_warning).c_str(),
+                  std::string(emcy_name(s.last_warning)).c_str(), s.last_warning_node);
+    out += b;
   }
   if (s.emcy != 0 || s.heartbeat_losses != 0 || s.bad_pdos != 0) {
     std::snprintf(b, sizeof b, "\n%llu EMCY, %llu heartbeat losses, %llu bad PDOs",

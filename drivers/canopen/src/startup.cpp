@@ -1,6 +1,7 @@
 #include "saw/canopen/startup.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <stdexcept>
 #include <thread>
 
@@ -15,6 +16,8 @@ std::string_view to_string(StartupPhase p) noexcept {
       return "NMT reset communication";
     case StartupPhase::boot:
       return "waiting for boot-up";
+    case StartupPhase::identify:
+      return "identity";
     case StartupPhase::configure:
       return "SDO configuration";
     case StartupPhase::start:
@@ -38,15 +41,23 @@ std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
   }
   const auto heartbeat_ms = static_cast<std::uint32_t>(axis.heartbeat_period / 1'000'000);
   out.push_back({{{0x1017, 0}, DataType::unsigned16, heartbeat_ms}, false});
+  if (axis.master_timeout > 0) {
+    const auto consumer_ms = static_cast<std::uint32_t>(axis.master_timeout / 1'000'000);
+    out.push_back(
+        {{{0x1016, 1}, DataType::unsigned32, std::uint32_t{axis.master_node} << 16 | consumer_ms}, false});
+  }
+  // "none" asks nothing of a drive: one without 0x6007 does nothing anyway.
+  out.push_back({{cia402::object::abort_connection_option_code, DataType::integer16,
+                  static_cast<std::uint32_t>(static_cast<std::uint16_t>(axis.abort_connection))},
+                 axis.abort_connection == AbortConnection::none});
+  for (const SdoWrite& w : axis.writes) out.push_back({w, false});
   out.push_back({{cia402::object::modes_of_operation, DataType::integer8,
                   static_cast<std::uint32_t>(static_cast<std::uint8_t>(axis.mode))},
                  false});
   return out;
 }
 
-namespace {
-// Values are kept as 32 bits; a signed object's (the mode) is its two's complement.
-Number write_value(const SdoWrite& w) {
+Number startup_value(const SdoWrite& w) noexcept {
   if (type_class(w.type) != TypeClass::signed_integer) return std::uint64_t{w.value};
   switch (size_of(w.type)) {
     case 1:
@@ -57,7 +68,6 @@ Number write_value(const SdoWrite& w) {
       return std::int64_t{static_cast<std::int32_t>(w.value)};
   }
 }
-}  // namespace
 
 struct StartupSequence::Node {
   Node(const AxisConfig& a, TimeNs sdo_timeout)
@@ -67,8 +77,9 @@ struct StartupSequence::Node {
   AxisConfig axis;
   SdoClient sdo;
   std::vector<StartupWrite> writes;
-  std::size_t next = 0;  // the write in flight (or the next one)
-  bool started = false;  // `next` was handed to the SDO client
+  std::size_t next = 0;        // the write in flight (or the next one)
+  bool started = false;        // `next` was handed to the SDO client
+  std::size_t identified = 0;  // identity objects read and found as expected
   bool booted = false;
   bool operational = false;
 
@@ -115,6 +126,57 @@ void StartupSequence::receive(TimeNs now) {
   }
 }
 
+namespace {
+std::string hex(std::uint32_t v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%08X", v);
+  return b;
+}
+}  // namespace
+
+// The drive is the one its EDS/DCF describes, before anything is written to it: a wrong file
+// or a wrong drive on the node would take PDO maps and a mode meant for another device.
+bool StartupSequence::identify(TimeNs now) {
+  struct Check {
+    ObjectAddress address;
+    const char* what;
+    std::uint32_t DriveIdentity::*expected;
+  };
+  static constexpr Check checks[] = {{{0x1000, 0}, "device type (0x1000)", &DriveIdentity::device_type},
+                                     {{0x1018, 1}, "vendor-ID (0x1018:01)", &DriveIdentity::vendor_id},
+                                     {{0x1018, 2}, "product code (0x1018:02)", &DriveIdentity::product_code}};
+  bool all_done = true;
+  for (auto& node : nodes_) {
+    Node& n = *node;
+    if (!n.axis.identity) continue;
+    const DriveIdentity& id = *n.axis.identity;
+    if (n.started && !n.sdo.busy()) {
+      const Check& c = checks[n.identified];
+      const SdoResult& r = n.sdo.result();
+      std::uint32_t value = 0;
+      if (r.status != SdoStatus::done || n.sdo.value(DataType::unsigned32, value) != Codec::ok) {
+        fail(n.who() + ": reading its " + c.what + " failed: " +
+             (r.status == SdoStatus::done ? std::string("not 4 bytes") : std::string(to_string(r.abort))));
+        return false;
+      }
+      if (value != id.*c.expected) {
+        fail(n.who() + ": " + c.what + " " + hex(value) + ", but " + id.file + " says " +
+             hex(id.*c.expected));
+        return false;
+      }
+      ++n.identified;
+      n.started = false;
+    }
+    if (!n.started && n.identified < std::size(checks)) {
+      (void)n.sdo.upload(checks[n.identified].address, now);
+      n.started = true;
+    }
+    while (auto f = n.sdo.poll(now)) send(*f);
+    all_done = all_done && n.identified >= std::size(checks);
+  }
+  return all_done;
+}
+
 bool StartupSequence::configure(TimeNs now) {
   bool all_done = true;
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
@@ -136,8 +198,7 @@ bool StartupSequence::configure(TimeNs now) {
       const SdoWrite& w = n.writes[n.next].write;
       std::uint8_t bytes[8];
       const std::span<std::uint8_t> span(bytes, size_of(w.type));
-      // Values are kept as 32 bits; a signed object's (the mode) is its two's complement.
-      const Number value = write_value(w);
+      const Number value = startup_value(w);
       if (encode(w.type, value, span) != Codec::ok || !n.sdo.download(w.address, span, now)) {
         fail(n.who() + ": value " + std::to_string(w.value) + " does not fit " + to_string(w.address));
         return false;
@@ -165,9 +226,9 @@ StartupPhase StartupSequence::step(TimeNs now) {
       bool all = true;
       for (auto& n : nodes_) all = all && n->booted;
       if (all) {
-        phase_ = StartupPhase::configure;
+        phase_ = StartupPhase::identify;
         phase_start_ = now;
-        (void)configure(now);
+        if (identify(now)) phase_ = StartupPhase::configure;
       } else if (in_phase > config_.boot_timeout) {
         for (auto& n : nodes_)
           if (!n->booted)
@@ -175,6 +236,9 @@ StartupPhase StartupSequence::step(TimeNs now) {
       }
       break;
     }
+    case StartupPhase::identify:
+      if (identify(now)) phase_ = StartupPhase::configure;
+      break;
     case StartupPhase::configure:
       if (configure(now)) phase_ = StartupPhase::start;
       break;

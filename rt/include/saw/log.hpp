@@ -32,7 +32,7 @@ struct LogRecord {
   TimeNs time = 0;
   LogLevel level = LogLevel::info;
   const char* source = "";  // a literal or a name that outlives the log (component names)
-  const char* format = "";  // a literal; "{}" marks each argument
+  const char* format = "";  // a literal; "{}" marks each argument, "{:x}" one in hex (0x2310)
   LogArg args[max_args];
 };
 

@@ -176,6 +176,39 @@ TEST(SimDriveFault, BusOffWithAbortConnectionQuickStopStopsTheDrive) {
   EXPECT_LT(std::abs(b.drive.motor().velocity()), 0.1);
 }
 
+TEST(SimDriveFault, AMasterWhoseHeartbeatStopsIsNoticedByTheConsumerAndTheDriveStops) {
+  Bench b;
+  Master m(b);
+  b.tick();
+  b.write({0x1016, 1}, DataType::unsigned32, std::uint32_t{127u << 16 | 50u});  // node 127, 50 ms
+  b.write({0x6007, 0}, DataType::integer16, std::int16_t{3});                   // quick stop
+  m.start(cia402::csv);
+  ASSERT_TRUE(m.reach(cia402::Target::operation_enabled));
+  m.target_velocity = 10 * 4096;
+  b.run_for(100 * ms);
+  EXPECT_EQ(b.drive.counters().heartbeat_events, 0u) << "not watched before the master's first heartbeat";
+  for (int i = 0; i < 10; ++i) {  // the master's heartbeat, every 20 ms
+    b.send(heartbeat_frame(127, NmtState::operational));
+    b.run_for(20 * ms);
+  }
+  EXPECT_EQ(b.drive.drive_state(), cia402::State::operation_enabled);
+  EXPECT_EQ(b.drive.counters().heartbeat_events, 0u);
+  // The master dies: its heartbeat and everything else stop, the last RPDO stays.
+  b.each_tick = {};
+  const TimeNs last = b.now - 20 * ms;
+  b.run_for(25 * ms);  // 45 ms since its last heartbeat
+  EXPECT_EQ(b.drive.drive_state(), cia402::State::operation_enabled) << "within the consumer time";
+  ASSERT_TRUE(b.run_until([&] { return b.drive.counters().heartbeat_events == 1; }, 100 * ms));
+  EXPECT_GT(b.now - last, 50 * ms);
+  EXPECT_LE(b.now - last, 52 * ms) << "within a step or two of the consumer time";
+  b.run_for(2 * ms);
+  EXPECT_EQ(b.drive.drive_state(), cia402::State::quick_stop_active) << "0x6007 = 3";
+  ASSERT_FALSE(b.emcys().empty());
+  EXPECT_EQ(b.emcys().back().code, 0x8130) << emcy_name(0x8130);
+  b.run_for(150 * ms);
+  EXPECT_LT(std::abs(b.drive.motor().velocity()), 0.1) << "stopped by itself";
+}
+
 TEST(SimDriveFault, SdoAbortOnOneObjectUntilCleared) {
   Bench b;
   b.tick();

@@ -20,6 +20,8 @@ struct Required {
 // 0x608F, 0x6091, ...) are not added: their absence has a meaning (no history, no limit, ...).
 constexpr Required required[] = {
     {{0x1001, 0}, "Error register", DataType::unsigned8, Access::ro, 0, true},
+    {{0x1016, 0}, "Highest sub-index supported", DataType::unsigned8, Access::ro, 1, false},
+    {{0x1016, 1}, "Consumer heartbeat time", DataType::unsigned32, Access::rw, 0, false},
     {{0x1017, 0}, "Producer heartbeat time", DataType::unsigned16, Access::rw, 0, false},
     {{0x2F00, 0}, "Highest sub-index supported", DataType::unsigned8, Access::ro, 5, false},
     {injection_object::inject, "Inject fault", DataType::unsigned8, Access::rw, 0, false},

@@ -29,6 +29,7 @@ constexpr std::uint16_t over_current = 0x2310;
 constexpr std::uint16_t following_error = 0x8611;
 constexpr std::uint16_t pdo_length = 0x8210;
 constexpr std::uint16_t bus_off_recovered = 0x8140;
+constexpr std::uint16_t heartbeat_error = 0x8130;  // life guard or heartbeat error
 }  // namespace code
 
 namespace object {
@@ -38,6 +39,7 @@ constexpr ObjectAddress sync_id{0x1005, 0};
 constexpr ObjectAddress emcy_id{0x1014, 0};
 constexpr ObjectAddress emcy_inhibit{0x1015, 0};
 constexpr ObjectAddress heartbeat_time{0x1017, 0};
+constexpr ObjectAddress consumer_heartbeat{0x1016, 1};
 constexpr ObjectAddress abort_connection_option{0x6007, 0};
 constexpr ObjectAddress position_demand{0x6062, 0};
 constexpr ObjectAddress following_error_timeout{0x6066, 0};
@@ -128,6 +130,27 @@ void SimDrive::refresh_identifiers() noexcept {
 void SimDrive::refresh_producers() noexcept {
   heartbeat_.set_period(get_or<std::uint16_t>(object::heartbeat_time, 0) * ms, now_);
   emcy_ = EmcyProducer(node_, get_or<std::uint16_t>(object::emcy_inhibit, 0) * TimeNs{100'000});
+  refresh_consumer();
+}
+
+void SimDrive::refresh_consumer() noexcept {
+  const auto v = get_or<std::uint32_t>(object::consumer_heartbeat, 0);
+  const auto node = static_cast<std::uint8_t>((v >> 16) & 0x7F);
+  consumer_time_ = static_cast<TimeNs>(v & 0xFFFF) * ms;
+  watched_node_ = consumer_time_ > 0 ? node : 0;
+  watched_seen_.reset();  // CiA 301: monitoring starts with the next heartbeat
+  consumer_fired_ = false;
+}
+
+// CiA 301's heartbeat event: the watched node silent for its consumer time. EMCY 0x8130, then
+// what 0x6007 says (CiA 402): a drive whose master is gone stops by itself.
+void SimDrive::watch_consumer() noexcept {
+  if (watched_node_ == 0 || !watched_seen_ || consumer_fired_) return;
+  if (now_ - *watched_seen_ <= consumer_time_) return;
+  consumer_fired_ = true;
+  ++counters_.heartbeat_events;
+  raise(code::heartbeat_error, error_register::communication);
+  abort_connection(code::heartbeat_error);
 }
 
 void SimDrive::restore(std::uint16_t first, std::uint16_t last) noexcept {
@@ -215,6 +238,8 @@ void SimDrive::written(ObjectAddress a) noexcept {
     pdos_->written(a);
   } else if (a == object::heartbeat_time) {
     heartbeat_.set_period(get_or<std::uint16_t>(a, 0) * ms, now_);
+  } else if (a == object::consumer_heartbeat) {
+    refresh_consumer();
   } else if (a == object::emcy_inhibit) {
     emcy_ = EmcyProducer(node_, get_or<std::uint16_t>(a, 0) * TimeNs{100'000});
   } else if (a == object::sync_id || a == object::emcy_id) {
@@ -276,15 +301,16 @@ void SimDrive::clear_all() noexcept {
   for (unsigned k = 1; k <= fault_kind_count; ++k) clear(static_cast<FaultKind>(k));
 }
 
-void SimDrive::abort_connection() noexcept {
-  // CiA 402's abort connection (0x6007) acts on a drive that is driving; a bus-off is one of
-  // its events. Absent 0x6007, nothing happens (the drive keeps its last setpoints).
+void SimDrive::abort_connection(std::uint16_t code) noexcept {
+  // CiA 402's abort connection (0x6007) acts on a drive that is driving; a bus-off and a
+  // heartbeat event are its events. Absent 0x6007, nothing happens (the drive keeps its last
+  // setpoints).
   if (!drive_.following() && drive_.state() != cia402::State::quick_stop_active) return;
   switch (get_or<std::int16_t>(object::abort_connection_option, 0)) {
-    case 1:  // fault signal: the EMCY waits in the queue until the bus is back
-      raise(code::bus_off_recovered, error_register::communication);
+    case 1:  // fault signal (a bus-off's EMCY waits in the queue until the bus is back)
+      if (code == code::bus_off_recovered) raise(code, error_register::communication);
       fault_input_ = true;
-      bus_off_fault_ = true;
+      bus_off_fault_ = code == code::bus_off_recovered;
       break;
     case 2:
       forced_command_ = cia402::controlword::disable_voltage_command;
@@ -328,7 +354,7 @@ void SimDrive::update_faults() noexcept {
                                                         : 0;
           until_[k - 1] = d > 0 ? now_ + d : forever;
           if (kind == FaultKind::sdo_abort) sdo_abort_ = f;
-          if (kind == FaultKind::bus_off) abort_connection();
+          if (kind == FaultKind::bus_off) abort_connection(code::bus_off_recovered);
           break;
         }
       }
@@ -379,6 +405,7 @@ void SimDrive::step(TimeNs now) noexcept {
   update_faults();
   publish_actuals();  // what a SYNC in this step's frames samples
   receive_all();
+  watch_consumer();
   control();
   produce();
   flush();
@@ -416,6 +443,11 @@ void SimDrive::dispatch(const can::Frame& f) noexcept {
     } else if (nmt_.state() == NmtState::operational && before != NmtState::operational) {
       pdos_->start(now_);
     }
+    return;
+  }
+  if (watched_node_ != 0 && id == cob::heartbeat + watched_node_ && parse_heartbeat(f)) {
+    watched_seen_ = now_;  // the consumer listens in every NMT state (error control)
+    consumer_fired_ = false;
     return;
   }
   const NmtState state = nmt_.state();

@@ -15,8 +15,9 @@ namespace saw::canopen {
 // The CANopen reason behind a FaultInfo (whose code is the generic one).
 enum class FaultReason : std::uint8_t {
   none,
-  drive_fault,      // a statusword showed fault or fault reaction active (detail: the last EMCY code)
-  emcy,             // an EMCY with an error code (detail: the code)
+  drive_fault,      // a statusword showed fault, or an enable's fault resets did not clear it
+                    // (detail: 0x603F when mapped, else the last EMCY's code)
+  emcy,             // an EMCY, and the drive's statusword then in fault (detail: the code)
   heartbeat_lost,   // no heartbeat within heartbeat_timeout (age: how long it was silent)
   node_rebooted,    // a boot-up after start-up: the drive's configuration is gone (restart needed)
   bus_off,          // the bus is off or down (detail: can::BusState)
@@ -25,8 +26,11 @@ enum class FaultReason : std::uint8_t {
   joint_limit,      // a measured position left [min, max]
   following_error,  // CSP: |target − position| above following_error
   enable_timeout,   // a drive did not reach operation enabled within the transition timeout
+                    // (detail: its statusword, whose state it was stuck in)
+  mode_mismatch,    // 0x6061 did not show the mode written to 0x6060 (detail: asked << 8 | shown)
+  nmt_left,         // the drive's heartbeat said it left NMT operational (detail: the NMT state)
 };
-constexpr std::size_t enum_count(FaultReason) { return 11; }
+constexpr std::size_t enum_count(FaultReason) { return 13; }
 constexpr std::string_view enum_type_name(FaultReason) { return "saw::canopen::FaultReason"; }
 // Lower case, a literal (the RT log keeps the pointer): "heartbeat lost".
 const char* to_string(FaultReason r) noexcept;
@@ -37,13 +41,19 @@ using saw::RefusedCommands;
 // A CANopen component's state and counters: a summary column (printed when a run ends).
 struct CanopenStatus {
   static constexpr std::string_view type_name = "saw::canopen::CanopenStatus";
-  static constexpr std::uint32_t layout_version = 2;  // 2: refused is the device base's
+  // 2: refused is the device base's; 3: fault_node, warnings
+  static constexpr std::uint32_t layout_version = 3;
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultReason reason = FaultReason::none;
   std::uint8_t bus_state = 0;  // can::BusState
   std::uint8_t joints = 0;
-  std::uint32_t faults = 0;  // times it went to FAULT
-  FaultInfo fault;           // the last fault (kept after recovery)
+  std::uint32_t faults = 0;     // times it went to FAULT
+  FaultInfo fault;              // the last fault (kept after recovery)
+  std::uint8_t fault_node = 0;  // its drive's node-ID (0: the bus, or none)
+  // EMCYs that were warnings (the drive stayed out of fault), and the newest one
+  std::uint64_t warnings = 0;
+  std::uint16_t last_warning = 0;
+  std::uint8_t last_warning_register = 0, last_warning_node = 0;
   std::uint64_t frames_received = 0, frames_sent = 0, send_refused = 0, foreign_frames = 0;
   std::uint64_t syncs = 0;
   std::uint64_t emcy = 0, heartbeat_losses = 0, bad_pdos = 0;
@@ -57,6 +67,11 @@ struct CanopenStatus {
                                             &CanopenStatus::joints,
                                             &CanopenStatus::faults,
                                             &CanopenStatus::fault,
+                                            &CanopenStatus::fault_node,
+                                            &CanopenStatus::warnings,
+                                            &CanopenStatus::last_warning,
+                                            &CanopenStatus::last_warning_register,
+                                            &CanopenStatus::last_warning_node,
                                             &CanopenStatus::frames_received,
                                             &CanopenStatus::frames_sent,
                                             &CanopenStatus::send_refused,

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,17 @@
 #include "saw/clock.hpp"
 
 namespace saw::canopen {
+
+// CiA 402's abort connection option code (0x6007): what a drive does when it loses its master
+// (its heartbeat consumer fires, bus-off, ...) while it is driving.
+enum class AbortConnection : std::int16_t { none = 0, fault = 1, disable_voltage = 2, quick_stop = 3 };
+
+// What a drive must say it is (0x1000, 0x1018:01, 0x1018:02), as its EDS/DCF says: checked at
+// start-up, before anything is written to it.
+struct DriveIdentity {
+  std::string file;  // the EDS/DCF that says so (named in the error)
+  std::uint32_t device_type = 0, vendor_id = 0, product_code = 0;
+};
 
 struct AxisConfig {
   std::string name;  // the joint's name: what faults and logs call it
@@ -25,6 +37,15 @@ struct AxisConfig {
   TimeNs heartbeat_period = 100'000'000;
   // ... and is lost when none came for this long (the master's consumer time; above the period).
   TimeNs heartbeat_timeout = 250'000'000;
+  // The drive watches the master's heartbeat (0x1016:01, written at start-up: the master's
+  // node-ID and this time; 0: not watched) and, once it is missing, does what 0x6007 says.
+  std::uint8_t master_node = 127;
+  TimeNs master_timeout = 300'000'000;
+  AbortConnection abort_connection = AbortConnection::quick_stop;
+  std::optional<DriveIdentity> identity;  // nullopt: not checked (no EDS given)
+  // The deployment's own SDO writes (0x60C2 interpolation period, vendor objects), written at
+  // start-up after 0x6007 and before 0x6060, in this order.
+  std::vector<SdoWrite> writes;
 };
 
 // The object that carries the mode's target: 0x607A (csp), 0x60FF (csv), 0x6071 (cst).
@@ -38,12 +59,16 @@ void check(const AxisConfig& a);
 // maps 0x606C, else the difference of positions; torque is the joint's effort (through the gear)
 // when 0x6077 is mapped, else 0.
 struct AxisFeedback {
-  bool valid = false;        // every TPDO arrived at least once
+  bool valid = false;        // every TPDO arrived at least once (since the start, or a re-configuration)
+  TimeNs watch_from = 0;     // not valid: stale counts from here (a re-configuration's end), or the start
   bool fresh = false;        // a TPDO arrived since the last cycle
   TimeNs last_received = 0;  // when the last TPDO arrived (the cycle's time)
   std::uint16_t statusword = 0;
   cia402::State state = cia402::State::unknown;
   std::int8_t mode_display = 0;  // 0x6061 when mapped, else 0
+  bool has_mode_display = false;
+  std::uint16_t error_code = 0;  // 0x603F when mapped, else 0
+  bool has_error_code = false;
   std::int32_t position_counts = 0;
   double position = 0, velocity = 0, torque = 0;
   bool has_velocity = false, has_torque = false;

@@ -8,6 +8,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
 #include "saw/canopen/cia402_controller.hpp"
+#include "saw/canopen/sdo.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/clock.hpp"
 
@@ -19,7 +20,19 @@ struct BusMasterConfig {
   TimeNs sdo_timeout = 500'000'000;  // each response of a runtime SDO transfer
   std::size_t sdo_queue = 16;        // runtime SDO requests (and replies) in flight
   std::size_t max_frames = 256;      // frames read per cycle at most; the rest wait a cycle
+  // The master's own heartbeat (CiA 301), which the drives' consumers (0x1016) watch: its
+  // node-ID (no drive may have it) and period; 0: none.
+  std::uint8_t node = 127;
+  TimeNs heartbeat_period = 100'000'000;
   cia402::ControllerConfig controller;
+};
+
+// A drive's configuration run again from the cycle (a drive that rebooted): the start-up's SDO
+// writes through its SDO channel, then NMT start and an operational heartbeat.
+struct Reconfiguration {
+  enum class State : std::uint8_t { idle, busy, done, failed } state = State::idle;
+  ObjectAddress object{};           // failed: the write refused (0x0000: no operational heartbeat)
+  SdoAbort abort = SdoAbort::none;  // ... and why
 };
 
 // Figures since construction; each only grows.
@@ -29,6 +42,7 @@ struct MasterCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t send_refused = 0;  // frames the bus did not take (full, down)
   std::uint64_t syncs = 0;
+  std::uint64_t heartbeats = 0;                // the master's own
   std::uint64_t foreign_frames = 0;            // frames for no drive of this master (another master's, ...)
   std::uint64_t receive_limited = 0;           // cycles that left frames for the next (max_frames)
   std::uint64_t emcy = 0;                      // EMCY messages, error resets included
@@ -43,7 +57,7 @@ struct MasterCounters {
 //   ...            the owner reads feedback() and health(), decides, and sets targets
 //   transmit(now)  each drive's CiA 402 controller on the statusword just read; RPDOs packed
 //                  and sent; a runtime SDO transfer stepped; SYNC last, so that every drive has
-//                  its RPDO before the SYNC that applies it.
+//                  its RPDO before the SYNC that applies it; the master's heartbeat when due.
 // receive() and transmit() neither allocate, lock, block, print nor throw. Construction and
 // start-up (StartupSequence, on the set-up thread) happen before the first cycle.
 class BusMaster {
@@ -80,6 +94,10 @@ class BusMaster {
   // voltage, or quick stop) and the setpoints as set, one SYNC so that the drives take them at
   // once, then NMT enter pre-operational for every node. Sent before it returns.
   void shut_down(std::uint16_t controlword, TimeNs now) noexcept;
+  // Starts re-running drive i's configuration (a drive that rebooted), stepped by transmit();
+  // its feedback counts as not received until its TPDOs come again.
+  void reconfigure(std::size_t i, TimeNs now) noexcept;
+  const Reconfiguration& reconfiguration(std::size_t i) const noexcept;
   // The controller's answer of the last transmit().
   const cia402::ControllerOutput& control(std::size_t i) const noexcept;
 

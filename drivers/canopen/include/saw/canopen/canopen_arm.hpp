@@ -36,7 +36,9 @@ struct JointConfig {
   double max_torque = 0;       // servo_jf's and servo_cf's bound per joint; 0: the rated torque at the joint
   double following_error = 0;  // csp: |target − position| that faults; 0: not checked
   double offset = 0;           // the joint's position when the drive reads 0: joint = drive position + offset
-  std::vector<PdoMapping> pdos;  // what the start-up configures; empty: default_pdo_mappings()
+  std::vector<PdoMapping> pdos;           // what the start-up configures; empty: default_pdo_mappings()
+  std::vector<SdoWrite> writes;           // the deployment's own SDO writes (AxisConfig::writes)
+  std::optional<DriveIdentity> identity;  // from its EDS/DCF: checked at start-up
 };
 
 enum class CommandTimeoutAction : std::uint8_t { hold, fault };
@@ -49,6 +51,12 @@ struct CanopenArmConfig {
   std::optional<ChainSpec> chain;          // measured_cp/cv and servo_cf; one joint per drive
   TimeNs heartbeat_period = 100'000'000;   // 0x1017 of every drive
   TimeNs heartbeat_timeout = 300'000'000;  // lost after this long without one
+  // The master's heartbeat (its node-ID and period) and how long each drive's consumer (0x1016)
+  // waits for it before it does what 0x6007 says (abort_connection).
+  std::uint8_t master_node = 127;
+  TimeNs master_heartbeat_period = 100'000'000;
+  TimeNs master_heartbeat_timeout = 300'000'000;
+  AbortConnection abort_connection = AbortConnection::quick_stop;
   // With no fresh servo_* for this long, an enabled arm holds its position (csp), zero velocity
   // (csv) or zero torque (cst), and says so; `fault` also makes it a FAULT. 0: 3 periods.
   TimeNs command_timeout = 0;
@@ -125,6 +133,11 @@ class CanopenArm : public Device {
   void publish() noexcept;
   Outcome failure(FaultReason reason, FaultCode code, std::size_t axis, std::uint32_t detail = 0,
                   TimeNs age = 0) noexcept;
+  Outcome check_emcy(std::size_t i, bool drive_fault) noexcept;
+  Outcome check_enabling(std::size_t i) noexcept;
+  Outcome reconfigure_rebooted() noexcept;
+  std::uint16_t error_code(std::size_t i) const noexcept;
+  bool says() const noexcept;  // a new fault (not one already raised) is worth a log line
   void target_all(cia402::Target t) noexcept;
 
   CanopenArmConfig config_;
@@ -139,11 +152,17 @@ class CanopenArm : public Device {
   Joints q_{}, qd_{}, tau_{};  // measured
   Joints target_{};            // what was sent this cycle (csp: position, csv: velocity, cst: torque)
   FaultReason reason_ = FaultReason::none;
-  bool enable_sent_ = false;  // this enable's fault resets and targets are out
+  bool enable_sent_ = false;     // this enable's fault resets and targets are out
+  bool operation_sent_ = false;  // ... and, every drive showing its mode, operation enabled
+  TimeNs mode_wait_ = -1;        // since when every drive is switched on, waiting for 0x6061
   TimeNs start_time_ = -1;
   std::array<std::uint64_t, JointState::max_joints> emcy_seen_{};
+  // An EMCY waits for the drive's next statusword: fault (an error) or not (a warning).
+  std::array<bool, JointState::max_joints> emcy_pending_{};
+  std::array<int, JointState::max_joints> emcy_tpdos_{};
   std::array<std::uint32_t, JointState::max_joints> boot_ups_seen_{};
   std::array<bool, JointState::max_joints> rebooted_{};
+  std::array<bool, JointState::max_joints> reconfiguring_{};  // this enable re-runs its configuration
 
   // State-table sources.
   JointState setpoint_js_{};

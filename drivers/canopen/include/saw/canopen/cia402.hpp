@@ -108,6 +108,7 @@ inline constexpr bool quick_stop_stays_active(std::int16_t option) noexcept {
 
 // The objects of a CiA 402 servo drive's first axis.
 namespace object {
+inline constexpr ObjectAddress abort_connection_option_code{0x6007, 0};
 inline constexpr ObjectAddress error_code{0x603F, 0};
 inline constexpr ObjectAddress controlword{0x6040, 0};
 inline constexpr ObjectAddress statusword{0x6041, 0};

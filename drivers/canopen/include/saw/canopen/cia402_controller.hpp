@@ -25,12 +25,15 @@ struct ControllerConfig {
   // Cycles the fault-reset bit stays high before it drops for one cycle to make a new edge,
   // for a drive that missed the first one or whose fault was still present.
   int fault_reset_cycles = 8;
+  // Rising edges of bit 7 sent to a drive that stays in fault before the reset is given up
+  // (Progress::fault): a fault whose cause is still present is not reset forever.
+  int fault_reset_tries = 3;
 };
 
 enum class Progress : std::uint8_t {
   reached,        // the drive is in the target state
   working,        // a transition is under way
-  fault,          // the drive is in fault (or reacting to one) and no reset was asked for
+  fault,          // the drive is in fault (or reacting to one): no reset asked for, or the tries used up
   timeout,        // no transition for transition_timeout
   unknown_state,  // the statusword is no CiA 402 state: the last controlword is held
 };
@@ -42,6 +45,7 @@ struct ControllerOutput {
   State state = State::unknown;
   Progress progress = Progress::working;
   TimeNs in_state_for = 0;  // time since the state (or the target) last changed
+  int fault_resets = 0;     // rising edges of bit 7 sent since the last request_fault_reset()
 };
 
 // Pure and allocation-free: call update() once per cycle with the statusword just received;
@@ -54,8 +58,9 @@ class Controller {
 
   void set_target(Target t, TimeNs now) noexcept;
   Target target() const noexcept { return target_; }
-  // Asks for a fault reset: a rising edge of bit 7 once the drive is in fault. Forgotten when
-  // the drive leaves fault, or at once if it is in no fault state.
+  // Asks for a fault reset: a rising edge of bit 7 once the drive is in fault, again (up to
+  // fault_reset_tries edges) while it stays there. Forgotten when the drive leaves fault, or at
+  // once if it is in no fault state. Ask only once the drive's statusword has been received.
   void request_fault_reset(TimeNs now) noexcept;
   // Extra controlword bits for the mode (4..6, 8..15: halt, mode-specific); others are ignored.
   void set_mode_bits(std::uint16_t bits) noexcept { mode_bits_ = bits & controlword::mode_bits; }
@@ -71,6 +76,7 @@ class Controller {
   std::uint16_t mode_bits_ = 0;
   bool reset_requested_ = false;
   int reset_high_cycles_ = 0;
+  int resets_ = 0;
   std::uint16_t last_ = 0;
   State last_state_ = State::unknown;
   TimeNs since_ = 0;

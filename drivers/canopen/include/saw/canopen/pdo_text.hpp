@@ -33,8 +33,8 @@ PdoMapping make_pdo(PdoKind kind, std::uint16_t number, std::uint8_t node, std::
 
 // What the master maps when the deployment says nothing: RPDO1 controlword + the mode's target
 // (target position, velocity or torque); TPDO1 statusword + position actual + torque actual,
-// TPDO2 velocity actual; PDOs 2..4 (RPDO) and 3..4 (TPDO) configured as not valid, so that a
-// drive's factory TPDOs do not load the bus.
+// TPDO2 velocity actual + modes of operation display + error code; PDOs 2..4 (RPDO) and 3..4 (TPDO)
+// configured as not valid, so that a drive's factory TPDOs do not load the bus.
 std::vector<PdoMapping> default_pdo_mappings(cia402::Mode mode, std::uint8_t node);
 
 }  // namespace saw::canopen

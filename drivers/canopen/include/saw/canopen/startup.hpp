@@ -1,4 +1,4 @@
-// The start-up of the drives on one bus: NMT reset, boot-ups, SDO configuration, NMT start.
+// The start-up of the drives on one bus: NMT reset, boot-ups, identity, SDO configuration, NMT start.
 #pragma once
 
 #include <cstdint>
@@ -24,8 +24,13 @@ struct StartupWrite {
 };
 
 // What the start-up writes to one drive, in order: its PDOs (configuration_writes() each),
-// the producer heartbeat time 0x1017 (ms), the mode of operation 0x6060.
+// the producer heartbeat time 0x1017 (ms), the consumer heartbeat time 0x1016:01 (the master's
+// node-ID and time, ms; when master_timeout is not 0), the abort connection option code 0x6007,
+// the deployment's writes (AxisConfig::writes), the mode of operation 0x6060.
 std::vector<StartupWrite> startup_writes(const AxisConfig& axis);
+// A write's value as its type encodes it (values are kept as 32 bits; a signed object's is its
+// two's complement).
+Number startup_value(const SdoWrite& w) noexcept;
 
 struct StartupConfig {
   TimeNs boot_timeout = 2'000'000'000;         // from NMT reset communication to every boot-up
@@ -33,7 +38,7 @@ struct StartupConfig {
   TimeNs operational_timeout = 2'000'000'000;  // from NMT start to an operational heartbeat
 };
 
-enum class StartupPhase : std::uint8_t { reset, boot, configure, start, operational, done, failed };
+enum class StartupPhase : std::uint8_t { reset, boot, identify, configure, start, operational, done, failed };
 std::string_view to_string(StartupPhase p) noexcept;
 
 // The sequence as a stepped machine: step() reads what the bus has, sends what is due and says
@@ -59,6 +64,7 @@ class StartupSequence {
   void receive(TimeNs now);
   void fail(const std::string& what);
   void send(const can::Frame& f);
+  bool identify(TimeNs now);
   bool configure(TimeNs now);
 
   can::Bus& bus_;

@@ -32,18 +32,19 @@ struct SimDriveConfig {
 
 // Each only grows.
 struct SimDriveCounters {
-  std::uint64_t frames_in = 0;     // taken from the bus, everyone's traffic
-  std::uint64_t frames_out = 0;    // accepted by the bus
-  std::uint64_t not_canopen = 0;   // failed canopen_data_frame() (FD, extended, remote): ignored
-  std::uint64_t send_refused = 0;  // the bus did not take them
-  std::uint64_t lost_bus_off = 0;  // received or produced while bus-off
-  std::uint64_t nmt = 0;           // NMT commands addressed to this node
-  std::uint64_t sync = 0;          // SYNCs acted on (operational)
-  std::uint64_t sdo_requests = 0;  // SDO requests served (pre-operational, operational)
-  std::uint64_t rpdos = 0;         // RPDOs accepted
-  std::uint64_t tpdos = 0;         // TPDOs produced
-  std::uint64_t emcys = 0;         // EMCYs produced (error and error reset)
-  std::uint64_t heartbeats = 0;    // heartbeats produced (boot-up not included)
+  std::uint64_t frames_in = 0;         // taken from the bus, everyone's traffic
+  std::uint64_t frames_out = 0;        // accepted by the bus
+  std::uint64_t not_canopen = 0;       // failed canopen_data_frame() (FD, extended, remote): ignored
+  std::uint64_t send_refused = 0;      // the bus did not take them
+  std::uint64_t lost_bus_off = 0;      // received or produced while bus-off
+  std::uint64_t nmt = 0;               // NMT commands addressed to this node
+  std::uint64_t sync = 0;              // SYNCs acted on (operational)
+  std::uint64_t sdo_requests = 0;      // SDO requests served (pre-operational, operational)
+  std::uint64_t rpdos = 0;             // RPDOs accepted
+  std::uint64_t tpdos = 0;             // TPDOs produced
+  std::uint64_t emcys = 0;             // EMCYs produced (error and error reset)
+  std::uint64_t heartbeats = 0;        // heartbeats produced (boot-up not included)
+  std::uint64_t heartbeat_events = 0;  // the watched node (0x1016:01, the master) went silent
   std::uint64_t pdo_length_errors = 0;
 };
 
@@ -117,7 +118,9 @@ class SimDrive {
   void refresh_identifiers() noexcept;
   void refresh_producers() noexcept;
   void end_fault(FaultKind kind) noexcept;
-  void abort_connection() noexcept;
+  void abort_connection(std::uint16_t code) noexcept;
+  void refresh_consumer() noexcept;
+  void watch_consumer() noexcept;
   SdoAbort check_write(ObjectAddress address, std::span<const std::uint8_t> data) const noexcept;
   void written(ObjectAddress address) noexcept;
   SdoAbort injected_abort(ObjectAddress address) const noexcept;
@@ -193,6 +196,12 @@ class SimDrive {
   bool pdo_length_error_ = false;                // EMCY 0x8210 sent, until an RPDO of the right length
   bool bus_off_fault_ = false;                   // the bus-off faulted the drive (0x6007 = 1)
   std::optional<std::uint16_t> forced_command_;  // 0x6007 = 2, 3: the drive's own command, once
+
+  // The heartbeat consumer (0x1016:01): the node it watches (the master) and for how long.
+  std::uint8_t watched_node_ = 0;
+  TimeNs consumer_time_ = 0;
+  std::optional<TimeNs> watched_seen_;  // its last heartbeat; monitoring starts with the first
+  bool consumer_fired_ = false;
 
   // Faults: events waiting for the next step, lasting ones with their end (max: until cleared).
   std::array<std::optional<Fault>, fault_kind_count> pending_{};
