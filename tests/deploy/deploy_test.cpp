@@ -13,7 +13,7 @@
 #include "packages.hpp"
 #include "saw/deploy/deployment.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 #include "text.hpp"
 
 namespace {
@@ -132,7 +132,7 @@ TEST(Deployment, SteppedRunRecordsEveryRow) {
   int rows = 0;
   while (std::getline(in, line)) ++rows;
   EXPECT_EQ(rows, 1001);
-  auto* t = d.find<saw::teleop::CollaborativeControlForce>("teleop");
+  auto* t = d.find<saw::teleop::Teleoperation>("teleop");
   ASSERT_NE(t, nullptr);
   EXPECT_LT(t->tracking_rms(), 1e-3);
 }
@@ -174,7 +174,7 @@ TEST(Integration, ShippedTeleopSimTracksInSteppedMode) {
   d.start();
   d.run_for(5.0);
   d.stop();
-  auto* t = d.find<saw::teleop::CollaborativeControlForce>("teleop");
+  auto* t = d.find<saw::teleop::Teleoperation>("teleop");
   ASSERT_NE(t, nullptr);
   EXPECT_EQ(t->operating_state(), saw::OperatingStateValue::enabled);
   EXPECT_EQ(t->enabled_cycles(), 5001u);

@@ -16,7 +16,7 @@ using saw::StateCommand;
 
 TEST(RtGuard, TeleoperationCycleIsRtClean) {
   saw::testing::GuardWindow window;
-  saw::teleop::TeleopConfig c;
+  saw::testing::CollaborativeTeleopConfig c;
   c.limits = {2, 2};  // low: the ratchet and the Ruckig offset trajectory both run
   c.prediction = {true, 0.02};
   c.align = true;
@@ -131,7 +131,7 @@ struct ConsoleRig : saw::testing::TeleopRig<Console> {
 
 TEST(RtGuard, EveryTeleoperationCommandIsRtClean) {
   saw::testing::GuardWindow window;
-  saw::teleop::TeleopConfig c;
+  saw::testing::CollaborativeTeleopConfig c;
   c.stale_timeout = 0.1;
   ConsoleRig rig(c, /*scripted=*/true);
   rig.run(200);
@@ -153,7 +153,7 @@ TEST(RtGuard, EveryTeleoperationCommandIsRtClean) {
 // A master that stops publishing: FAULT, cycles in FAULT, then re-enabled once it is back.
 TEST(RtGuard, TeleoperationFaultAndRecoveryAreRtClean) {
   saw::testing::GuardWindow window;
-  saw::teleop::TeleopConfig c;
+  saw::testing::CollaborativeTeleopConfig c;
   c.stale_timeout = 0.01;
   ConsoleRig rig(c, /*scripted=*/false, /*enable_at=*/200);
   rig.run(50);

@@ -6,7 +6,7 @@
 
 namespace saw::teleop {
 
-// What a DelayTask adds to the arm interface it re-publishes; CollaborativeControlForce reads
+// What a DelayTask adds to the arm interface it re-publishes; Teleoperation reads
 // them, when present, to judge staleness on the source.
 namespace delayed_arm {
 inline constexpr crtk::Read<TimeNs> source_time{"source_time"};  // of the source row shown
@@ -18,7 +18,7 @@ inline constexpr crtk::Read<TimeNs> delay{"delay"};              // how late it 
 // history; force commands and button events pass through (one cycle later). The rows are this
 // task's, stamped with its cycle: "source_time" says when the source wrote the value shown
 // (it stops advancing when the source dies) and "delay" how late it is meant to be, so that a
-// consumer can judge staleness on the source (CollaborativeControlForce does).
+// consumer can judge staleness on the source (Teleoperation does).
 class DelayTask : public Task {
  public:
   DelayTask(std::string name, TaskConfig task, double delay_seconds);
