@@ -177,12 +177,18 @@ struct BadLaw : SpringLaw {
   using SpringLaw::SpringLaw;
 };
 
+struct SameNameLaw : SpringLaw {
+  static constexpr std::string_view name = "spring_test";
+  using SpringLaw::SpringLaw;
+};
+
 TEST(TeleopSeam, ALawRegistersWithOneLineAndMayNotShadowTheTasksKeys) {
   saw::teleop::LawRegistry r;
   r.add<SpringLaw>();
   ASSERT_NE(r.find("spring_test"), nullptr);
   EXPECT_EQ(r.find("spring_test")->rows.at(0).command, "set_stiffness");
-  EXPECT_THROW(r.add<SpringLaw>(), std::invalid_argument);
+  EXPECT_NO_THROW(r.add<SpringLaw>()) << "the same law again (a plug-in loaded again)";
+  EXPECT_THROW(r.add<SameNameLaw>(), std::invalid_argument) << "another law under a taken name";
   EXPECT_THROW(r.add<BadLaw>(), std::invalid_argument);
 }
 

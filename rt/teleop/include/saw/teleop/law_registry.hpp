@@ -110,7 +110,7 @@ LawSpec law_spec(const typename L::Settings& settings = {}) {
           }};
 }
 
-// One row of a law's settings table (docs, `saw-rt --list-laws`).
+// One row of a law's settings table (docs/teleop-laws.md).
 struct SettingRow {
   std::string name, shape, unit, bounds, fallback, command, help;
 };
@@ -123,13 +123,15 @@ class LawRegistry {
     // Reads the law's settings from the component's `params:` (file:line:key errors).
     std::function<LawSpec(const deploy::Params&)> parse;
     std::vector<SettingRow> rows;
+    const void* identity = nullptr;  // the law's type (a plug-in loaded again registers it again)
   };
 
-  // Throws std::invalid_argument for a name taken, or a setting named like one of the task's
-  // own keys (`reserved`).
+  // Throws std::invalid_argument for a name taken by another law, or a setting named like one
+  // of the task's own keys (`reserved`). The same law again is no change.
   template <Law L>
   void add() {
     Entry e;
+    e.identity = &L::name;
     e.description = std::string(L::description);
     e.parse = [](const deploy::Params& p) {
       typename L::Settings s{};
