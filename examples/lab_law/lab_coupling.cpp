@@ -51,12 +51,22 @@ struct CouplingLaw {
     out.limiting = f.norm() > s_.force_limit;
     out.slave_offset = offset_;
     out.finite = f.allFinite() && std::isfinite(f.norm());
+    // What the coupling has given the devices (a passivity observer would watch this grow).
+    if (out.finite)
+      energy_ +=
+          (out.master_force.dot(in.master.velocity) + out.slave_force.dot(in.slave.velocity)) * in.period;
     return out;
   }
 
  private:
   Settings s_;
   Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();
+  double energy_ = 0;  // J
+
+ public:
+  // A value the law computes, shown as the task's state and read command `energy`.
+  static constexpr auto declared_readouts = std::tuple{saw::teleop::Readout<CouplingLaw, double>{
+      "energy", "J", &CouplingLaw::energy_, "work done by the coupling on both devices"}};
 };
 
 void register_law(saw::deploy::ComponentRegistry&) { saw::teleop::law_registry().add<CouplingLaw>(); }

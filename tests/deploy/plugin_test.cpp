@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <regex>
 
 #include "packages.hpp"
@@ -102,6 +103,8 @@ TEST(Plugins, TheExampleLabLawRunsOnTheTeleoperationTask) {
   ASSERT_NE(t, nullptr);
   EXPECT_EQ(t->law_name(), "lab_coupling");
   EXPECT_NE(t->provided("teleop")->find_command("set_feedback"), nullptr) << "its settings are commands";
+  const auto* energy = t->provided("teleop")->find_command("energy");
+  ASSERT_NE(energy, nullptr) << "its read-outs are read commands";
   d.start();
   d.run_for(1.5);
   d.stop();
@@ -109,6 +112,9 @@ TEST(Plugins, TheExampleLabLawRunsOnTheTeleoperationTask) {
   EXPECT_GT(t->enabled_cycles(), 1400u);
   EXPECT_GT(t->tracking_max(), 0.0) << "the master moved";
   EXPECT_LT(t->tracking_rms(), 0.01) << "the slave follows the master";
+  double work = 0;
+  ASSERT_EQ(energy->read(nullptr, &work), saw::Status::ok);
+  EXPECT_TRUE(std::isfinite(work) && work != 0.0) << work;
   // A setting out of its declared bounds is a file:line error like any other.
   std::string bad = text;
   bad.replace(bad.find("feedback: 0.5"), 13, "feedback: 2");

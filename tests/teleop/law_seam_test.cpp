@@ -165,9 +165,13 @@ struct SpringLaw {
   saw::teleop::LawCommand step(const saw::teleop::LawInputs& in) noexcept {
     saw::teleop::LawCommand out;
     out.slave_force = -s_.stiffness * in.slave.position;
+    pull_ = out.slave_force.norm();
     return out;
   }
   Settings s_;
+  double pull_ = 0;
+  static constexpr auto declared_readouts =
+      std::tuple{saw::teleop::Readout<SpringLaw, double>{"pull", "N", &SpringLaw::pull_, "|f_s|"}};
 };
 
 struct BadLaw : SpringLaw {
@@ -181,6 +185,28 @@ struct SameNameLaw : SpringLaw {
   static constexpr std::string_view name = "spring_test";
   using SpringLaw::SpringLaw;
 };
+
+// Connected to the task, calling nothing of it (any law's interface).
+class Bystander : public saw::Component {
+ public:
+  Bystander() : Component("operator") {
+    auto& r = require("teleop");
+    r.add_function("state_command", state_command);
+  }
+  saw::FunctionWrite<saw::StateCommand> state_command;
+};
+
+TEST(TeleopSeam, ALawsReadOutsAreTheTasksState) {
+  saw::testing::TeleopRig<Bystander> rig(saw::teleop::TeleopConfig{}, saw::teleop::law_spec<SpringLaw>());
+  rig.slave.position = {0.01, 0, 0};
+  rig.step(3);
+  const auto* pull = rig.teleop.provided("teleop")->find_command("pull");
+  ASSERT_NE(pull, nullptr);
+  double v = 0;
+  ASSERT_EQ(pull->read(nullptr, &v), Status::ok);
+  EXPECT_NEAR(v, 0.5, 1e-12) << "50 N/m · 1 cm";
+  EXPECT_NEAR(rig.slave.force[0], -0.5, 1e-12);
+}
 
 TEST(TeleopSeam, ALawRegistersWithOneLineAndMayNotShadowTheTasksKeys) {
   saw::teleop::LawRegistry r;

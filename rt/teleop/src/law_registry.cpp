@@ -45,6 +45,15 @@ std::string LawRegistry::markdown() const {
              (r.bounds.empty() ? "—" : r.bounds) + " | `" + r.fallback + "` | " + code(r.command) + " | " +
              r.help + " |\n";
     }
+    if (!e.readouts.empty()) {
+      out += "\nRead-outs (state, read commands): ";
+      for (std::size_t i = 0; i < e.readouts.size(); ++i) {
+        const auto& r = e.readouts[i];
+        out += (i ? "; " : "") + ("`" + r.name + "`") + (r.unit.empty() ? "" : " (" + r.unit + ")") + ", " +
+               r.help;
+      }
+      out += ".\n";
+    }
     out += "\n";
   }
   return out;

@@ -60,6 +60,8 @@ struct LawContext {
 //                                              // device): stay ready to engage (default: reset)
 //     void on_set(std::string_view setting, const Settings& before) noexcept;  // after set_<name>
 //     std::uint64_t refusals() const noexcept; int last_refusal() const noexcept;  // e.g. a planner's
+//     static constexpr auto declared_readouts = std::tuple{Readout<MyLaw, double>{...}, ...};
+//                                              // values it computes, shown as the task's state
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {

@@ -29,7 +29,8 @@ class LawModel {
   virtual std::uint64_t refusals() const noexcept = 0;
   virtual int last_refusal() const noexcept = 0;
   // Setup: each declared setting as a latched state column and read command `name`, and (when
-  // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`.
+  // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`. Each declared
+  // read-out as a state column and read command.
   virtual void provide_settings(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected) = 0;
 };
 
@@ -62,6 +63,14 @@ class LawHolder final : public LawModel {
   }
   void provide_settings(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected) override {
     std::apply([&](const auto&... s) { (provide(p, table, rejected, s), ...); }, L::declared_settings);
+    if constexpr (requires { L::declared_readouts; })
+      std::apply(
+          [&](const auto&... r) {
+            (p.add_command_read(std::string(r.name),
+                                table.add_column(std::string(r.name), &(law_.*r.member))),
+             ...);
+          },
+          L::declared_readouts);
   }
   L& law() noexcept { return law_; }
 
@@ -123,7 +132,8 @@ class LawRegistry {
     // Reads the law's settings from the component's `params:` (file:line:key errors).
     std::function<LawSpec(const deploy::Params&)> parse;
     std::vector<SettingRow> rows;
-    const void* identity = nullptr;  // the law's type (a plug-in loaded again registers it again)
+    std::vector<SettingRow> readouts;  // name, unit, help
+    const void* identity = nullptr;    // the law's type (a plug-in loaded again registers it again)
   };
 
   // Throws std::invalid_argument for a name taken by another law, or a setting named like one
@@ -140,6 +150,14 @@ class LawRegistry {
     };
     const typename L::Settings defaults{};
     std::apply([&](const auto&... d) { (e.rows.push_back(row(d, defaults)), ...); }, L::declared_settings);
+    if constexpr (requires { L::declared_readouts; })
+      std::apply(
+          [&](const auto&... r) {
+            (e.readouts.push_back(
+                 {std::string(r.name), "", std::string(r.unit), "", "", "", std::string(r.help)}),
+             ...);
+          },
+          L::declared_readouts);
     add_entry(std::string(L::name), std::move(e));
   }
 

@@ -33,6 +33,17 @@ struct Setting {
   std::string_view invalid_why = {};
 };
 
+// A value a law computes and shows (a bilateral law's energy per port, a passivity controller's
+// damping): a state column and read command `name` of the task, recorded and exported like its
+// own. Declared in `declared_readouts`, after the member it reads.
+template <class L, class T>
+struct Readout {
+  std::string_view name;
+  std::string_view unit;
+  T L::*member = nullptr;
+  std::string_view help;
+};
+
 inline std::string setting_number(double v) {
   if (std::isinf(v)) return v > 0 ? "∞" : "−∞";
   char b[32];
