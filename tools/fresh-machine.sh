@@ -6,6 +6,10 @@
 # step's time and exit status reported. Needs root and debootstrap.
 # Usage: tools/fresh-machine.sh [ROOT_DIR] [COMMIT]
 set -euo pipefail
+command -v debootstrap >/dev/null || {
+  echo "fresh-machine: needs debootstrap (apt-get install debootstrap) and root" >&2
+  exit 1
+}
 root_dir=${1:-/tmp/saw-fresh-root}
 commit=${2:-HEAD}
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)

@@ -62,10 +62,10 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICK
 
 
-# What one subscriber's state topics carry per second (see `one`): four at 1 kHz (both arms'
-# measured_cp, the tracking error, the slave force) and three tasks' period_statistics, which the
-# gateway publishes at a tenth of the rows.
-STATE_RATE_HZ = 4 * 1000 + 3 * 100
+# What one subscriber's state topics carry per second (see `one`): three at 1 kHz (both arms'
+# measured_cp, the tracking error: what the teleoperation panel draws) and three tasks'
+# period_statistics, which the gateway publishes at a tenth of the rows.
+STATE_RATE_HZ = 3 * 1000 + 3 * 100
 
 
 def one(args, n: int, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> dict:

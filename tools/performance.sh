@@ -3,7 +3,8 @@
 # (machine, kernel, date, commands, tables, goals) and the plots in docs/img/. Takes about 8
 # minutes; --quick (about 3) shortens the jitter runs and the benchmark loops for a first look;
 # --can runs only the CANopen benchmark (about 15 s) and rewrites only its section; --gui runs only
-# the remote GUIs' benchmark (about 3.5 minutes) and rewrites only its section.
+# the remote GUIs' benchmarks (about 4 minutes: the headless subscribers, then the window) and
+# rewrites only their sections.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
@@ -29,6 +30,9 @@ if ((quick)); then gui_seconds=8 gui_rounds=1; fi
 gui_run() {
   run gui .venv/bin/python tools/gui_scale.py build/release/bin/saw-rt build/release/bin/saw-gateway \
     --seconds $gui_seconds --rounds $gui_rounds --json $out/gui.json
+  # The window itself (Xvfb): redraws, command latency, CPU with the Teleoperation tab open.
+  run window .venv/bin/python tools/gui_perf.py build/release/bin/saw-rt --seconds 10 --rounds 5 \
+    --json $out/window.json
 }
 if ((gui_only)); then
   tools/build.sh saw-rt saw-gateway

@@ -137,6 +137,36 @@ TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
   EXPECT_LT(t->tracking_rms(), 0.02) << "the slave follows the master";
 }
 
+// The human-like hand (reaches with dwells, tremor) and the virtual wall of the simulated device.
+TEST(Deployment, HandAndWallParametersAreCheckedLikeTheRest) {
+  const std::string hand = "hand: {type: sinusoid, amplitude: [0.02, 0, 0], frequency: 0.5}";
+  const Case cases[] = {
+      {hand.c_str(), "hand: {type: reach, targets: [[0.02, 0, 0], [0.01, 0]]}",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.targets': expected a point \[x, y, z\])"},
+      {hand.c_str(), "hand: {type: reach}",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.targets')"},
+      {hand.c_str(), "hand: {type: reach, targets: [[0.9, 0, 0]]}",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.targets': a target is more than 0\.5 m)"},
+      {hand.c_str(), "hand: {type: line, tremor: {amplitude: 0.01}}",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.hand\.tremor\.amplitude': .*out of range)"},
+      {hand.c_str(), "wall: {normal: [0, 0, 0]}",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.wall\.normal': must not be zero)"},
+      {hand.c_str(), "wall: {normal: [1, 0, 0], stifness: 10}",
+       R"(^cfg\.yaml:6:\d+: key 'components\[0\]\.params\.wall\.stifness': unknown parameter)"},
+  };
+  for (const auto& c : cases) {
+    const auto message = error_of(c.from, c.to);
+    EXPECT_TRUE(std::regex_search(message, std::regex(c.expect)))
+        << "message: " << message << "\nexpected: " << c.expect;
+  }
+  std::string text = good;
+  text.replace(text.find(hand), hand.size(),
+               "hand: {type: reach, targets: [[0.02, 0, 0], [0, 0.02, 0]], reach_time: 0.6, dwell: 0.3, "
+               "tremor: {amplitude: 0.0003, frequency: 9}}, wall: {point: [0.01, 0, 0], normal: [-1, 0, 0], "
+               "stiffness: 2500}");
+  EXPECT_NO_THROW((void)build(text, "cfg.yaml", registry()));
+}
+
 TEST(Deployment, ConnectionTypeMismatchKeepsTheManagersMessage) {
   // teleop's required "master" wants measured_cp as read<Pose>; the device's "sim" interface has
   // set_button (write<ButtonCommand>) etc. but no measured_cp.

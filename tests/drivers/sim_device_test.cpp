@@ -347,6 +347,92 @@ TEST(SimHapticDevice, HandFollowsALineAndACsv) {
   EXPECT_THROW(saw::drivers::HandScript::load_csv(path + ".missing"), std::runtime_error);
 }
 
+// The human-like hand: minimum-jerk reaches (at rest at both ends, half-way at half time), a dwell
+// at each target, back to the origin, and round again.
+TEST(HandScript, ReachesAreMinimumJerkWithDwells) {
+  saw::drivers::HandScript h;
+  h.kind = saw::drivers::HandScript::Kind::reach;
+  h.targets = {Eigen::Vector3d(0.02, 0, 0), Eigen::Vector3d(0.02, 0.01, 0)};
+  h.reach_time = 0.8;
+  h.dwell = 0.2;
+  std::size_t cursor = 0;
+  const auto at = [&](double t) { return h.target(t, cursor).position; };
+  EXPECT_TRUE(at(0).isZero());
+  EXPECT_TRUE(at(0.4).isApprox(Eigen::Vector3d(0.01, 0, 0)));  // symmetric profile: half-way at half time
+  EXPECT_LT(at(0.1).x(), 0.1 * 0.02) << "slow start: 10u³−15u⁴+6u⁵ is 0.0156 at u=1/8, not 0.125";
+  for (double t : {0.8, 0.9, 1.0})
+    EXPECT_TRUE(at(t).isApprox(h.targets[0])) << "dwell at the target, t=" << t;
+  EXPECT_TRUE(at(1.8).isApprox(h.targets[1]));
+  EXPECT_NEAR(at(2.8).norm(), 0, 1e-12) << "back at the origin after the last target";
+  EXPECT_TRUE(at(3.4).isApprox(at(0.4))) << "and round again";
+  // Zero velocity at both ends of a reach (and nothing faster than the profile's 1.875·d/T peak).
+  const double dt = 1e-4, peak = 1.875 * 0.02 / 0.8;
+  EXPECT_NEAR((at(dt) - at(0)).norm() / dt, 0, 1e-3);
+  EXPECT_NEAR((at(0.8) - at(0.8 - dt)).norm() / dt, 0, 1e-3);
+  EXPECT_NEAR((at(0.4 + dt) - at(0.4)).norm() / dt, peak, 1e-3);
+}
+
+// Physiological tremor: sub-millimetre, in the 8–12 Hz band on every axis, on top of the motion.
+TEST(HandScript, TremorIsSubMillimetreInItsBand) {
+  saw::drivers::HandScript h;
+  h.kind = saw::drivers::HandScript::Kind::line;  // holding still at the origin
+  h.tremor_amplitude = 3e-4;
+  h.tremor_frequency = 10;
+  std::size_t cursor = 0;
+  Eigen::Vector3d peak = Eigen::Vector3d::Zero();
+  std::array<int, 3> crossings{};
+  Eigen::Vector3d last = h.target(0, cursor).position;
+  const int n = 100'000;  // 10 s at 10 kHz
+  for (int i = 1; i <= n; ++i) {
+    const Eigen::Vector3d p = h.target(i * 1e-4, cursor).position;
+    peak = peak.cwiseMax(p.cwiseAbs());
+    for (int k = 0; k < 3; ++k)
+      if ((p[k] > 0) != (last[k] > 0)) ++crossings[static_cast<std::size_t>(k)];
+    last = p;
+  }
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_LE(peak[k], 3e-4 + 1e-12);
+    EXPECT_GT(peak[k], 2.9e-4);
+    const double hz = crossings[static_cast<std::size_t>(k)] / 2.0 / 10.0;
+    EXPECT_GE(hz, 8.0) << "axis " << k;
+    EXPECT_LE(hz, 12.0) << "axis " << k;
+  }
+  h.kind = saw::drivers::HandScript::Kind::none;  // no hand: no tremor either
+  EXPECT_TRUE(h.target(0.0123, cursor).position.isZero());
+}
+
+// The contact scenario: the hand pushes the tip into a stiff wall. The wall pushes back along its
+// normal by its stiffness times the depth, holds the hand's push at rest, and never pulls.
+TEST(SimHapticDevice, AVirtualWallPushesBackByItsStiffness) {
+  SimDeviceConfig c;
+  c.hand.kind = saw::drivers::HandScript::Kind::line;
+  c.hand.to = {0.02, 0, 0};  // 2 cm into the wall: the hand's spring pushes ~ 300 N/m · (2 cm − depth)
+  c.hand.duration = 0.5;
+  c.hand.stiffness = 300;
+  c.wall.enabled = true;
+  c.wall.point = {0.005, 0, 0};
+  c.wall.normal = {-1, 0, 0};  // the wall's free side faces the origin
+  c.wall.stiffness = 3000;
+  Rig rig(c);
+  const Eigen::Vector3d origin = rig.position();
+  EXPECT_TRUE(rig.device.wall_force().isZero()) << "no contact yet";
+  rig.steps(4000);
+  const double x = rig.position().x() - origin.x();
+  const double depth = x - 0.005;
+  ASSERT_GT(depth, 0) << "the tip is in the wall";
+  const Eigen::Vector3d f = rig.device.wall_force();
+  EXPECT_NEAR(f.x(), -3000 * depth, 0.05) << "stiffness times depth, against the push";
+  EXPECT_NEAR(f.y(), 0, 1e-9);
+  EXPECT_NEAR(f.x() + 300 * (0.02 - x), 0, 0.1) << "at rest: the wall holds the hand's push";
+  EXPECT_LT(depth, 0.003) << "a stiff wall: the hand's 300 N/m against 3000 N/m";
+  // Outside the wall (a wall pulling the tip back in would make contact sticky).
+  SimDeviceConfig away = c;
+  away.hand.to = {-0.01, 0, 0};
+  Rig free(away);
+  free.steps(2000);
+  EXPECT_TRUE(free.device.wall_force().isZero());
+}
+
 // A device never keeps pushing: without a fresh servo_cf for command_timeout, zero force, and
 // the state says so; the next command applies again.
 TEST(SimHapticDevice, CommandWatchdogDropsTheForceWhenCommandsStop) {

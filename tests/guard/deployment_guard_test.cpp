@@ -19,7 +19,7 @@ struct Deployment {
   Deployment()
       : master("master", saw::TaskConfig::periodic(1ms, 0), master_config()),
         slave("slave", saw::TaskConfig::periodic(1ms, 0), saw::drivers::SimDeviceConfig{}),
-        delay("master_delay", saw::TaskConfig::periodic(1ms, 0), 0.01),
+        delay("master_delay", saw::TaskConfig::periodic(1ms, 0), link_config()),
         teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config(),
                saw::teleop::law_spec<saw::teleop::CollaborativeLaw>(teleop_config())) {
     for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &delay, &teleop})
@@ -27,6 +27,13 @@ struct Deployment {
     m.connect("master_delay", "source", "master", "arm");
     m.connect("teleop", "master", "master_delay", "arm");
     m.connect("teleop", "slave", "slave", "arm");
+  }
+  // Both directions delayed, jittered and lossy: every path of the link runs under the guard.
+  static saw::teleop::DelayConfig link_config() {
+    saw::teleop::DelayConfig c;
+    c.measured = {10'000'000, 2'000'000, 0.05, 1};
+    c.commands = {10'000'000, 2'000'000, 0.05, 2};
+    return c;
   }
   static saw::drivers::SimDeviceConfig master_config() {
     saw::drivers::SimDeviceConfig c;

@@ -59,10 +59,23 @@ class Deployment:
         fd, self.yaml = tempfile.mkstemp(suffix=".yaml", prefix="sawgui-")
         with os.fdopen(fd, "w") as f:
             f.write(DEPLOYMENT.format(tag=self.tag, domain=self.domain))
+        self.saw_rt = saw_rt
         self.rt = subprocess.Popen([saw_rt, self.yaml], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
     def kill_rt(self):
         self.rt.send_signal(signal.SIGKILL)
+
+    def restart_rt(self):
+        """saw-rt again, the same deployment (after kill_rt): its gateway is a new one."""
+        self.rt.wait()
+        self._unlink_segments()
+        self.rt = subprocess.Popen([self.saw_rt, self.yaml], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                   text=True)
+
+    def _unlink_segments(self):
+        for n in (self.master, self.slave, self.teleop):  # kill -9 leaves segments behind
+            if os.path.exists(f"/dev/shm/saw.{n}"):
+                os.unlink(f"/dev/shm/saw.{n}")
 
     def gateway_pids(self):
         out = subprocess.run(["pgrep", "-P", str(self.rt.pid), "saw-gateway"], capture_output=True, text=True)
@@ -83,9 +96,7 @@ class Deployment:
             while os.path.exists(f"/proc/{g}") and time.monotonic() < deadline:
                 time.sleep(0.05)
         os.unlink(self.yaml)
-        for n in (self.master, self.slave, self.teleop):  # kill -9 leaves segments behind
-            if os.path.exists(f"/dev/shm/saw.{n}"):
-                os.unlink(f"/dev/shm/saw.{n}")
+        self._unlink_segments()
 
 
 @pytest.fixture

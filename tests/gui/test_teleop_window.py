@@ -63,11 +63,23 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         w.tabs.setCurrentWidget(w.teleop)
         panel = w.teleop
         assert (panel.master, panel.slave) == (d.master, d.slave)
+        # The teleoperation publishes no read-back of its settings: the panel shows none (no
+        # hard-coded 1.0 / 300 / 3.0 the system may not have), and says the bounds it wants.
+        for e in (panel.scale, panel.gain_m, panel.gain_s, panel.lim_m, panel.lim_s):
+            assert e.text() == "" and e.placeholderText().startswith("within ["), (e.text(), e.placeholderText())
+        clicked = time.monotonic()
         qtbot.mouseClick(panel.disable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)
+        shown_ms = (time.monotonic() - clicked) * 1e3
         qtbot.mouseClick(panel.enable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "ENABLED", timeout=LONG)
-        # The slave follows the master one to one: over the master's 2 s cycle, as far as it.
+        figure(f"Disable clicked, DISABLED shown on the panel {shown_ms:.0f} ms later (tools/gui_perf.py measures "
+               "it with an independent DDS monitor; docs/performance.md)")
+        # The slave follows the master one to one: over the master's 2 s cycle (once the plots hold
+        # one), as far as it.
+        master_cp = panel._topic(d.master, "measured_cp")
+        qtbot.waitUntil(lambda: len(live.series(master_cp)[1]) and live.series(master_cp)[1][-1]
+                        - live.series(master_cp)[1][0] > 2.5, timeout=LONG)
         qtbot.waitUntil(lambda: 0.8 < ratio(panel) < 1.25, timeout=LONG)
         before = ratio(panel)
 
@@ -79,6 +91,9 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         after = ratio(panel)
         figure(f"slave/master x excursion over 2 s: {before:.2f} at scale 1, {after:.2f} at scale 2 "
                f"(slave {peak_to_peak_x(panel.slave_plot, 2.0) * 1e3:.1f} mm)")
+        # (a screenshot with 8 s drawn)
+        qtbot.waitUntil(lambda: len(live.series(master_cp)[1]) and live.series(master_cp)[1][-1]
+                        - live.series(master_cp)[1][0] > 8, timeout=LONG)
         save(w, shots, "teleop")
 
         # Clutch, held: the teleoperation pauses; released: it resumes.
@@ -87,22 +102,29 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         qtbot.mouseRelease(panel.clutch, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "ENABLED", timeout=LONG)
 
-        # Recording what the window reads to CSV: every sample, in order.
+        # Recording what the window reads (a recorder process: MCAP and CSV): every sample, in order.
         record = os.path.join(shots, "record")
         slave_cp = f"rt/{d.slave}/measured_cp"
         w.toggle_recording(record, topics=[slave_cp, f"rt/{d.teleop}/tracking_error"])
+        qtbot.waitUntil(lambda: live.recording()["ready"], timeout=LONG)
         start = live.count(slave_cp)
         qtbot.waitUntil(lambda: live.count(slave_cp) > start + 500, timeout=LONG)
-        files = w.toggle_recording()
-        assert "recorded" in w.statusBar().currentMessage()
+        summary = w.toggle_recording()
+        assert "recorded" in w.statusBar().currentMessage(), w.statusBar().currentMessage()
         w.statusBar().clearMessage()  # (it names a local path: not for the screenshots)
         csv_path = os.path.join(record, slave_cp.replace("/", "_") + ".csv")
-        assert sorted(files) == sorted([csv_path, os.path.join(record, f"rt_{d.teleop}_tracking_error.csv")]), files
+        # (each component's period_statistics comes along: the recorder checks its rows against it)
+        assert sorted(summary["files"]) == sorted([os.path.join(record, "recording.mcap"), csv_path,
+                                                   os.path.join(record, f"rt_{d.teleop}_tracking_error.csv")] +
+                                                  [os.path.join(record, f"rt_{c}_period_statistics.csv")
+                                                   for c in (d.slave, d.teleop)]), summary["files"]
+        assert "upstream_missed" in summary["topics"][slave_cp], summary["topics"][slave_cp]
         with open(csv_path) as f:
             rows = list(csv.reader(f))
         assert rows[0] == ["source_time_s", "pose.position.x", "pose.position.y", "pose.position.z"], rows[0]
         times = [float(r[0]) for r in rows[1:]]
-        assert len(times) >= 500 and all(b > a for a, b in zip(times, times[1:])), len(times)
+        assert len(times) == summary["topics"][slave_cp]["samples"] >= 500, (len(times), summary)
+        assert all(b > a for a, b in zip(times, times[1:])), "in order"
         figure(f"recorded {len(times)} samples of {slave_cp} over {times[-1] - times[0]:.2f} s")
         png = w.save_plots(os.path.join(shots, "plots.png"))
         with open(png, "rb") as f:
@@ -141,6 +163,19 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         save(w, shots, "component")
         # The teleoperation's view logs the gateway's refusal of the other peer's gain.
         w.picker.setCurrentText(d.teleop)
+        # No form pre-fills a value outside its bounds, nor one the component does not publish (a
+        # set_gains of 0, 0 would decouple the slave).
+        for name, v in w.views.items():
+            for f in v.forms.values():
+                if (name, f.endpoint.name) == (d.slave, "servo_cf"):
+                    continue  # (typed into above)
+                for field, edit in getattr(f, "fields", {}).items():
+                    text = edit.currentText() if hasattr(edit, "currentText") else edit.text()
+                    if f.source is None and not hasattr(edit, "currentText"):
+                        assert text == "", (name, f.endpoint.name, field, text)
+                    if text and f.limits and f.cls is not msgs.StringStamped:
+                        assert all(f.limits[0] <= float(x) <= f.limits[1] for x in text.split()), (name, field, text)
+        assert w.views[d.teleop].forms["set_gains"].fields["master"].text() == ""
         qtbot.waitUntil(lambda: "set_gains rejected" in w.views[d.teleop].log.toPlainText(), timeout=LONG)
 
         # Task health: each exported task's own cycles and overruns, and a histogram of the wake-up

@@ -1,10 +1,13 @@
 // The keystore: SROS2's layout, files that OpenSSL's own command line accepts, permissions per
 // role, and an enclave check that names what is wrong (expired, another CA, tampered files).
+#include "saw/security/keystore.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "keystore_fixture.hpp"
 #include "saw/security/enclave.hpp"
@@ -195,6 +198,89 @@ TEST(EnclaveCheck, TheRos2EnvironmentNamesTheEnclaveAndNeverFallsBackToPlaintext
   EXPECT_THROW(saw::security::resolve_enclave(std::nullopt), std::runtime_error);
   for (const char* v : {"ROS_SECURITY_ENABLE", "ROS_SECURITY_KEYSTORE", "ROS_SECURITY_STRATEGY"})
     ::unsetenv(v);
+}
+
+TEST(Keystore, AGatewaysSubjectIsOrderedForCycloneDdsPeersAndOtherRolesKeepTheirName) {
+  TempKeystore ks("order");
+  const auto gateway = saw::security::load_enclave(ks.enroll("gateway", Role::gateway));
+  const auto viewer = saw::security::load_enclave(ks.enroll("viewer", Role::monitor));
+  EXPECT_EQ(gateway.subject.rfind("serialNumber=", 0), 0u) << gateway.subject;
+  EXPECT_NE(gateway.subject.find(",CN=/gateway"), std::string::npos) << gateway.subject;
+  EXPECT_TRUE(gateway.peers_start_handshake);
+  EXPECT_EQ(viewer.subject, "CN=/viewer");
+  EXPECT_FALSE(viewer.peers_start_handshake);  // CN=/viewer's hash does not begin with 22 one bits
+  EXPECT_NE(
+      read(gateway.dir / "permissions.xml").find("<subject_name>" + gateway.subject + "</subject_name>"),
+      std::string::npos);
+}
+
+TEST(EnclaveCheck, ADomainOutsideTheGovernanceOrThePermissionsIsNamed) {
+  saw::security::KeystoreOptions o;
+  o.governance.domain_min = 0;
+  o.governance.domain_max = 5;
+  TempKeystore ks("domain", o);
+  const auto e = saw::security::load_enclave(ks.enroll("op", Role::operator_));
+  EXPECT_NO_THROW(saw::security::check_domain(e, 5));
+  try {
+    saw::security::check_domain(e, 7);
+    ADD_FAILURE() << "domain 7 accepted";
+  } catch (const std::runtime_error& ex) {
+    EXPECT_NE(std::string(ex.what()).find("domain 7 is not in the governance's domains 0-5"),
+              std::string::npos)
+        << ex.what();
+  }
+}
+
+TEST(EnclaveCheck, ARevokedCertificateIsRefusedAndTheOthersStillLoad) {
+  TempKeystore ks("revoke");
+  const fs::path gone = ks.enroll("gone", Role::operator_), kept = ks.enroll("kept", Role::monitor);
+  EXPECT_EQ(saw::security::revoke(ks.dir, "gone"), "CN=/gone");
+  EXPECT_EQ(saw::security::revoke(ks.dir, "/gone"), "CN=/gone");  // again: listed once
+  for (const fs::path& e : {gone, kept}) EXPECT_TRUE(fs::is_symlink(e / "crl.pem")) << e;
+  EXPECT_NE(error_of(gone, std::chrono::system_clock::now()).find("certificate CN=/gone was revoked on"),
+            std::string::npos);
+  const auto k = saw::security::load_enclave(kept);
+  ASSERT_TRUE(k.crl.has_value());
+  const fs::path later = ks.enroll("later", Role::monitor);  // enrolled after: links the CRL too
+  EXPECT_TRUE(fs::is_symlink(later / "crl.pem"));
+  if (!has_openssl()) GTEST_SKIP() << "the openssl command is not installed";
+  const std::string ca = (ks.dir / "public/identity_ca.cert.pem").string(),
+                    crl = (ks.dir / "public/crl.pem").string();
+  EXPECT_EQ(openssl("crl -in " + crl + " -CAfile " + ca + " -noout"), 0);
+  EXPECT_NE(
+      openssl("verify -crl_check -CRLfile " + crl + " -CAfile " + ca + " " + (gone / "cert.pem").string()),
+      0);
+  EXPECT_EQ(
+      openssl("verify -crl_check -CRLfile " + crl + " -CAfile " + ca + " " + (kept / "cert.pem").string()),
+      0);
+  EXPECT_THROW(saw::security::revoke(ks.dir, "nobody"), std::runtime_error);
+}
+
+TEST(Keystore, AFailedEnrolmentLeavesNothingAndAFailedReenrolmentKeepsTheOldEnclave) {
+  TempKeystore ks("staging");
+  const fs::path kept = ks.enroll("lab/console", Role::monitor);
+  const std::string cert = read(kept / "cert.pem");
+  std::ofstream(ks.dir / "private/identity_ca.key.pem", std::ios::trunc) << "not a key\n";
+  EXPECT_THROW(ks.enroll("or2/nurse", Role::monitor), std::runtime_error);
+  EXPECT_FALSE(fs::exists(ks.dir / "enclaves/or2"));
+  EXPECT_THROW(ks.enroll("lab/console", Role::operator_), std::runtime_error);
+  EXPECT_EQ(read(kept / "cert.pem"), cert);
+  std::vector<std::string> in_lab;
+  for (const auto& f : fs::directory_iterator(ks.dir / "enclaves/lab")) in_lab.push_back(f.path().filename());
+  EXPECT_EQ(in_lab, std::vector<std::string>{"console"});
+}
+
+TEST(Keystore, ReenrollingAnEnclaveKeepsTheEnclavesInsideIt) {
+  TempKeystore ks("nested");
+  const fs::path lab = ks.enroll("lab", Role::monitor), console = ks.enroll("lab/console", Role::operator_);
+  const std::string cert = read(lab / "cert.pem"), inner = read(console / "cert.pem");
+  ks.enroll("lab", Role::operator_);
+  EXPECT_NE(read(lab / "cert.pem"), cert);
+  EXPECT_EQ(read(console / "cert.pem"), inner);
+  EXPECT_NO_THROW(saw::security::load_enclave(lab));
+  EXPECT_NO_THROW(saw::security::load_enclave(console));
+  for (const auto& f : fs::directory_iterator(ks.dir / "enclaves"))
+    EXPECT_NE(f.path().filename().string().front(), '.') << f.path();
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "saw/drivers/hand_script.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -41,6 +42,40 @@ std::vector<HandSample> HandScript::load_csv(const std::string& path) {
   return out;
 }
 
+namespace {
+
+// The minimum-jerk blend at u in [0, 1]: 10u³ − 15u⁴ + 6u⁵.
+double minimum_jerk(double u) noexcept {
+  u = std::clamp(u, 0.0, 1.0);
+  return u * u * u * (10 + u * (-15 + 6 * u));
+}
+
+// Origin → targets[0] → … → targets[n-1] → origin, repeated: each leg a reach, then a dwell.
+Eigen::Vector3d reach_position(const HandScript& h, double t) noexcept {
+  const std::size_t legs = h.targets.size() + 1;
+  const double leg_time = h.reach_time + h.dwell;
+  if (h.targets.empty() || leg_time <= 0) return Eigen::Vector3d::Zero();
+  const double cycle = std::fmod(std::max(t, 0.0), leg_time * static_cast<double>(legs));
+  const auto leg = std::min(static_cast<std::size_t>(cycle / leg_time), legs - 1);
+  const auto point = [&](std::size_t i) {
+    return i == 0 || i == legs ? Eigen::Vector3d::Zero() : h.targets[i - 1];
+  };
+  const Eigen::Vector3d from = point(leg), to = point(leg + 1);
+  const double within = cycle - static_cast<double>(leg) * leg_time;
+  return from + minimum_jerk(h.reach_time > 0 ? within / h.reach_time : 1.0) * (to - from);
+}
+
+Eigen::Vector3d tremor(const HandScript& h, double t) noexcept {
+  // Three incommensurate frequencies and phases: the tremor does not repeat as one sinusoid would.
+  static constexpr double ratio[3] = {1.0, 1.09, 0.93}, phase[3] = {0.0, 1.3, 2.6};
+  Eigen::Vector3d d;
+  for (int k = 0; k < 3; ++k)
+    d[k] = h.tremor_amplitude * std::sin(2 * M_PI * h.tremor_frequency * ratio[k] * t + phase[k]);
+  return d;
+}
+
+}  // namespace
+
 HandSample HandScript::target(double t, std::size_t& cursor) const noexcept {
   HandSample s{t, Eigen::Vector3d::Zero(), false};
   switch (kind) {
@@ -74,7 +109,11 @@ HandSample HandScript::target(double t, std::size_t& cursor) const noexcept {
       s.clutch = a.clutch;
       break;
     }
+    case Kind::reach:
+      s.position = reach_position(*this, t);
+      break;
   }
+  if (kind != Kind::none && tremor_amplitude > 0) s.position += tremor(*this, t);
   return s;
 }
 

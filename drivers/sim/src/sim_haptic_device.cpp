@@ -32,6 +32,12 @@ SimDeviceConfig with_defaults(SimDeviceConfig c, const TaskConfig& task) {
   if (omni && c.initial_joints.isZero()) c.initial_joints = Eigen::Vector3d(0, 0, 1.2);
   if (!omni && c.initial_joints.isZero())
     c.initial_joints = Eigen::Vector3d::Constant(falcon::DeltaGeometry{}.angle_at_zero);
+  if (c.wall.enabled) {
+    if (!(c.wall.normal.norm() > 1e-9)) throw std::invalid_argument("the wall's normal must not be zero");
+    c.wall.normal.normalize();
+    if (c.wall.stiffness < 0 || c.wall.damping < 0)
+      throw std::invalid_argument("the wall's stiffness and damping must not be negative");
+  }
   if ((c.inertia.array() <= 0).any()) throw std::invalid_argument("inertia must be positive");
   if ((c.joint_min.array() > c.joint_max.array()).any()) throw std::invalid_argument("joint_min > joint_max");
   return c;
@@ -70,6 +76,7 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   auto& st = state_table();
   columns_.hand_force = st.add_column("hand_force", &hand_force_);
   columns_.servo_force = st.add_column("servo_force", &servo_force_);
+  columns_.wall_force = st.add_column("wall_force", &wall_force_);
   columns_.command_timeout = watchdog().holding_column();
   columns_.watchdog_trips = watchdog().trips_column();
   columns_.measured_cp = contract_columns().measured_cp;
@@ -80,6 +87,7 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   sim.add_command_write<ButtonCommand>("set_button",
                                        [this](const ButtonCommand& b) { set_button(b.button, b.pressed); });
   sim.add_command_read("hand_force", columns_.hand_force);
+  sim.add_command_read("wall_force", columns_.wall_force);
   sim.add_command_read("rejected_commands", st.add_column("rejected_commands", &rejected_column_));
 }
 
@@ -117,7 +125,7 @@ Outcome SimHapticDevice::write(const Setpoint& s) {
 
 void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& servo,
                                 const Eigen::Vector3d& hand_target) noexcept {
-  Eigen::Vector3d hand = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hand = Eigen::Vector3d::Zero(), contact = Eigen::Vector3d::Zero();
   for (int i = 0; i < config_.substeps; ++i) {
     const Eigen::Vector3d x = kinematics_.fk(q_);
     const Eigen::Matrix3d j = kinematics_.jacobian(q_);
@@ -125,7 +133,8 @@ void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& servo,
     hand = config_.hand.kind == HandScript::Kind::none
                ? Eigen::Vector3d::Zero()
                : Eigen::Vector3d(config_.hand.stiffness * (hand_target - x) - config_.hand.damping * xd);
-    const Eigen::Vector3d tau = j.transpose() * (servo + hand);  // τ = Jᵀ·f
+    contact = wall(x, xd);
+    const Eigen::Vector3d tau = j.transpose() * (servo + hand + contact);  // τ = Jᵀ·f
     const Eigen::Vector3d qdd = (tau - config_.damping.cwiseProduct(qd_)).cwiseQuotient(config_.inertia);
     qd_ += dt * qdd;  // semi-implicit Euler
     q_ += dt * qd_;
@@ -136,6 +145,16 @@ void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& servo,
   }
   hand_force_ = to_vec3(hand);
   servo_force_ = to_vec3(servo);
+  wall_force_ = to_vec3(contact);
+}
+
+Eigen::Vector3d SimHapticDevice::wall(const Eigen::Vector3d& x, const Eigen::Vector3d& xd) const noexcept {
+  const VirtualWall& w = config_.wall;
+  if (!w.enabled) return Eigen::Vector3d::Zero();
+  const double depth = -(x - (hand_origin_ + w.point)).dot(w.normal);
+  if (depth <= 0) return Eigen::Vector3d::Zero();
+  const double push = w.stiffness * depth - w.damping * xd.dot(w.normal);
+  return std::max(push, 0.0) * w.normal;  // a wall pushes, it never pulls the tip back in
 }
 
 void SimHapticDevice::publish() noexcept {

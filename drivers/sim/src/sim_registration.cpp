@@ -1,6 +1,7 @@
 // The sim package's types for deployments: each parameter read, range-checked and located.
 #include "saw/drivers/sim_registration.hpp"
 
+#include <cmath>
 #include <filesystem>
 
 #include "saw/drivers/sim_haptic_device.hpp"
@@ -16,9 +17,13 @@ using deploy::Params;
 HandScript parse_hand(Params h, const std::string& directory) {
   using Kind = HandScript::Kind;
   HandScript s;
-  s.kind = h.get_enum<Kind>(
-      "type", {{"none", Kind::none}, {"line", Kind::line}, {"sinusoid", Kind::sinusoid}, {"csv", Kind::csv}},
-      Kind::none);
+  s.kind = h.get_enum<Kind>("type",
+                            {{"none", Kind::none},
+                             {"line", Kind::line},
+                             {"sinusoid", Kind::sinusoid},
+                             {"csv", Kind::csv},
+                             {"reach", Kind::reach}},
+                            Kind::none);
   s.stiffness = h.get_in_range("stiffness", 0, 5000, s.stiffness);
   s.damping = h.get_in_range("damping", 0, 500, s.damping);
   s.from = to_eigen(h.get_or<Vec3>("from", {0, 0, 0}));
@@ -28,6 +33,19 @@ HandScript parse_hand(Params h, const std::string& directory) {
   s.amplitude = to_eigen(h.get_or<Vec3>("amplitude", {0, 0, 0}));
   s.frequency = h.get_in_range("frequency", 0, 100, s.frequency);
   s.phase = h.get_or<double>("phase", 0);
+  if (s.kind == Kind::reach) {
+    for (const Vec3& p : h.get<std::vector<Vec3>>("targets")) {
+      if (std::abs(p[0]) > 0.5 || std::abs(p[1]) > 0.5 || std::abs(p[2]) > 0.5)
+        h.fail_at("targets", "a target is more than 0.5 m from the hand's origin");
+      s.targets.push_back(to_eigen(p));
+    }
+    if (s.targets.empty()) h.fail_at("targets", "needs at least one target");
+  }
+  s.reach_time = h.get_in_range("reach_time", 1e-2, 60, s.reach_time);
+  s.dwell = h.get_in_range("dwell", 0, 60, s.dwell);
+  const Params tremor = h.child("tremor");
+  s.tremor_amplitude = tremor.get_in_range("amplitude", 0, 0.002, 0.0);
+  s.tremor_frequency = tremor.get_in_range("frequency", 0.1, 30, s.tremor_frequency);
   if (s.kind == Kind::csv) {
     std::filesystem::path file = h.get<std::string>("file");
     if (file.is_relative() && !directory.empty()) file = std::filesystem::path(directory) / file;
@@ -53,6 +71,15 @@ SimDeviceSpec parse_sim_device(const ComponentContext& ctx, Params& p) {
   c.max_force = p.get_in_range("max_force", 0, 100, 0);
   c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.hand = parse_hand(p.child("hand"), ctx.directory);
+  if (p.has("wall")) {
+    const Params w = p.child("wall");
+    c.wall.enabled = true;
+    c.wall.point = to_eigen(w.get_or<Vec3>("point", {0, 0, 0}));
+    c.wall.normal = to_eigen(w.get<Vec3>("normal"));
+    if (!(c.wall.normal.norm() > 1e-9)) w.fail_at("normal", "must not be zero");
+    c.wall.stiffness = w.get_in_range("stiffness", 0, 1e5, c.wall.stiffness);
+    c.wall.damping = w.get_in_range("damping", 0, 1e3, c.wall.damping);
+  }
   const TaskConfig task = deploy::periodic_task(ctx, p, "sim_haptic_device");
   c.command_timeout = p.get_or<std::chrono::nanoseconds>("command_timeout", 3 * task.period).count();
   if (c.command_timeout < task.period.count() || c.command_timeout > std::chrono::nanoseconds(10s).count())

@@ -34,13 +34,23 @@ void print_security(const ParticipantConfig& dds) {
     const security::Enclave e = security::load_enclave(*dir);
     std::printf("  DDS Security with enclave %s (%s, valid until %s)\n", e.dir.c_str(), e.subject.c_str(),
                 utc_date(e.not_after).c_str());
+    if (!e.peers_start_handshake)
+      std::printf(
+          "  warning: this certificate was not enrolled with `sawctl security enroll --role gateway`: "
+          "Cyclone DDS "
+          "peers (sawgui, sawdds, ROS 2 on rmw_cyclonedds) whose subject hashes higher than %s, about half "
+          "of "
+          "them, cannot authenticate (Fast DDS 2.9 would start their handshake with a key encoding Cyclone "
+          "DDS "
+          "0.10 refuses; docs/security.md)\n",
+          e.subject.c_str());
   } else {
     std::printf("  DDS without security (no enclave)\n");
   }
 }
 
 SecurityCommands::SecurityCommands(CLI::App& app) {
-  security_ = app.add_subcommand("security", "DDS Security keystores: init, enroll, check");
+  security_ = app.add_subcommand("security", "DDS Security keystores: init, enroll, revoke, check");
   security_->require_subcommand(1);
   init_ = security_->add_subcommand("init", "create a keystore (identity and permissions CAs, governance)");
   init_->add_option("dir", dir_, "keystore directory")->required();
@@ -56,6 +66,10 @@ SecurityCommands::SecurityCommands(CLI::App& app) {
   enroll_->add_option("--expires", days_, "days until the certificate expires")->check(CLI::Range(1, 36500));
   enroll_->add_option("--component", components_,
                       "limit the grant to this component (repeatable; default all)");
+  revoke_ = security_->add_subcommand(
+      "revoke", "revoke an enclave's certificate: the keystore's crl.pem, linked into every enclave");
+  revoke_->add_option("dir", dir_, "keystore directory")->required();
+  revoke_->add_option("name", name_, "enclave name")->required();
   check_ =
       security_->add_subcommand("check", "check an enclave as saw-gateway and sawctl do before using it");
   check_->add_option("enclave", dir_, "KEYSTORE/enclaves/NAME")->required();
@@ -78,6 +92,12 @@ int SecurityCommands::run() const {
       const security::Enclave e = security::load_enclave(dir);
       std::printf("enclave %s: %s, role %s, expires %s\n", dir.c_str(), e.subject.c_str(), role_.c_str(),
                   utc_date(e.not_after).c_str());
+    } else if (revoke_->parsed()) {
+      const std::string subject = security::revoke(dir_, name_);
+      std::printf(
+          "revoked %s: %s/public/crl.pem, linked as crl.pem into every enclave (copy it to hosts "
+          "that hold copies of enclaves)\n",
+          subject.c_str(), dir_.c_str());
     } else if (check_->parsed()) {
       const security::Enclave e = security::load_enclave(dir_);
       std::printf("enclave %s: %s, valid until %s\n", e.dir.c_str(), e.subject.c_str(),

@@ -16,7 +16,8 @@ void add_enclave_option(CLI::App& app, ParticipantConfig& dds);
 void print_security(const ParticipantConfig& dds);
 
 // `sawctl security init DIR [--sign-only]`, `security enroll DIR NAME --role R [--expires DAYS]
-// [--component C]...`, `security check ENCLAVE`: keystores need no DDS participant.
+// [--component C]...`, `security revoke DIR NAME`, `security check ENCLAVE`: keystores need no DDS
+// participant.
 class SecurityCommands {
  public:
   explicit SecurityCommands(CLI::App& app);
@@ -25,7 +26,7 @@ class SecurityCommands {
 
  private:
   CLI::App* security_;
-  CLI::App *init_, *enroll_, *check_;
+  CLI::App *init_, *enroll_, *revoke_, *check_;
   std::string dir_, name_, role_;
   bool sign_only_ = false;
   int days_ = 365;

@@ -16,13 +16,13 @@ LOOPBACK_URI = (
 )
 os.environ.setdefault("CYCLONEDDS_URI", LOOPBACK_URI)
 
-from cyclonedds.core import Policy, Qos  # noqa: E402  (after CYCLONEDDS_URI)
+from cyclonedds.core import DDSException, Policy, Qos  # noqa: E402  (after CYCLONEDDS_URI)
 from cyclonedds.domain import DomainParticipant  # noqa: E402
 from cyclonedds.pub import DataWriter  # noqa: E402
 from cyclonedds.sub import DataReader  # noqa: E402
 from cyclonedds.topic import Topic  # noqa: E402
 
-from . import msgs  # noqa: E402
+from . import msgs, security  # noqa: E402
 
 XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 
@@ -73,8 +73,25 @@ def error_qos(depth: int = 16):
     return Qos(Policy.Reliability.Reliable(0), Policy.Durability.TransientLocal, Policy.History.KeepLast(depth), XCDR1)
 
 
+class SecurityRefused(security.SecurityError, DDSException):
+    """No participant: its enclave does not allow it. Both a SecurityError and, for callers that
+    report a participant DDS would not make (sawgui), a DDSException."""
+
+    def __init__(self, msg):
+        security.SecurityError.__init__(self, msg)
+        self.code, self.msg = DDSException.DDS_RETCODE_NOT_ALLOWED_BY_SECURITY, msg
+
+    def __str__(self):
+        return self.msg
+
+
 class Client:
     def __init__(self, domain: int = 0):
+        # ROS_SECURITY_ENABLE=true: the enclave's security, or SecurityError, never plaintext.
+        try:
+            security.secure_environment(domain)
+        except security.SecurityError as e:
+            raise SecurityRefused(str(e)) from None
         self.participant = DomainParticipant(domain)
         self._topics = {}
         self._topic_lock = threading.Lock()

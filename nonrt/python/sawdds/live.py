@@ -8,42 +8,58 @@ collects with `results()`. Every sample taken counts in the statistics; the wind
 drawing is the last `window` seconds.
 """
 import collections
-import csv
+import json
 import os
 import queue
 import random
+import signal
+import subprocess
+import sys
 import threading
 import time
 
+import numpy as np
+from cyclonedds._clayer import ddspy_take
+from cyclonedds.core import InstanceState, SampleState, ViewState
 from cyclonedds.internal import InvalidSample
 
 from .client import Client, latched
-from . import msgs, values
+from . import cdr, msgs, values
+
+ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 
 FAULT = "FAULT"
 
 
 class Series:
-    """One topic: its last sample, a time window of its numbers, statistics over every sample."""
+    """One topic: its last sample, a time window of its numbers (numpy, for drawing), statistics
+    over every sample. Samples come in batches as bytes: the numbers of a batch of one layout are
+    decoded in one numpy call (sawdds.cdr), the rest one by one; only each batch's newest sample
+    becomes a Python message (for `latest`)."""
 
     def __init__(self, endpoint, window: float):
         self.endpoint = endpoint
         self.window = window
+        self.cls = msgs.BY_DDS_NAME[endpoint.dds_type]
         self.names = None  # the numeric leaves, from the first sample
-        self.times = collections.deque()
-        self.rows = collections.deque()
+        self.layout = None  # sawdds.cdr.Layout of the first sample, None if it has none
+        self.times = np.empty(0)
+        self.rows = np.empty((0, 0))
+        self.used = 0  # rows of times/rows in use (the oldest first)
         self.count = 0
-        self.stats = {}  # leaf -> [n, min, max, sum, sum of squares]
+        self.stats = None  # [n, min, max, sum, sum of squares] per leaf, numpy
         self.last = None
         self.last_time = None  # the sample's source time (s, wall clock)
         self.received_at = None  # when it was taken (s, monotonic)
         self.log = collections.deque(maxlen=500)  # (time, text) for events
         self.logged = 0  # entries ever added to the log (it keeps the last 500)
+        self.logs = endpoint.kind.endswith("event") or self.cls in (msgs.StringStamped, msgs.OperatingState)
 
     def add(self, sample, t: float):
+        """One decoded sample (events, latched states, and what the fast path cannot lay out)."""
         self.count += 1
         self.last, self.last_time, self.received_at = sample, t, time.monotonic()
-        if self.endpoint.kind.endswith("event") or isinstance(sample, (msgs.StringStamped, msgs.OperatingState)):
+        if self.logs:
             self.log.append((t, values.text(sample)))
             self.logged += 1
         nums = values.numbers(sample)
@@ -51,25 +67,81 @@ class Series:
             return
         if self.names is None:
             self.names = list(nums)
-        row = [nums.get(n, float("nan")) for n in self.names]
-        for n, x in zip(self.names, row):
-            s = self.stats.setdefault(n, [0, x, x, 0.0, 0.0])
-            s[0] += 1
-            s[1], s[2] = min(s[1], x), max(s[2], x)
-            s[3] += x
-            s[4] += x * x
-        self.times.append(t)
-        self.rows.append(row)
-        while self.times and self.times[0] < t - self.window:
-            self.times.popleft()
-            self.rows.popleft()
+        self._append(np.array([t]), np.array([[nums.get(n, np.nan) for n in self.names]]))
+
+    def add_raw(self, batch):
+        """A batch of (bytes, source time in s) of one topic, oldest first."""
+        datas = [d for d, _ in batch]
+        if self.names is None:
+            first = self.cls.deserialize(datas[0])
+            self.names = list(values.numbers(first))
+            try:
+                self.layout = cdr.Layout(self.cls, datas[0], self.names) if self.names else None
+            except (TypeError, ValueError):
+                self.layout = None
+        decoded = self.layout.decode(datas) if self.layout is not None else None
+        if decoded is None:  # laid out otherwise (or not numeric): one by one
+            for d, t in batch:
+                self.add(self.cls.deserialize(d), t)
+            return
+        self.count += len(batch)
+        self.last = self.cls.deserialize(datas[-1])
+        self.last_time, self.received_at = batch[-1][1], time.monotonic()
+        self._append(np.fromiter((t for _, t in batch), float, len(batch)), decoded[0])
+
+    def _append(self, ts, vals):
+        n, k = vals.shape
+        if self.stats is None:
+            self.stats = [0, np.full(k, np.inf), np.full(k, -np.inf), np.zeros(k), np.zeros(k)]
+        st = self.stats
+        st[0] += n
+        st[1] = np.fmin(st[1], vals.min(axis=0))
+        st[2] = np.fmax(st[2], vals.max(axis=0))
+        st[3] += vals.sum(axis=0)
+        st[4] += (vals * vals).sum(axis=0)
+        # Drop what left the window, then grow (doubling) if the rest does not fit.
+        newest = ts[-1]
+        keep = self.used - int(np.searchsorted(self.times[:self.used], newest - self.window, side="left"))
+        if keep < self.used:
+            self.times[:keep] = self.times[self.used - keep:self.used]
+            self.rows[:keep] = self.rows[self.used - keep:self.used]
+            self.used = keep
+        if self.used + n > len(self.times) or self.rows.shape[1] != k:
+            cap = max(1024, 2 * (self.used + n))
+            times, rows = np.empty(cap), np.empty((cap, k))
+            times[:self.used] = self.times[:self.used]
+            if self.rows.shape[1] == k:
+                rows[:self.used] = self.rows[:self.used]
+            else:
+                self.used = 0
+            self.times, self.rows = times, rows
+        self.times[self.used:self.used + n] = ts
+        self.rows[self.used:self.used + n] = vals
+        self.used += n
+
+    def window_arrays(self, max_points: int):
+        """(times, rows) of the window, at most `max_points` (every k-th), with a NaN row inserted
+        where the samples stopped for longer than usual (a plot draws a gap there, not a line)."""
+        t, r = self.times[:self.used], self.rows[:self.used]
+        if self.used < 2:
+            return t.copy(), r.copy()
+        step = max(1, self.used // max_points)
+        t, r = t[::step], r[::step]
+        dt = np.diff(t)
+        usual = float(np.median(dt)) if len(dt) else 0.0
+        breaks = np.nonzero(dt > max(4 * usual, 0.05))[0] if usual > 0 else np.nonzero(dt > 0.05)[0]
+        if len(breaks):
+            t = np.insert(t, breaks + 1, t[breaks] + dt[breaks] / 2)
+            r = np.insert(r, breaks + 1, np.nan, axis=0)
+        return t, r
 
 
 class Live:
     """The system as the registry and the watched topics show it, kept up to date off the caller's thread."""
 
-    def __init__(self, domain: int = 0, window: float = 10.0, period: float = 0.005):
+    def __init__(self, domain: int = 0, window: float = 10.0, period: float = 0.02):
         self.client = Client(domain)
+        self.domain = domain
         self.window, self.period = window, period
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -78,7 +150,7 @@ class Live:
         self._errors = {}  # component -> (reader, deque of (time, text))
         self._gateways = {}  # name -> dict
         self._components = {}  # name -> dict
-        self._recording = None  # (directory, {topic: (file, csv.writer)})
+        self._recording = None  # the recorder process and what it said (record())
         self._jobs = queue.Queue()
         self._results = queue.Queue()
         self._writers = {}
@@ -128,22 +200,24 @@ class Live:
             return (r[1].last, r[1].last_time) if r else (None, None)
 
     def series(self, topic: str, max_points: int = 2000):
-        """(names, times, rows) of the last `window` seconds, decimated to at most `max_points` for drawing."""
+        """(names, times, rows) of the last `window` seconds as numpy arrays, decimated to at most
+        `max_points` for drawing, a NaN row where the samples stopped (a gap)."""
         with self._lock:
             r = self._readers.get(topic)
             if not r or not r[1].names:
-                return [], [], []
-            s = r[1]
-            step = max(1, len(s.times) // max_points)
-            return list(s.names), list(s.times)[::step], list(s.rows)[::step]
+                return [], np.empty(0), np.empty((0, 0))
+            t, rows = r[1].window_arrays(max_points)
+            return list(r[1].names), t, rows
 
     def statistics(self, topic: str) -> dict:
         """{leaf: (count, min, max, mean, rms)} over every sample taken since watching began."""
         with self._lock:
             r = self._readers.get(topic)
-            if not r:
+            if not r or r[1].stats is None:
                 return {}
-            return {n: (s[0], s[1], s[2], s[3] / s[0], (s[4] / s[0]) ** 0.5) for n, s in r[1].stats.items()}
+            n, lo, hi, total, squares = r[1].stats
+            return {name: (n, float(lo[i]), float(hi[i]), float(total[i] / n), float((squares[i] / n) ** 0.5))
+                    for i, name in enumerate(r[1].names)}
 
     def count(self, topic: str) -> int:
         with self._lock:
@@ -189,6 +263,11 @@ class Live:
         """Sends a command once its gateway has matched our writer; results() then holds (tag, ok, text)."""
         self._jobs.put(("send", topic, sample, tag))
 
+    def prepare(self, topic: str):
+        """Makes the writer of a command topic now (when a gateway serves it), so that the first
+        command sent on it does not wait for the writer to be made and matched."""
+        self._jobs.put(("prepare", topic))
+
     def query(self, topic: str, data: bytes, tag=None, timeout: float = 2.0):
         """Asks a qualified read (rq/ topic) with the qualifier's bytes; results() then holds
         (tag, ok, the reply as text or why not)."""
@@ -202,25 +281,60 @@ class Live:
             except queue.Empty:
                 return out
 
-    # ---- recording ----
+    # ---- recording (a process of its own: sawdds.record) ----
 
     def record(self, topics, directory: str):
-        """Writes every sample of `topics` (watched from now on) to <directory>/<topic>.csv until stop_recording()."""
+        """Starts recording every sample of `topics` to <directory>/recording.mcap (ROS 2 types) and
+        one CSV per topic, in a recorder process of its own (sawdds.record: nothing it does waits on
+        this process's interpreter, and nothing this process does makes it miss a sample)."""
         os.makedirs(directory, exist_ok=True)
-        for t in topics:
-            self.watch(t)
-        with self._lock:
-            self._recording = (directory, {t: None for t in topics})
+        self.stop_recording()
+        cmd = [sys.executable, "-m", "sawdds.record", "--domain", str(self.domain),
+               "--out", directory] + [a for t in topics for a in ("--topic", t)]
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+            [os.path.dirname(os.path.dirname(os.path.abspath(__file__)))] + sys.path))
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        rec = {"directory": directory, "process": proc, "ready": False, "summary": None, "error": ""}
 
-    def stop_recording(self) -> list:
+        def follow():  # the recorder's lines: "ready", then one JSON summary when it stops
+            for line in proc.stdout:
+                if line.startswith("ready"):
+                    rec["ready"] = True
+                elif line.startswith("{"):
+                    rec["summary"] = json.loads(line)
+            rec["error"] = proc.stderr.read().strip()
+        rec["thread"] = threading.Thread(target=follow, name="sawdds-recorder", daemon=True)
+        rec["thread"].start()
+        with self._lock:
+            self._recording = rec
+
+    def recording(self):
+        """None, or {"directory", "ready" (the recorder's readers matched), "error"} of the recording."""
+        with self._lock:
+            rec = self._recording
+        if rec is None:
+            return None
+        return {"directory": rec["directory"], "ready": rec["ready"],
+                "error": rec["error"] if rec["process"].poll() not in (None, 0) else ""}
+
+    def stop_recording(self, timeout: float = 10.0):
+        """Stops the recorder; its summary ({"files": [...], "topics": {topic: {"samples", "missed",
+        ...}}}) or None if nothing was recording (or the recorder failed: {"error": why})."""
         with self._lock:
             rec, self._recording = self._recording, None
-        files = []
-        for entry in (rec[1].values() if rec else []):
-            if entry:
-                entry[0].close()
-                files.append(entry[0].name)
-        return files
+        if rec is None:
+            return None
+        p = rec["process"]
+        if p.poll() is None:
+            p.send_signal(signal.SIGINT)
+        try:
+            p.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+        rec["thread"].join(timeout=2)
+        return rec["summary"] or {"error": rec["error"] or f"the recorder exited with {p.returncode}",
+                                  "files": [], "topics": {}}
 
     # ---- the reading thread ----
 
@@ -286,17 +400,23 @@ class Live:
             items = list(self._readers.items())
             errs = list(self._errors.items())
         for topic, (reader, series) in items:
-            samples = [s for s in reader.take(N=1024) if not isinstance(s, InvalidSample)]
-            if not samples:
+            if series.logs:  # events and latched states: few, decoded as messages
+                samples = [s for s in reader.take(N=1024) if not isinstance(s, InvalidSample)]
+                if not samples:
+                    continue
+                with self._lock:
+                    for s in samples:
+                        series.add(s, s.sample_info.source_timestamp * 1e-9)
+                        if isinstance(s, msgs.OperatingState):
+                            self._state_changed(series.endpoint.component_name, s)
                 continue
-            with self._lock:
-                for s in samples:
-                    series.add(s, s.sample_info.source_timestamp * 1e-9)
-                    if isinstance(s, msgs.OperatingState):
-                        self._state_changed(series.endpoint.component_name, s)
-                rec = self._recording
-            if rec and topic in rec[1]:
-                self._write_rows(rec, topic, series, samples)
+            got = ddspy_take(reader._ref, ANY, 1024)
+            if isinstance(got, int) or not got:
+                continue
+            batch = [(d, i.source_timestamp * 1e-9) for d, i in got if i.valid_data]
+            if batch:
+                with self._lock:
+                    series.add_raw(batch)
         for comp, (reader, log, taken) in errs:
             got = [s for s in reader.take(N=64) if isinstance(s, msgs.StringStamped)]
             if got:
@@ -328,20 +448,6 @@ class Live:
         else:
             c["fault_reason"] = ""
 
-    def _write_rows(self, rec, topic, series, samples):
-        entry = rec[1].get(topic)
-        if entry is None and series.names is not None:
-            f = open(os.path.join(rec[0], topic.replace("/", "_") + ".csv"), "w", newline="")
-            w = csv.writer(f)
-            w.writerow(["source_time_s"] + series.names)
-            entry = rec[1][topic] = (f, w)
-        if entry is None:
-            return
-        for s in samples:
-            nums = values.numbers(s)
-            entry[1].writerow([f"{s.sample_info.source_timestamp * 1e-9:.6f}"] +
-                              [nums.get(n, "") for n in series.names])
-
     def _read_loop(self):
         last_registry = 0.0
         while not self._stop.is_set():
@@ -363,21 +469,30 @@ class Live:
             if job is None or self._stop.is_set():
                 return
             try:
-                if job[0] == "send":
+                if job[0] == "prepare":
+                    self._writer(job[1])
+                elif job[0] == "send":
                     self._results.put((job[3], *self._send(job[1], job[2])))
                 else:
                     self._results.put((job[3], *self._query(*job[1:3], job[4])))
             except Exception as e:  # a bad endpoint or type: said, not raised in a thread nobody watches
-                self._results.put((job[3], False, f"{type(e).__name__}: {e}"))
+                if job[0] != "prepare":
+                    self._results.put((job[3], False, f"{type(e).__name__}: {e}"))
 
-    def _send(self, topic, sample, wait: float = 3.0):
+    def _writer(self, topic):
+        """The writer of command `topic` (made once), or None while no live gateway serves it."""
         with self._lock:
             e = self._endpoint(topic)
         if e is None:
-            return False, f"no live gateway serves {topic}"
+            return None
         if topic not in self._writers:
             self._writers[topic] = self.client.writer_for(e)[0]
-        w = self._writers[topic]
+        return self._writers[topic]
+
+    def _send(self, topic, sample, wait: float = 3.0):
+        w = self._writer(topic)
+        if w is None:
+            return False, f"no live gateway serves {topic}"
         deadline = time.monotonic() + wait
         while not w.get_matched_subscriptions():
             if time.monotonic() > deadline:

@@ -5,7 +5,7 @@ from PySide6 import QtWidgets
 from sawdds import msgs, values
 
 from . import model
-from .widgets import Outcome, Plot, clock
+from .widgets import PLOT_POINTS, Outcome, Plot, clock, newest, units_of
 
 
 class CommandForm(QtWidgets.QGroupBox):
@@ -23,18 +23,40 @@ class CommandForm(QtWidgets.QGroupBox):
         self.limits = model.limits(endpoint)
         if self.limits:
             form.addRow(QtWidgets.QLabel(f"within [{self.limits[0]:g}, {self.limits[1]:g}], as the component declares"))
+        # A field starts from the component's current value when it publishes one (read_back), else
+        # empty: a made-up default (0) can be outside the bounds, or a harmful value within them.
+        self.source = model.read_back(view.live, view.component, endpoint)
+        self.filled = {}  # field -> the text last filled from the read-back (not edited since)
         for name, kind in values.form_fields(self.cls):
             if endpoint.saw_type == "saw::StateCommand":
                 w = QtWidgets.QComboBox()
                 w.addItems(values.STATE_COMMANDS)
             else:
-                w = QtWidgets.QLineEdit("0" if kind in (int, float) else "")
+                w = QtWidgets.QLineEdit("")
+                w.setMinimumWidth(90)
+                if kind in (int, float, list):
+                    w.setPlaceholderText(model.placeholder(self.limits))
             self.fields[name] = w
             form.addRow(name, w)
+        if self.source is not None:
+            form.addRow(QtWidgets.QLabel(f"starts from {self.source.name}, the current value"))
         self.button = QtWidgets.QPushButton("Send")
         self.button.clicked.connect(self.submit)
         self.outcome = Outcome()
         form.addRow(self.button, self.outcome)
+
+    def fill(self, live):
+        """Puts the read-back's newest value in the fields the person has not edited."""
+        if self.source is None:
+            return
+        sample, _ = live.latest(self.source.topic)
+        if sample is None:
+            return
+        for name, text in model.form_texts(sample, values.form_fields(self.cls)).items():
+            w = self.fields.get(name)
+            if isinstance(w, QtWidgets.QLineEdit) and w.text() == self.filled.get(name, "") and text != w.text():
+                w.setText(text)
+                self.filled[name] = text
 
     def submit(self):
         raw = {n: (w.currentText() if isinstance(w, QtWidgets.QComboBox) else w.text()) for n, w in self.fields.items()}
@@ -90,6 +112,15 @@ class ComponentView(QtWidgets.QWidget):
         self.table = QtWidgets.QTableWidget(len(self.reads), 4)
         self.table.setHorizontalHeaderLabels(["read", "value", "samples", "statistics (all samples)"])
         self.table.verticalHeader().hide()
+        # Name and count as wide as they need; value and statistics share the rest (elided, never
+        # pushed out of sight behind a scroll bar).
+        header = self.table.horizontalHeader()
+        for j, mode in enumerate((QtWidgets.QHeaderView.ResizeMode.ResizeToContents,
+                                  QtWidgets.QHeaderView.ResizeMode.Stretch,
+                                  QtWidgets.QHeaderView.ResizeMode.ResizeToContents,
+                                  QtWidgets.QHeaderView.ResizeMode.Stretch)):
+            header.setSectionResizeMode(j, mode)
+        self.table.setWordWrap(False)
         for i, e in enumerate(self.reads):
             self.table.setItem(i, 0, QtWidgets.QTableWidgetItem(e.name))
             for j in (1, 2, 3):
@@ -128,6 +159,7 @@ class ComponentView(QtWidgets.QWidget):
         lay = QtWidgets.QVBoxLayout(self)
         lay.addWidget(split)
         self._logged = {}
+        self.served = None  # (gateway, alive): a failure said to a gateway since gone is cleared on its return
 
     def _default_plots(self) -> list:
         numeric = [e for e in self.reads if e.topic and e.dds_type not in (
@@ -159,10 +191,13 @@ class ComponentView(QtWidgets.QWidget):
             st = self.live.statistics(e.topic)
             self.table.item(i, 3).setText("; ".join(f"{k.split('.')[-1]} mean {v[3]:.4g} [{v[1]:.4g}, {v[2]:.4g}]"
                                                     for k, v in list(st.items())[:3]))
-        self.table.resizeColumnsToContents()
-        for plot, e in zip(self.plots, self.plotted):
+        drawn = [self.live.series(e.topic, PLOT_POINTS) for e in self.plotted]
+        t_end = newest(*drawn)  # one time axis for the view's plots
+        for plot, e, series in zip(self.plots, self.plotted, drawn):
+            if plot.units != units_of(e):
+                plot.set_units(units_of(e))
             plot.setTitle(e.name, color="k")
-            plot.show_series(*self.live.series(e.topic))
+            plot.show_series(*series, t_end=t_end)
         lines = []
         for e in self.events:
             total, entries = self.live.log(e.topic, self._logged.get(e.topic, 0))
@@ -173,6 +208,13 @@ class ComponentView(QtWidgets.QWidget):
         self._logged["error"] = total
         for _, line in sorted(lines):
             self.log.appendPlainText(line)
+        comp = self.live.components().get(self.component, {})
+        served = (comp.get("gateway"), comp.get("gone_at") is None)
+        back = self.served is not None and served != self.served and served[1]
+        self.served = served
         for f in self.forms.values():
             if hasattr(f, "outcome"):
+                if back:
+                    f.outcome.clear_stale()
                 f.outcome.check_errors(self.live, self.component)
+                f.fill(self.live)

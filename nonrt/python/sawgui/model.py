@@ -8,6 +8,46 @@ from sawdds import values
 def limits(endpoint):
     """(min, max) a write command's component declares (the registry carries them), or None."""
     return (endpoint.limit_min, endpoint.limit_max) if endpoint is not None and endpoint.limited else None
+
+
+def read_back(live, component: str, command) -> object:
+    """The read endpoint that publishes the current value of write command `command` (same
+    message type): `set_X` is read back as `X`, a CRTK `servo_Y` / `move_Y` as `setpoint_Y`;
+    None when the component publishes none (a form then starts empty, never from a guess)."""
+    if command is None:
+        return None
+    name = command.name
+    wanted = [name[4:]] if name.startswith("set_") else (
+        ["setpoint_" + name.split("_", 1)[1]] if name.startswith(("servo_", "move_")) else [])
+    for e in live.endpoints(component):
+        if e.kind == "read" and e.name in wanted and e.dds_type == command.dds_type and e.topic:
+            return e
+    return None
+
+
+def form_texts(sample, fields) -> dict:
+    """{field name: text} of a form's fields (values.form_fields) from a sample of the same type."""
+    out = {}
+    for name, kind in fields:
+        v = sample
+        for part in name.split("."):
+            v = getattr(v, part, None)
+        if v is None:
+            continue
+        if kind is list:
+            out[name] = " ".join(f"{x:.6g}" for x in v)
+        elif kind in (int, float):
+            out[name] = f"{v:.6g}"
+        elif kind is bool:
+            out[name] = "true" if v else "false"
+        else:
+            out[name] = str(v)
+    return out
+
+
+def placeholder(lim) -> str:
+    """What an empty numeric field says it wants."""
+    return f"within [{lim[0]:g}, {lim[1]:g}]" if lim else "a number"
 STATE_COLORS = {"ENABLED": "#1f9d3a", "DISABLED": "#6b6b6b", "PAUSED": "#c98a00", "FAULT": "#d01010",
                 "GONE": "#404040", "": "#909090"}
 
@@ -43,8 +83,9 @@ def teleop_sides(live, teleop: str):
 def teleop_topics(live, teleop: str) -> list:
     """What the teleoperation panel reads."""
     master, slave = teleop_sides(live, teleop)
-    wanted = [(teleop, "tracking_error"), (teleop, "fault"), (teleop, "slave_force"), (slave, "measured_cp"),
-              (master, "measured_cp"), (master, "clutch")]
+    # What it draws and says; not the forces (1 kHz it would decode and never show).
+    wanted = [(teleop, "tracking_error"), (teleop, "fault"), (slave, "measured_cp"), (master, "measured_cp"),
+              (master, "clutch")]
     return [e.topic for c, n in wanted if c for e in [endpoint(live, c, n)] if e is not None and e.topic]
 
 

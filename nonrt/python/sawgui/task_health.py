@@ -76,7 +76,7 @@ class TaskHealth(QtWidgets.QWidget):
         if "last_wakeup_latency" not in names:
             return
         k = names.index("last_wakeup_latency")
-        edges, counts = histogram([r[k] / 1e3 for r in rows])
+        edges, counts = histogram([r[k] / 1e3 for r in rows if r[k] == r[k]])  # (not the NaN of a gap)
         self.hist.clear()
         self.hist.setTitle(f"{component}: wake-up latency, {sum(counts)} samples")
         if counts:

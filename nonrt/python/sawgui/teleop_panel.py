@@ -1,11 +1,13 @@
 """The teleoperation panel: enable/disable, clutch, scale, gains and force limits (checked against
 the bounds the component accepts), the tracking error and both arms' positions, state and last fault."""
+import time
+
 from PySide6 import QtWidgets
 
 from sawdds import msgs, values
 
 from . import model
-from .widgets import Outcome, Plot, StateBadge, clock
+from .widgets import PLOT_POINTS, Outcome, Plot, StateBadge, clock, newest
 
 
 class TeleopPanel(QtWidgets.QWidget):
@@ -36,9 +38,11 @@ class TeleopPanel(QtWidgets.QWidget):
 
         settings = QtWidgets.QGroupBox("settings")
         form = QtWidgets.QGridLayout(settings)
-        self.scale = QtWidgets.QLineEdit("1.0")
-        self.gain_m, self.gain_s = QtWidgets.QLineEdit("300"), QtWidgets.QLineEdit("300")
-        self.lim_m, self.lim_s = QtWidgets.QLineEdit("3.0"), QtWidgets.QLineEdit("3.0")
+        # Empty until the component publishes the setting's current value (model.read_back): a
+        # hard-coded default would show a setting the system may not have.
+        self.scale = QtWidgets.QLineEdit("")
+        self.gain_m, self.gain_s = QtWidgets.QLineEdit(""), QtWidgets.QLineEdit("")
+        self.lim_m, self.lim_s = QtWidgets.QLineEdit(""), QtWidgets.QLineEdit("")
         self.apply_scale = QtWidgets.QPushButton("Apply scale")
         self.apply_gains = QtWidgets.QPushButton("Apply gains")
         self.apply_limits = QtWidgets.QPushButton("Apply force limits")
@@ -50,6 +54,7 @@ class TeleopPanel(QtWidgets.QWidget):
             bounds = f"  [{lim[0]:g}, {lim[1]:g}]" if lim else ""
             form.addWidget(QtWidgets.QLabel(label + bounds), r, 0)
             for j, e in enumerate(edits):
+                e.setPlaceholderText(model.placeholder(lim))
                 if lim:
                     e.setToolTip(f"within [{lim[0]:g}, {lim[1]:g}], as the component declares")
                 form.addWidget(e, r, 1 + j)
@@ -59,13 +64,17 @@ class TeleopPanel(QtWidgets.QWidget):
         self.refusal = QtWidgets.QLabel("")
         self.refusal.setWordWrap(True)
         form.addWidget(self.refusal, len(rows) + 1, 0, 1, 4)
+        self.settings = {command: (edits, model.read_back(live, teleop, model.endpoint(live, teleop, command,
+                                                                                    kinds=("write",))))
+                         for _, command, edits, _ in rows}
+        self.filled = {}  # edit -> the text last filled from a read-back (not edited since)
         self.apply_scale.clicked.connect(self.send_scale)
         self.apply_gains.clicked.connect(lambda: self.send_pair("set_gains", [self.gain_m, self.gain_s]))
         self.apply_limits.clicked.connect(lambda: self.send_pair("set_force_limits", [self.lim_m, self.lim_s]))
 
         self.fault = QtWidgets.QLabel("last fault: none")
         self.fault.setWordWrap(True)
-        self.error_plot = Plot("tracking error |e_s|", "m")
+        self.error_plot = Plot("tracking error |e_s|", "m")  # metres, as every plot (the axis says mm)
         self.slave_plot = Plot(f"{self.slave}.measured_cp position", "m")
         self.master_plot = Plot(f"{self.master}.measured_cp position", "m")
         plots = QtWidgets.QGridLayout()
@@ -73,6 +82,16 @@ class TeleopPanel(QtWidgets.QWidget):
         plots.addWidget(self.master_plot, 1, 0)
         plots.addWidget(self.slave_plot, 1, 1)
 
+        # The commands' writers now: the first click must not wait for one to be made and matched.
+        for name in ("state_command", "set_scale", "set_gains", "set_force_limits"):
+            e = model.endpoint(live, teleop, name, kinds=("write", "void"))
+            if e is not None and e.topic:
+                live.prepare(e.topic)
+        for _, source in self.settings.values():
+            if source is not None:
+                live.watch(source.topic)
+        self.attached = None  # (gateway, served, since): the refusals shown are those since it serves
+        self.badge.set_state(model.shown_state(live.components().get(teleop, {})))  # no empty first frame
         lay = QtWidgets.QVBoxLayout(self)
         lay.addLayout(top)
         lay.addWidget(settings)
@@ -121,17 +140,43 @@ class TeleopPanel(QtWidgets.QWidget):
         state = model.shown_state(comp)
         if state != self.badge.state:
             self.badge.set_state(state)
+        attached = (comp.get("gateway"), comp.get("gone_at") is None)
+        if attached != (self.attached or (None, None))[:2]:
+            # Served again (a restart) or gone: what was said to the old gateway no longer holds.
+            if attached[1] and self.attached is not None:
+                self.outcome.clear_stale()
+                self.refusal.setText("")
+            self.attached = attached + (time.time(),)
         if state.startswith("FAULT") or comp.get("fault_reason"):
             self.fault.setText(f"last fault at {clock(comp.get('fault_time'))}: {comp.get('fault_reason')}")
             self.fault.setStyleSheet("QLabel { color: #d01010; font-weight: bold; font-size: 14px; }")
         elif state == "GONE":
             self.fault.setText(f"the gateway serving {self.teleop} left at {clock(comp.get('gone_at'))}")
-        self.error_plot.show_series(*self.live.series(self._topic(self.teleop, "tracking_error")))
-        self.slave_plot.show_series(*self.live.series(self._topic(self.slave, "measured_cp")))
-        self.master_plot.show_series(*self.live.series(self._topic(self.master, "measured_cp")))
+        drawn = [self.live.series(self._topic(c, n), PLOT_POINTS) for c, n in
+                 ((self.teleop, "tracking_error"), (self.slave, "measured_cp"), (self.master, "measured_cp"))]
+        t_end = newest(*drawn)  # one time axis for the three plots
+        for plot, series in zip((self.error_plot, self.slave_plot, self.master_plot), drawn):
+            plot.show_series(*series, t_end=t_end)
         self.outcome.check_errors(self.live, self.teleop)
-        refusals = [(t, text) for t, text in self.live.errors(self.teleop) if " rejected: " in text]
+        since = self.attached[2] if self.attached else 0.0
+        refusals = [(t, text) for t, text in self.live.errors(self.teleop) if " rejected: " in text and t >= since]
         if refusals:  # whoever sent it (this window or another peer), the gateway's last refusal
             t, text = refusals[-1]
             self.refusal.setText(f"last refusal by the gateway, at {clock(t)}: {text}")
             self.refusal.setStyleSheet("QLabel { color: #d01010; }")
+        self.fill_settings()
+
+    def fill_settings(self):
+        """Each setting's fields from the value the component publishes, unless edited since."""
+        for command, (edits, source) in self.settings.items():
+            if source is None:
+                continue
+            sample, _ = self.live.latest(source.topic)
+            if sample is None:
+                continue
+            texts = [f"{sample.data:.6g}"] if isinstance(sample, msgs.Float64) else \
+                [f"{sample.master:.6g}", f"{sample.slave:.6g}"] if isinstance(sample, msgs.MasterSlave) else []
+            for e, text in zip(edits, texts):
+                if e.text() == self.filled.get(e, "") and e.text() != text:
+                    e.setText(text)
+                    self.filled[e] = text

@@ -103,6 +103,16 @@ std::string last_error(const std::string& fallback) {
 
 Key generate_p256() { return Key(check(EVP_EC_gen("P-256"), "generating a P-256 key")); }
 
+void add_subject_entries(X509_NAME* name, const std::string& common_name, const std::string& serial) {
+  check(X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_UTF8,
+                                   reinterpret_cast<const unsigned char*>(common_name.c_str()), -1, -1, 0),
+        "subject name");
+  if (!serial.empty())
+    check(X509_NAME_add_entry_by_txt(name, "serialNumber", MBSTRING_ASC,
+                                     reinterpret_cast<const unsigned char*>(serial.c_str()), -1, -1, 0),
+          "subject serialNumber");
+}
+
 Cert make_certificate(const CertRequest& r, EVP_PKEY* subject_key, X509* issuer, EVP_PKEY* issuer_key) {
   Cert cert(check(X509_new(), "X509_new"));
   check(X509_set_version(cert.get(), X509_VERSION_3), "X509_set_version");
@@ -114,16 +124,16 @@ Cert make_certificate(const CertRequest& r, EVP_PKEY* subject_key, X509* issuer,
   set_time(cert.get(), r.not_before, true);
   set_time(cert.get(), r.not_after, false);
   X509_NAME* name = X509_get_subject_name(cert.get());
-  check(X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_UTF8,
-                                   reinterpret_cast<const unsigned char*>(r.common_name.c_str()), -1, -1, 0),
-        "subject name");
+  add_subject_entries(name, r.common_name, r.subject_serial);
   check(X509_set_issuer_name(cert.get(), issuer != nullptr ? X509_get_subject_name(issuer) : name),
         "issuer name");
   check(X509_set_pubkey(cert.get(), subject_key), "X509_set_pubkey");
   X509* signer = issuer != nullptr ? issuer : cert.get();
   add_extension(cert.get(), signer, NID_basic_constraints, r.ca ? "critical,CA:TRUE,pathlen:1" : "CA:FALSE");
   add_extension(cert.get(), signer, NID_subject_key_identifier, "hash");
-  add_extension(cert.get(), signer, NID_authority_key_identifier, "keyid:always");
+  // The issuer's key identifier when it has one; else its name and serial. SROS2's CA has no
+  // subject key identifier, and "keyid:always" would refuse to enrol into its keystore.
+  add_extension(cert.get(), signer, NID_authority_key_identifier, "keyid,issuer");
   if (X509_sign(cert.get(), issuer_key, EVP_sha256()) <= 0) fail("X509_sign");
   return cert;
 }
@@ -196,6 +206,102 @@ std::string verify_issued_by(X509* cert, X509* ca) {
   if (X509_verify_cert(ctx.get()) == 1) return "";
   ERR_clear_error();
   return X509_verify_cert_error_string(X509_STORE_CTX_get_error(ctx.get()));
+}
+
+Crl read_crl(const std::filesystem::path& file) {
+  const std::string text = read_text(file);
+  Bio b = memory_bio(text);
+  X509_CRL* c = PEM_read_bio_X509_CRL(b.get(), nullptr, nullptr, nullptr);
+  if (c == nullptr) throw std::runtime_error(last_error(file.filename().string() + ": not a PEM CRL"));
+  return Crl(c);
+}
+
+std::string pem(X509_CRL* crl) {
+  Bio b = memory_bio();
+  check(PEM_write_bio_X509_CRL(b.get(), crl), "PEM_write_bio_X509_CRL");
+  return text_of(b.get());
+}
+
+std::string serial_hex(X509* cert) {
+  std::unique_ptr<BIGNUM, decltype(&BN_free)> bn(
+      check(ASN1_INTEGER_to_BN(X509_get0_serialNumber(cert), nullptr), "ASN1_INTEGER_to_BN"), BN_free);
+  char* hex = check(BN_bn2hex(bn.get()), "BN_bn2hex");
+  std::string out(hex);
+  OPENSSL_free(hex);
+  return out;
+}
+
+Crl make_crl(X509* ca, EVP_PKEY* ca_key, const std::vector<std::pair<std::string, TimePoint>>& entries,
+             TimePoint next) {
+  Crl crl(check(X509_CRL_new(), "X509_CRL_new"));
+  check(X509_CRL_set_version(crl.get(), 1), "X509_CRL_set_version");  // v2
+  check(X509_CRL_set_issuer_name(crl.get(), X509_get_subject_name(ca)), "X509_CRL_set_issuer_name");
+  auto asn1_time = [](TimePoint t) {
+    return std::unique_ptr<ASN1_TIME, FreeAsn1Time>(
+        check(ASN1_TIME_set(nullptr, std::chrono::system_clock::to_time_t(t)), "ASN1_TIME_set"));
+  };
+  // A day back, as certificates start: a host whose clock is a little behind must not see a
+  // CRL "not yet valid", which would make DDS Security refuse every peer.
+  check(X509_CRL_set1_lastUpdate(crl.get(),
+                                 asn1_time(std::chrono::system_clock::now() - std::chrono::hours(24)).get()),
+        "lastUpdate");
+  check(X509_CRL_set1_nextUpdate(crl.get(), asn1_time(next).get()), "nextUpdate");
+  for (const auto& [serial, when] : entries) {
+    X509_REVOKED* r = check(X509_REVOKED_new(), "X509_REVOKED_new");
+    BIGNUM* bn = nullptr;
+    if (BN_hex2bn(&bn, serial.c_str()) == 0) {
+      X509_REVOKED_free(r);
+      fail("serial " + serial);
+    }
+    ASN1_INTEGER* n = BN_to_ASN1_INTEGER(bn, nullptr);
+    BN_free(bn);
+    const int ok = n != nullptr && X509_REVOKED_set_serialNumber(r, n) == 1 &&
+                   X509_REVOKED_set_revocationDate(r, asn1_time(when).get()) == 1;
+    ASN1_INTEGER_free(n);
+    if (!ok || X509_CRL_add0_revoked(crl.get(), r) != 1) {
+      X509_REVOKED_free(r);
+      fail("X509_CRL_add0_revoked");
+    }
+  }
+  check(X509_CRL_sort(crl.get()), "X509_CRL_sort");
+  // Names the issuing CA's key (or its name and serial, for a CA without a key identifier).
+  X509V3_CTX ctx;
+  X509V3_set_ctx(&ctx, ca, nullptr, nullptr, crl.get(), 0);
+  X509_EXTENSION* ext =
+      check(X509V3_EXT_conf_nid(nullptr, &ctx, NID_authority_key_identifier, "keyid,issuer"),
+            "CRL authorityKeyIdentifier");
+  const int added = X509_CRL_add_ext(crl.get(), ext, -1);
+  X509_EXTENSION_free(ext);
+  check(added == 1 ? 1 : 0, "X509_CRL_add_ext");
+  if (X509_CRL_sign(crl.get(), ca_key, EVP_sha256()) <= 0) fail("X509_CRL_sign");
+  return crl;
+}
+
+std::vector<std::pair<std::string, TimePoint>> revoked(X509_CRL* crl) {
+  std::vector<std::pair<std::string, TimePoint>> out;
+  STACK_OF(X509_REVOKED)* list = X509_CRL_get_REVOKED(crl);
+  for (int i = 0; i < sk_X509_REVOKED_num(list); ++i) {
+    const X509_REVOKED* r = sk_X509_REVOKED_value(list, i);
+    std::unique_ptr<BIGNUM, decltype(&BN_free)> bn(
+        check(ASN1_INTEGER_to_BN(X509_REVOKED_get0_serialNumber(r), nullptr), "ASN1_INTEGER_to_BN"), BN_free);
+    char* hex = check(BN_bn2hex(bn.get()), "BN_bn2hex");
+    out.emplace_back(hex, time_of(X509_REVOKED_get0_revocationDate(r)));
+    OPENSSL_free(hex);
+  }
+  return out;
+}
+
+bool crl_signed_by(X509_CRL* crl, X509* ca) {
+  EVP_PKEY* key = X509_get0_pubkey(ca);
+  const bool ok = key != nullptr && X509_CRL_verify(crl, key) == 1 &&
+                  X509_NAME_cmp(X509_CRL_get_issuer(crl), X509_get_subject_name(ca)) == 0;
+  ERR_clear_error();
+  return ok;
+}
+
+TimePoint next_update(X509_CRL* crl) {
+  const ASN1_TIME* t = X509_CRL_get0_nextUpdate(crl);
+  return t == nullptr ? TimePoint{} : time_of(t);
 }
 
 }  // namespace saw::security::ossl

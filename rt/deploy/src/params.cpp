@@ -112,6 +112,29 @@ Vec3 Params::get<Vec3>(const std::string& key) const {
   return {v[0], v[1], v[2]};
 }
 template <>
+std::vector<Vec3> Params::get<std::vector<Vec3>>(const std::string& key) const {
+  const YAML::Node v = value(key);
+  if (!v.IsSequence()) fail_at(key, "expected a list of [x, y, z] points");
+  std::vector<Vec3> out;
+  for (const auto& e : v) {
+    const auto [line, column] = location(e);
+    if (!e.IsSequence() || e.size() != 3)
+      throw ConfigError(file_, line, column, key_path(key), "expected a point [x, y, z]");
+    Vec3 p{};
+    for (std::size_t i = 0; i < 3; ++i) {
+      try {
+        p[i] = e[i].as<double>();
+      } catch (const YAML::Exception&) {
+        throw ConfigError(file_, line, column, key_path(key),
+                          "expected a number, got '" + e[i].Scalar() + "'");
+      }
+      if (!std::isfinite(p[i])) throw ConfigError(file_, line, column, key_path(key), "not a finite number");
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+template <>
 std::chrono::nanoseconds Params::get<std::chrono::nanoseconds>(const std::string& key) const {
   const YAML::Node v = value(key);
   if (!v.IsScalar()) fail_at(key, "expected a duration such as 1ms, 500us, 2s or a number of seconds");

@@ -4,29 +4,55 @@
 
 namespace saw::teleop {
 namespace {
-std::size_t rows_for(TaskConfig task, double delay_seconds) {
-  const double period = static_cast<double>(task.period.count()) * 1e-9;
-  if (period <= 0) throw std::invalid_argument("DelayTask must be periodic");
+
+TimeNs period_of(const TaskConfig& task) {
+  if (task.period.count() <= 0) throw std::invalid_argument("DelayTask must be periodic");
+  return task.period.count();
+}
+
+void check(const LinkConfig& link, const char* which) {
+  constexpr TimeNs ten_s = 10'000'000'000;
+  if (link.delay < 0 || link.delay > ten_s || link.jitter < 0 || link.jitter > ten_s)
+    throw std::invalid_argument(std::string("DelayTask ") + which + ": delay and jitter must be 0..10 s");
+  if (!(link.loss >= 0 && link.loss <= 0.5))
+    throw std::invalid_argument(std::string("DelayTask ") + which + ": loss must be 0..0.5");
+}
+
+DelayConfig checked(DelayConfig c) {
+  check(c.measured, "measured");
+  check(c.commands, "commands");
+  return c;
+}
+
+DelayConfig only_delay(double delay_seconds) {
   if (!(delay_seconds >= 0) || delay_seconds > 10)
     throw std::invalid_argument("DelayTask delay must be 0..10 s");
-  // History must reach back `delay`, with margin for the row being written and the lookup.
-  return static_cast<std::size_t>(delay_seconds / period) + 16;
+  DelayConfig c;
+  c.measured.delay = static_cast<TimeNs>(delay_seconds * 1e9);
+  return c;
 }
+
 }  // namespace
 
 DelayTask::DelayTask(std::string name, TaskConfig task, double delay_seconds)
-    : Task(std::move(name), task, rows_for(task, delay_seconds)),
-      delay_(static_cast<TimeNs>(delay_seconds * 1e9)) {
-  source_cp_column_ = state_table().add_column("source_cp", &source_cp_);
-  source_cv_column_ = state_table().add_column("source_cv", &source_cv_);
-  source_row_time_column_ = state_table().add_column("source_row_time", &source_row_time_);
+    : DelayTask(std::move(name), task, only_delay(delay_seconds)) {}
+
+DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
+    : Task(std::move(name), task),
+      delay_(checked(config).measured.delay),
+      commands_direct_(config.commands.delay == 0 && config.commands.jitter == 0 &&
+                       config.commands.loss == 0),
+      command_hold_(config.command_hold > 0 ? config.command_hold
+                                            : config.commands.jitter + 5 * period_of(task)),
+      measured_(config.measured, period_of(task)),
+      commands_(config.commands, period_of(task)) {
   namespace arm = crtk::arm;
   auto& p = provide(std::string(arm::interface_name));
   crtk::provide(p, arm::measured_cp, state_table(), &measured_cp_);
   crtk::provide(p, arm::measured_cv, state_table(), &measured_cv_);
   crtk::provide(p, delayed_arm::source_time, state_table(), &source_time_);
   crtk::provide(p, delayed_arm::delay, state_table(), &delay_);
-  crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { (void)write_cf_(w); });
+  crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { pass_command(w); });
   clutch_ = &crtk::provide(p, arm::clutch);
   operator_present_ = &crtk::provide(p, arm::operator_present);
 
@@ -41,41 +67,43 @@ DelayTask::DelayTask(std::string name, TaskConfig task, double delay_seconds)
       Need::optional);
 }
 
+void DelayTask::pass_command(const Wrench& w) noexcept {
+  if (commands_direct_)
+    (void)write_cf_(w);
+  else
+    commands_.send(now(), w);
+}
+
 void DelayTask::run() {
-  // A failed read keeps the previous value and its time: a dead source shows as a source time
-  // that stops advancing, never as fresh rows of this task.
-  Pose cp;
-  Twist cv;
+  const TimeNs t = now();
+  // A failed read sends nothing: a dead source shows as a source time that stops advancing,
+  // never as fresh rows of this task.
+  DelayedSample sample;
   RowStamp stamp;
-  if (read_cp_(cp, stamp) == Status::ok && read_cv_(cv) == Status::ok) {
-    source_cp_ = cp;
-    source_cv_ = cv;
-    source_row_time_ = stamp.time;
+  if (read_cp_(sample.cp, stamp) == Status::ok && read_cv_(sample.cv) == Status::ok) {
+    sample.source_time = stamp.time;
+    measured_.send(t, sample);
+    // Until the first sample arrives, the output is the source as it is now (nothing older exists).
+    if (!have_output_) {
+      measured_cp_ = sample.cp;
+      measured_cv_ = sample.cv;
+      source_time_ = sample.source_time;
+    }
   }
-  // The rows written so far hold the source as it was at each past cycle; until history
-  // reaches back `delay`, the output is not published (the row repeats the initial value).
-  if (delay_ == 0) {
-    measured_cp_ = source_cp_;
-    measured_cv_ = source_cv_;
-    source_time_ = source_row_time_;
-    return;
-  }
-  Pose p;
-  Twist v;
-  TimeNs t = 0;
-  const TimeNs then = now() - delay_;
-  if (state_table().read_at_or_before(source_cp_column_, then, p) == Status::ok &&
-      state_table().read_at_or_before(source_cv_column_, then, v) == Status::ok &&
-      state_table().read_at_or_before(source_row_time_column_, then, t) == Status::ok) {
-    measured_cp_ = p;
-    measured_cv_ = v;
-    source_time_ = t;
+  DelayedSample shown;
+  if (measured_.receive(t, shown)) {
+    measured_cp_ = shown.cp;
+    measured_cv_ = shown.cv;
+    source_time_ = shown.source_time;
     have_output_ = true;
-  } else if (!have_output_) {
-    measured_cp_ = source_cp_;  // no history reaching back `delay` yet: the oldest we have is now
-    measured_cv_ = source_cv_;
-    source_time_ = source_row_time_;
   }
+  if (commands_direct_) return;
+  Wrench w;
+  if (commands_.receive(t, w)) {
+    held_ = w;
+    held_since_ = t;
+  }
+  if (held_since_ >= 0 && t - held_since_ <= command_hold_) (void)write_cf_(held_);
 }
 
 }  // namespace saw::teleop

@@ -36,13 +36,35 @@ TeleopSpec parse_teleop(const ComponentContext& ctx, Params& p) {
 
 struct DelaySpec {
   TaskConfig task;
-  double delay = 0;  // s
+  DelayConfig config;
 };
 
+TimeNs duration_in(const Params& p, const std::string& key, std::chrono::nanoseconds fallback) {
+  const auto d = p.get_or<std::chrono::nanoseconds>(key, fallback);
+  if (d > 10s || d < 0ns) p.fail_at(key, "from 0 to 10 s");
+  return d.count();
+}
+
+// One direction of the link: `delay` (required for the measurements), `jitter`, `loss`.
+LinkConfig parse_link(const Params& p, std::chrono::nanoseconds default_delay, std::uint64_t seed) {
+  LinkConfig l;
+  l.delay = p.has("delay") || default_delay < 0ns ? duration_in(p, "delay", 0ns) : default_delay.count();
+  l.jitter = duration_in(p, "jitter", 0ns);
+  l.loss = p.get_in_range("loss", 0, 0.5, 0);
+  l.seed = seed;
+  return l;
+}
+
 DelaySpec parse_delay(const ComponentContext& ctx, Params& p) {
-  const auto delay = p.get<std::chrono::nanoseconds>("delay");
-  if (delay > 10s || delay < 0ns) p.fail_at("delay", "from 0 to 10 s");
-  return {deploy::periodic_task(ctx, p, "delay"), static_cast<double>(delay.count()) * 1e-9};
+  if (!p.has("delay")) (void)p.get<std::chrono::nanoseconds>("delay");  // names the missing key
+  const auto seed = static_cast<std::uint64_t>(p.get_or<std::int64_t>("seed", 1));
+  DelayConfig c;
+  c.measured = parse_link(p, -1ns, seed);
+  // The command direction: its own `commands: {delay, jitter, loss}`, passed straight through
+  // when absent (as before links had two directions).
+  if (p.has("commands")) c.commands = parse_link(p.child("commands"), 0ns, seed * 0x9e3779b97f4a7c15ULL + 1);
+  c.command_hold = duration_in(p, "command_hold", 0ns);
+  return {deploy::periodic_task(ctx, p, "delay"), c};
 }
 
 }  // namespace
@@ -54,9 +76,9 @@ void register_components(deploy::ComponentRegistry& registry) {
                parse_teleop, [](const std::string& name, const TeleopSpec& s) {
                  return std::make_unique<Teleoperation>(name, s.task, s.config, s.law);
                });
-  registry.add("delay", "re-publishes a device's measured_cp/cv `delay` late", parse_delay,
-               [](const std::string& name, const DelaySpec& s) {
-                 return std::make_unique<DelayTask>(name, s.task, s.delay);
+  registry.add("delay", "a simulated network link to a device: delay, jitter and loss, each direction",
+               parse_delay, [](const std::string& name, const DelaySpec& s) {
+                 return std::make_unique<DelayTask>(name, s.task, s.config);
                });
   registry.add_summary_format<TeleopSummary>([](const TeleopSummary& s) { return to_string(s); });
 }

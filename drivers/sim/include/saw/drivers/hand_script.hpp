@@ -15,7 +15,7 @@ struct HandSample {
 
 // Target positions are relative to the device's initial tip position (the hand's origin).
 struct HandScript {
-  enum class Kind : std::uint8_t { none, line, sinusoid, csv } kind = Kind::none;
+  enum class Kind : std::uint8_t { none, line, sinusoid, csv, reach } kind = Kind::none;
   double stiffness = 200.0;  // N/m
   double damping = 2.0;      // N·s/m
   // line: from `from` to `to` in `duration` s, then hold (or back and forth).
@@ -27,6 +27,14 @@ struct HandScript {
   double frequency = 0.5, phase = 0.0;
   // csv: "t,x,y,z[,clutch]" rows, loaded by load_csv() (not on an RT path).
   std::vector<HandSample> samples;
+  // reach: as a person moves between targets: from the origin to each target in turn and back
+  // to the origin, each reach a minimum-jerk profile of `reach_time` s (Flash & Hogan: the
+  // smoothest path, zero velocity and acceleration at both ends), then still for `dwell` s.
+  std::vector<Eigen::Vector3d> targets;
+  double reach_time = 1.0, dwell = 0.5;
+  // Physiological tremor on top of any motion: three sinusoids near `tremor_frequency` (one per
+  // axis, 8–12 Hz in a person), each of `tremor_amplitude` m peak (sub-millimetre in a person).
+  double tremor_amplitude = 0.0, tremor_frequency = 10.0;
 
   // Throws std::runtime_error naming the file and line of a bad row.
   static std::vector<HandSample> load_csv(const std::string& path);

@@ -9,8 +9,21 @@
 #include "saw/device.hpp"
 #include "saw/drivers/arm_kinematics.hpp"
 #include "saw/drivers/hand_script.hpp"
+#include "saw/eigen.hpp"
 
 namespace saw::drivers {
+
+// A stiff virtual wall the tip can push into (a tool in contact with tissue or a fixture): the
+// plane through `point` (relative to the initial tip position) with outward unit `normal`; past
+// it the wall pushes back along the normal with stiffness·depth + damping·(inward speed), never
+// pulling.
+struct VirtualWall {
+  bool enabled = false;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitX();
+  double stiffness = 2000.0;  // N/m
+  double damping = 5.0;       // N·s/m
+};
 
 struct SimDeviceConfig {
   ArmModel model = ArmModel::omni;
@@ -23,6 +36,7 @@ struct SimDeviceConfig {
   double max_force = 0;  // N; zero: the model's default (Omni 3.3 N, Falcon 9 N)
   bool start_enabled = true;
   HandScript hand;
+  VirtualWall wall;
   int substeps = 4;  // integration steps per cycle
   // Command watchdog: with no fresh servo_cf for this long, the device applies zero force
   // (a dead teleoperation process must not leave it pushing). 0: 3 periods.
@@ -43,7 +57,7 @@ static_assert(sizeof(ButtonCommand) == 2 && offsetof(ButtonCommand, pressed) == 
 // measured_js (with the model's joint names), operating_state, fault, command_timeout,
 // watchdog_trips (reads); servo_cf, state_command (writes); operating_state, fault, clutch,
 // operator_present (events); also servo_force (the force applied this cycle).
-// Provided "sim": set_button (write), hand_force, rejected_commands (reads).
+// Provided "sim": set_button (write), hand_force, wall_force, rejected_commands (reads).
 // The base checks every servo_cf (finite, |force| <= max_force) and runs the watchdog; this
 // driver is the simulated hardware: the hand, the dynamics and the stops.
 class SimHapticDevice : public Device {
@@ -55,6 +69,8 @@ class SimHapticDevice : public Device {
   TimeNs command_timeout() const noexcept { return config_.command_timeout; }
   // What the simulated motors apply now (N): the safe output is zero.
   Eigen::Vector3d applied_force() const noexcept { return applied_; }
+  // What the virtual wall pushes on the tip now (N).
+  Eigen::Vector3d wall_force() const noexcept { return to_eigen(wall_force_); }
   // Times the hardware was put in its safe state (disable, fault, stop, failed start).
   int safe_entries() const noexcept { return safe_entries_; }
 
@@ -62,7 +78,7 @@ class SimHapticDevice : public Device {
     StateColumn<Pose> measured_cp;
     StateColumn<Twist> measured_cv;
     StateColumn<JointState> measured_js;
-    StateColumn<Vec3> hand_force, servo_force;
+    StateColumn<Vec3> hand_force, servo_force, wall_force;
     StateColumn<bool> command_timeout;
     StateColumn<std::uint64_t> watchdog_trips;
   };
@@ -77,6 +93,7 @@ class SimHapticDevice : public Device {
   void set_button(std::uint8_t id, bool pressed) noexcept;
   void integrate(double dt, const Eigen::Vector3d& force, const Eigen::Vector3d& hand_target) noexcept;
   void publish() noexcept;
+  Eigen::Vector3d wall(const Eigen::Vector3d& x, const Eigen::Vector3d& xd) const noexcept;
 
   SimDeviceConfig config_;
   ArmKinematics kinematics_;
@@ -89,7 +106,7 @@ class SimHapticDevice : public Device {
   int safe_entries_ = 0;
 
   // State-table sources.
-  Vec3 hand_force_{}, servo_force_{};
+  Vec3 hand_force_{}, servo_force_{}, wall_force_{};
   std::uint64_t rejected_column_ = 0;
   Columns columns_;
 };

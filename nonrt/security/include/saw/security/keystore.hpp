@@ -43,4 +43,9 @@ struct EnrollOptions {
 std::filesystem::path enroll(const std::filesystem::path& dir, const std::string& name,
                              const EnrollOptions& options);
 
+// Revokes enclave NAME's certificate: DIR/public/crl.pem (signed by the identity CA, valid as long
+// as the CA, earlier revocations kept) lists its serial, and every enclave of the keystore links
+// it as crl.pem, where ROS 2 and sawrt's programs read it. Returns the enclave's subject.
+std::string revoke(const std::filesystem::path& dir, const std::string& name);
+
 }  // namespace saw::security

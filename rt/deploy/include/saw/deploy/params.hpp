@@ -28,7 +28,7 @@ class Params {
   bool has(const std::string& key) const;
 
   // Supported T: double, int, std::int64_t, bool, std::string, saw::Vec3, std::vector<double>,
-  // std::vector<std::string>,
+  // std::vector<std::string>, std::vector<saw::Vec3> (a list of [x, y, z]),
   // std::chrono::nanoseconds (seconds as a number, or "10ms", "500us", "2s", "100ns").
   template <class T>
   T get(const std::string& key) const;

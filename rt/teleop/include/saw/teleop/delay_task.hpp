@@ -3,38 +3,64 @@
 
 #include "saw/crtk_arm.hpp"
 #include "saw/task.hpp"
+#include "saw/teleop/delay_channel.hpp"
 
 namespace saw::teleop {
 
 // What a DelayTask adds to the arm interface it re-publishes; Teleoperation reads
 // them, when present, to judge staleness on the source.
+// One reading of the source as it travels.
+struct DelayedSample {
+  Pose cp{};
+  Twist cv{};
+  TimeNs source_time = 0;
+};
+
 namespace delayed_arm {
 inline constexpr crtk::Read<TimeNs> source_time{"source_time"};  // of the source row shown
 inline constexpr crtk::Read<TimeNs> delay{"delay"};              // how late it is meant to be
 }  // namespace delayed_arm
 
+// A simulated network between a device and its controller: each direction its own link.
+struct DelayConfig {
+  LinkConfig measured;  // the device's measured_cp/cv on their way to the controller
+  LinkConfig commands;  // servo_cf on its way to the device (all zero: passed straight through)
+  // The device end repeats the last command that arrived, each cycle, for at most this long (0:
+  // the commands link's jitter plus 5 periods): a lost or late packet is not a gap in the
+  // device's command stream, and a controller that died is still noticed by the device's watchdog.
+  TimeNs command_hold = 0;
+};
+
 // Required "source" (a device's arm interface), provided "arm" with the same CRTK names.
-// Positions and velocities come out `delay` late, read from this task's own state-table
-// history; force commands and button events pass through (one cycle later). The rows are this
-// task's, stamped with its cycle: "source_time" says when the source wrote the value shown
-// (it stops advancing when the source dies) and "delay" how late it is meant to be, so that a
-// consumer can judge staleness on the source (Teleoperation does).
+// Positions and velocities come out through the `measured` link (late, jittered, some lost: the
+// newest arrived is shown and held); force commands through the `commands` link; button events
+// pass through. The rows are this task's, stamped with its cycle: "source_time" says when the
+// source wrote the value shown (it stops advancing when the source dies) and "delay" how late it
+// is meant to be, so that a consumer can judge staleness on the source (the teleoperation does).
 class DelayTask : public Task {
  public:
   DelayTask(std::string name, TaskConfig task, double delay_seconds);
+  DelayTask(std::string name, TaskConfig task, DelayConfig config);
 
   void run() override;
   double delay() const noexcept { return static_cast<double>(delay_) * 1e-9; }
+  const DelayChannel<DelayedSample>& measured_link() const noexcept { return measured_; }
+  const DelayChannel<Wrench>& commands_link() const noexcept { return commands_; }
 
  private:
+  void pass_command(const Wrench& w) noexcept;
+
   TimeNs delay_;
-  Pose source_cp_{}, measured_cp_{};
-  Twist source_cv_{}, measured_cv_{};
-  TimeNs source_row_time_ = 0, source_time_ = 0;  // of the source row read now; of the one shown
-  StateColumn<Pose> source_cp_column_;
-  StateColumn<Twist> source_cv_column_;
-  StateColumn<TimeNs> source_row_time_column_;
+  bool commands_direct_;
+  TimeNs command_hold_;
+  Pose measured_cp_{};
+  Twist measured_cv_{};
+  TimeNs source_time_ = 0;  // of the row shown
+  DelayChannel<DelayedSample> measured_;
+  DelayChannel<Wrench> commands_;
   bool have_output_ = false;
+  Wrench held_{};
+  TimeNs held_since_ = -1;  // when the held command arrived; -1: none
   FunctionRead<Pose> read_cp_;
   FunctionRead<Twist> read_cv_;
   FunctionWrite<Wrench> write_cf_;

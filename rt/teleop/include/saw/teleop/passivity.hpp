@@ -1,0 +1,51 @@
+// PassivityController: time-domain passivity at one port of a teleoperation network — the energy
+// observed and what would be created dissipated.
+#pragma once
+
+#include <Eigen/Core>
+
+namespace saw::teleop {
+
+// Energy through one port of a network, from the force the network applies to the device and the
+// device's velocity: output while the network does work on the device (F·v > 0), input while the
+// device does work on the network. Both only grow.
+struct PortEnergy {
+  double in = 0;   // J
+  double out = 0;  // J
+};
+
+// The passivity observer and controller of an impedance port (velocity in, force out) of a
+// two-port network whose other port is far away (Hannaford & Ryu 2002; Ryu, Kwon & Hannaford
+// 2004). The network is passive when no port ever gives out more energy than has come in at the
+// other: for each direction, E_out(here, t) ≤ E_in(there, t − T), where the remote input arrives
+// over the same link as the data, T late. Each step, the force the law wants is applied unless
+// its output this step would break that bound; then a damping α·v is subtracted, just enough
+// to keep it (capped at `max_damping`, the most the device renders stably). Since the remote input
+// arrives late, a delayed channel has less energy to spend the longer the delay: transparency
+// degrades with delay, stability does not.
+class PassivityController {
+ public:
+  explicit PassivityController(double max_damping = 1e3) noexcept : max_damping_(max_damping) {}
+
+  struct Step {
+    Eigen::Vector3d force;  // to apply
+    double damping = 0;     // α this step, N·s/m
+  };
+  // `remote_in`: the other port's input energy as last received (J). No allocation, no throw.
+  Step step(const Eigen::Vector3d& force, const Eigen::Vector3d& velocity, double remote_in,
+            double dt) noexcept;
+
+  const PortEnergy& energy() const noexcept { return energy_; }
+  // Energy the controller took out (J) and the observed margin after the last step (J; negative
+  // only when the damping cap kept it from restoring passivity).
+  double dissipated() const noexcept { return dissipated_; }
+  double margin() const noexcept { return margin_; }
+  void reset() noexcept { *this = PassivityController(max_damping_); }
+
+ private:
+  double max_damping_;
+  PortEnergy energy_;
+  double dissipated_ = 0, margin_ = 0;
+};
+
+}  // namespace saw::teleop
