@@ -13,7 +13,7 @@
 #include "packages.hpp"
 #include "saw/deploy/deployment.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 #include "text.hpp"
 
 namespace {
@@ -106,6 +106,40 @@ TEST(Deployment, EveryErrorNamesFileLineColumnAndKey) {
   for (const auto& c : cases) expect_error(c);
 }
 
+// `law:` picks the teleoperation's law; its settings are its own parameters, checked as declared.
+TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
+  const std::string collaborative = "params: {gains: {master: 100, slave: 100}}";
+  const Case cases[] = {
+      {"params: {gains: {master: 100, slave: 100}}", "params: {law: springy}",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.law': 'springy' is not one of: collaborative, position_position)"},
+      {"params: {gains: {master: 100, slave: 100}}", "params: {law: position_position, stiffness: 1e9}",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.stiffness': .*out of range)"},
+      // Another law's setting is not this law's: an unknown parameter.
+      {"params: {gains: {master: 100, slave: 100}}", "params: {law: position_position, gains: {master: 1}}",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.gains': unknown parameter)"},
+      {"params: {gains: {master: 100, slave: 100}}", "params: {mirror: [1, 0.5, 1]}",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.mirror': each entry must be 1 or -1)"},
+  };
+  for (const auto& c : cases) {
+    const auto message = error_of(c.from, c.to);
+    EXPECT_TRUE(std::regex_search(message, std::regex(c.expect)))
+        << "message: " << message << "\nexpected: " << c.expect;
+  }
+  std::string text = good;
+  text.replace(text.find(collaborative), collaborative.size(),
+               "params: {law: position_position, stiffness: 200, damping: 1}");
+  auto d = build(text, "cfg.yaml", registry());
+  d.start();
+  d.run_for(1.0);
+  d.stop();
+  auto* t = d.find<saw::teleop::Teleoperation>("teleop");
+  ASSERT_NE(t, nullptr);
+  EXPECT_EQ(t->law_name(), "position_position");
+  EXPECT_EQ(t->operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_GT(t->enabled_cycles(), 900u);
+  EXPECT_LT(t->tracking_rms(), 0.02) << "the slave follows the master";
+}
+
 // The human-like hand (reaches with dwells, tremor) and the virtual wall of the simulated device.
 TEST(Deployment, HandAndWallParametersAreCheckedLikeTheRest) {
   const std::string hand = "hand: {type: sinusoid, amplitude: [0.02, 0, 0], frequency: 0.5}";
@@ -161,7 +195,7 @@ TEST(Deployment, SteppedRunRecordsEveryRow) {
   int rows = 0;
   while (std::getline(in, line)) ++rows;
   EXPECT_EQ(rows, 1001);
-  auto* t = d.find<saw::teleop::CollaborativeControlForce>("teleop");
+  auto* t = d.find<saw::teleop::Teleoperation>("teleop");
   ASSERT_NE(t, nullptr);
   EXPECT_LT(t->tracking_rms(), 1e-3);
 }
@@ -203,7 +237,7 @@ TEST(Integration, ShippedTeleopSimTracksInSteppedMode) {
   d.start();
   d.run_for(5.0);
   d.stop();
-  auto* t = d.find<saw::teleop::CollaborativeControlForce>("teleop");
+  auto* t = d.find<saw::teleop::Teleoperation>("teleop");
   ASSERT_NE(t, nullptr);
   EXPECT_EQ(t->operating_state(), saw::OperatingStateValue::enabled);
   EXPECT_EQ(t->enabled_cycles(), 5001u);

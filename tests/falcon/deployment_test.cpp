@@ -11,7 +11,7 @@
 #include "saw/drivers/falcon/falcon_device.hpp"
 #include "saw/drivers/falcon/registration.hpp"
 #include "saw/drivers/sim_registration.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 #include "saw/teleop/registration.hpp"
 
 namespace {
@@ -80,7 +80,7 @@ Tracking run_shipped(const char* file, Check&& check) {
   d.start();
   d.run_for(10.0);
   d.stop();
-  const auto* t = d.find<saw::teleop::CollaborativeControlForce>("teleop");
+  const auto* t = d.find<saw::teleop::Teleoperation>("teleop");
   if (t == nullptr) throw std::runtime_error(std::string(file) + ": no teleop");
   EXPECT_EQ(t->operating_state(), saw::OperatingStateValue::enabled) << file;
   check(d);

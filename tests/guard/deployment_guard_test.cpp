@@ -7,8 +7,9 @@
 #include "guard_support.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/manager.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
 #include "saw/teleop/delay_task.hpp"
+#include "saw/teleop/teleoperation.hpp"
+#include "saw/testing/teleop_rig.hpp"
 
 namespace {
 
@@ -19,7 +20,8 @@ struct Deployment {
       : master("master", saw::TaskConfig::periodic(1ms, 0), master_config()),
         slave("slave", saw::TaskConfig::periodic(1ms, 0), saw::drivers::SimDeviceConfig{}),
         delay("master_delay", saw::TaskConfig::periodic(1ms, 0), link_config()),
-        teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config()) {
+        teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config(),
+               saw::teleop::law_spec<saw::teleop::CollaborativeLaw>(teleop_config())) {
     for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &delay, &teleop})
       m.add(*c);
     m.connect("master_delay", "source", "master", "arm");
@@ -39,8 +41,8 @@ struct Deployment {
     c.hand.amplitude = {0.03, 0.01, 0};
     return c;
   }
-  static saw::teleop::TeleopConfig teleop_config() {
-    saw::teleop::TeleopConfig c;
+  static saw::testing::CollaborativeTeleopConfig teleop_config() {
+    saw::testing::CollaborativeTeleopConfig c;
     c.gains = {60, 60};
     c.prediction = {true, 0.01};
     c.stale_timeout = 0.5;  // real threads on a busy VM: do not fault on a scheduling hiccup
@@ -48,7 +50,7 @@ struct Deployment {
   }
   saw::drivers::SimHapticDevice master, slave;
   saw::teleop::DelayTask delay;
-  saw::teleop::CollaborativeControlForce teleop;
+  saw::teleop::Teleoperation teleop;
   saw::Manager m;
 };
 

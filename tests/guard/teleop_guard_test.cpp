@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "guard_support.hpp"
+#include "saw/teleop/laws/position_position.hpp"
 #include "saw/testing/teleop_rig.hpp"
 
 namespace {
@@ -16,7 +17,7 @@ using saw::StateCommand;
 
 TEST(RtGuard, TeleoperationCycleIsRtClean) {
   saw::testing::GuardWindow window;
-  saw::teleop::TeleopConfig c;
+  saw::testing::CollaborativeTeleopConfig c;
   c.limits = {2, 2};  // low: the ratchet and the Ruckig offset trajectory both run
   c.prediction = {true, 0.02};
   c.align = true;
@@ -37,6 +38,46 @@ TEST(RtGuard, TeleoperationCycleIsRtClean) {
   const auto counts = window.counts();
   EXPECT_TRUE(ratcheted) << "the scenario should have exercised the ratchet";
   EXPECT_EQ(counts.cycles, 2000u);
+  EXPECT_RT_CLEAN(counts);
+}
+
+// The second law on the same task: its step, hold and reset, and its own commands, from the
+// first cycle.
+class PpConsole : public saw::Task {
+ public:
+  PpConsole() : Task("console", saw::TaskConfig::periodic(1ms, 0)) {
+    auto& r = require("teleop");
+    r.add_function("set_scale", scale_);
+    r.add_function("set_stiffness", stiffness_);
+  }
+  void run() override {
+    const int cycle = cycle_++;
+    if (cycle == 100) (void)scale_(2.0);
+    if (cycle == 150) (void)stiffness_(50.0);
+    if (cycle == 160) (void)stiffness_(-1.0);  // refused
+  }
+
+ private:
+  int cycle_ = 0;
+  saw::FunctionWrite<double> scale_, stiffness_;
+};
+
+TEST(RtGuard, PositionPositionLawIsRtClean) {
+  saw::testing::GuardWindow window;
+  saw::teleop::TeleopConfig c;
+  c.stale_timeout = 0.1;
+  saw::testing::TeleopRig<PpConsole> rig(c, saw::teleop::law_spec<saw::teleop::PositionPositionLaw>());
+  for (int i = 0; i < 400; ++i) {
+    rig.master.position[0] = 0.1 * std::sin(i * 0.01);
+    if (i == 200) rig.master.press_clutch(true);
+    if (i == 250) rig.master.press_clutch(false);
+    rig.step();
+  }
+  rig.manager.stop();
+  const auto counts = window.counts();
+  EXPECT_EQ(rig.teleop.rejected_commands(), 1u);
+  EXPECT_EQ(rig.teleop.operating_state(), OperatingStateValue::enabled);
+  EXPECT_EQ(counts.cycles, 2 * 400u);
   EXPECT_RT_CLEAN(counts);
 }
 
@@ -131,7 +172,7 @@ struct ConsoleRig : saw::testing::TeleopRig<Console> {
 
 TEST(RtGuard, EveryTeleoperationCommandIsRtClean) {
   saw::testing::GuardWindow window;
-  saw::teleop::TeleopConfig c;
+  saw::testing::CollaborativeTeleopConfig c;
   c.stale_timeout = 0.1;
   ConsoleRig rig(c, /*scripted=*/true);
   rig.run(200);
@@ -153,7 +194,7 @@ TEST(RtGuard, EveryTeleoperationCommandIsRtClean) {
 // A master that stops publishing: FAULT, cycles in FAULT, then re-enabled once it is back.
 TEST(RtGuard, TeleoperationFaultAndRecoveryAreRtClean) {
   saw::testing::GuardWindow window;
-  saw::teleop::TeleopConfig c;
+  saw::testing::CollaborativeTeleopConfig c;
   c.stale_timeout = 0.01;
   ConsoleRig rig(c, /*scripted=*/false, /*enable_at=*/200);
   rig.run(50);

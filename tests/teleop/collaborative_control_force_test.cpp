@@ -1,6 +1,6 @@
 // The teleoperation task against fake devices, on the stepped clock: clutch, ratchet, faults,
 // jerk-limited offsets, run-time settings, delay and prediction.
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 
 namespace {
 
-using saw::teleop::TeleopConfig;
+using saw::testing::TeleopConfig;
 using saw::testing::basic;
 using saw::testing::dist;
 using saw::testing::norm;

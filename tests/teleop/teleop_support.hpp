@@ -4,12 +4,11 @@
 #include <cmath>
 #include <vector>
 
-#include "saw/teleop/collaborative_control_force.hpp"
 #include "saw/testing/teleop_rig.hpp"
 
 namespace saw::testing {
 
-using saw::teleop::TeleopConfig;
+using TeleopConfig = CollaborativeTeleopConfig;
 
 inline double norm(const saw::Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 inline double dist(const saw::Vec3& a, const saw::Vec3& b) {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "saw/log.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 #include "saw/teleop/delay_task.hpp"
 #include "saw/testing/fake_device.hpp"
 #include "saw/testing/stepper.hpp"
@@ -24,7 +24,7 @@ using saw::OperatingStateValue;
 using saw::Status;
 using saw::teleop::FaultCode;
 using saw::teleop::FaultInfo;
-using saw::teleop::TeleopConfig;
+using saw::testing::TeleopConfig;
 using saw::testing::basic;
 using saw::testing::norm;
 using saw::testing::Rig;

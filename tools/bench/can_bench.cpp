@@ -43,7 +43,7 @@
 #include "saw/manager.hpp"
 #include "saw/rt_context.hpp"
 #include "saw/rt_thread.hpp"
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 #include "saw/teleop/registration.hpp"
 #include "stats.hpp"
 
@@ -579,7 +579,7 @@ void e2e(const Options& o, double seconds, E2eRun& out) {
     auto d = saw::deploy::make_deployment(yaml, o.config, registry);
     auto* master = d.find<saw::Task>("master");
     auto* slave = d.find<canopen::CanopenArm>("slave");
-    auto* teleop = d.find<saw::teleop::CollaborativeControlForce>("teleop");
+    auto* teleop = d.find<saw::teleop::Teleoperation>("teleop");
     if (master == nullptr || slave == nullptr || teleop == nullptr)
       throw std::runtime_error(o.config + ": expected components master, slave (canopen_arm) and teleop");
     rec.slave_name = slave->name().c_str();

@@ -1,8 +1,10 @@
 // The teleop package's types for deployments: each parameter read, range-checked and located.
 #include "saw/teleop/registration.hpp"
 
-#include "saw/teleop/collaborative_control_force.hpp"
 #include "saw/teleop/delay_task.hpp"
+#include "saw/teleop/law_registry.hpp"
+#include "saw/teleop/laws/collaborative.hpp"
+#include "saw/teleop/teleoperation.hpp"
 
 namespace saw::teleop {
 namespace {
@@ -14,35 +16,22 @@ using deploy::Params;
 struct TeleopSpec {
   TaskConfig task;
   TeleopConfig config;
+  LawSpec law;
 };
 
 TeleopSpec parse_teleop(const ComponentContext& ctx, Params& p) {
-  TeleopConfig c;
-  c.scale.scale = p.get_in_range("scale", min_scale, max_scale, 1.0);
-  c.scale.mirror = p.get_or<Vec3>("mirror", {1, 1, 1});
-  if (!c.scale.valid()) p.fail_at("mirror", "each entry must be 1 or -1");
-  Params g = p.child("gains");
-  c.gains.master = g.get_in_range("master", 0, max_gain, c.gains.master);
-  c.gains.slave = g.get_in_range("slave", 0, max_gain, c.gains.slave);
-  Params l = p.child("force_limits");
-  c.limits.master = l.get_in_range("master", 0, max_force_limit, c.limits.master);
-  c.limits.slave = l.get_in_range("slave", 0, max_force_limit, c.limits.slave);
-  c.ratchet = p.get_or<bool>("ratchet", true);
-  Params o = p.child("offset_limits");
-  c.offset_limits.velocity = o.get_in_range("velocity", 1e-6, 10, c.offset_limits.velocity);
-  c.offset_limits.acceleration = o.get_in_range("acceleration", 1e-6, 1e3, c.offset_limits.acceleration);
-  c.offset_limits.jerk = o.get_in_range("jerk", 1e-6, 1e5, c.offset_limits.jerk);
-  Params pr = p.child("prediction");
-  c.prediction.enabled = pr.get_or<bool>("enabled", false);
-  c.prediction.master_horizon = deploy::seconds_in_range(pr, "master", 0ns, 0, max_horizon);
-  c.prediction.slave_horizon = deploy::seconds_in_range(pr, "slave", 0ns, 0, max_horizon);
+  // The law's settings sit beside the task's own keys, each read as the law declares it.
+  const auto law = p.get_or<std::string>("law", std::string(CollaborativeLaw::name));
+  const LawRegistry::Entry* entry = law_registry().find(law);
+  if (entry == nullptr) p.fail_at("law", "'" + law + "' is not one of: " + law_registry().names());
+  TeleopSpec spec{{}, {}, entry->parse(p)};
+  TeleopConfig& c = spec.config;
   c.stale_timeout = deploy::seconds_in_range(p, "stale_timeout", 10ms, 1e-6, 10);
   c.startup_timeout = deploy::seconds_in_range(p, "startup_timeout", 0ns, 0, 600);
   c.device_timeout = deploy::seconds_in_range(p, "device_timeout", 5s, 0.001, 600);
   c.start_enabled = p.get_or<bool>("start_enabled", true);
-  c.align = p.get_or<bool>("align", false);
-  c.slave_offset = p.get_or<Vec3>("slave_offset", {0, 0, 0});
-  return {deploy::periodic_task(ctx, p, "teleop"), c};
+  spec.task = deploy::periodic_task(ctx, p, "teleop");
+  return spec;
 }
 
 struct DelaySpec {
@@ -81,9 +70,11 @@ DelaySpec parse_delay(const ComponentContext& ctx, Params& p) {
 }  // namespace
 
 void register_components(deploy::ComponentRegistry& registry) {
-  registry.add("teleop", "collaborative force teleoperation between a master and a slave", parse_teleop,
-               [](const std::string& name, const TeleopSpec& s) {
-                 return std::make_unique<CollaborativeControlForce>(name, s.task, s.config);
+  registry.add("teleop",
+               "teleoperation between a master and a slave under a control law (`law:` " +
+                   law_registry().names() + "; default collaborative)",
+               parse_teleop, [](const std::string& name, const TeleopSpec& s) {
+                 return std::make_unique<Teleoperation>(name, s.task, s.config, s.law);
                });
   registry.add("delay", "a simulated network link to a device: delay, jitter and loss, each direction",
                parse_delay, [](const std::string& name, const DelaySpec& s) {

@@ -1,6 +1,6 @@
 #include <cstdio>
 
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 
 namespace saw::teleop {
 

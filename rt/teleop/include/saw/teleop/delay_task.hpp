@@ -7,7 +7,7 @@
 
 namespace saw::teleop {
 
-// What a DelayTask adds to the arm interface it re-publishes; CollaborativeControlForce reads
+// What a DelayTask adds to the arm interface it re-publishes; Teleoperation reads
 // them, when present, to judge staleness on the source.
 // One reading of the source as it travels.
 struct DelayedSample {

@@ -4,13 +4,20 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <string_view>
+#include <tuple>
 
 namespace saw::teleop {
 
 struct OffsetLimits {
+  // Crosses processes as the collaborative law's read-back `offset_limits`.
+  static constexpr std::string_view type_name = "saw::teleop::OffsetLimits";
+  static constexpr std::uint32_t layout_version = 1;
   double velocity = 0.05;     // m/s
   double acceleration = 0.5;  // m/s²
   double jerk = 10.0;         // m/s³
+  static constexpr auto fields =
+      std::tuple{&OffsetLimits::velocity, &OffsetLimits::acceleration, &OffsetLimits::jerk};
 };
 
 // Fixed 3 DoF: Ruckig's update() then allocates nothing. The offset moves only through

@@ -5,8 +5,8 @@
 
 namespace saw::teleop {
 
-// `teleop` (CollaborativeControlForce) and `delay` (DelayTask), each with its parameters'
-// parser, and the teleop summary's format.
+// `teleop` (Teleoperation, running a law of law_registry()) and `delay` (DelayTask), each with its
+// parameters' parser, and the teleop summary's format.
 void register_components(deploy::ComponentRegistry& registry);
 
 }  // namespace saw::teleop

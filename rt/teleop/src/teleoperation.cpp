@@ -1,4 +1,4 @@
-#include "saw/teleop/collaborative_control_force.hpp"
+#include "saw/teleop/teleoperation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,24 +11,24 @@
 namespace saw::teleop {
 namespace {
 
-bool finite(double x) { return std::isfinite(x); }
 double seconds(const TaskConfig& t) { return static_cast<double>(t.period.count()) * 1e-9; }
 // A delay a DelayTask reports beyond this is garbage (DelayTask refuses more than 10 s).
 constexpr TimeNs max_delay = 10'000'000'000;
 
 }  // namespace
 
-CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfig task, TeleopConfig config)
+Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig config, const LawSpec& law)
     : Task(std::move(name), task),
       config_(config),
-      slave_offset_(seconds(task) > 0 ? seconds(task) : 0.001, config.offset_limits) {
+      law_(law.make(LawContext{seconds(task) > 0 ? seconds(task) : 0.001})) {
   auto& st = state_table();
   columns_.operating_state = st.add_column("operating_state", &state_);
   columns_.master_force = st.add_column("master_force", &master_force_);
   columns_.slave_force = st.add_column("slave_force", &slave_force_);
   columns_.master_error = st.add_column("master_error", &master_error_);
   columns_.slave_error = st.add_column("slave_error", &slave_error_);
-  columns_.slave_offset = st.add_column("slave_offset", &slave_offset_value_);
+  // The offset the law works with now; the setting `slave_offset` (if the law has one) is its target.
+  columns_.slave_offset = st.add_column("current_offset", &slave_offset_value_);
   columns_.tracking_error = st.add_column("tracking_error", &tracking_error_);
   columns_.ratcheting = st.add_column("ratcheting", &ratcheting_);
   columns_.clutched = st.add_column("clutched", &clutched_);
@@ -36,6 +36,7 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
   columns_.rejected_inputs = st.add_column("rejected_inputs", &rejected_inputs_);
   columns_.offset_errors = st.add_column("offset_errors", &offset_errors_);
   columns_.summary = st.add_column("summary", &summary_, ColumnUse::summary);
+  columns_.description = st.add_column("description", &description_);
 
   auto& p = provide("teleop");
   crtk::provide(p, crtk::operating_state, columns_.operating_state);
@@ -45,8 +46,10 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
   p.add_command_read("fault", columns_.fault);
   p.add_command_read("rejected_inputs", columns_.rejected_inputs);
   p.add_command_read("offset_errors", columns_.offset_errors);
+  p.add_command_read("description", columns_.description);
   crtk::provide(p, crtk::state_command, [this](const StateCommand& c) { handle_state_command(c); });
-  add_settings(p);
+  // Declared once by the law: set_<name> (bounded, refusals counted), and <name> read back.
+  law_->provide_settings(p, st, rejected_);
   state_event_ = &crtk::provide(p, crtk::operating_state_event);
   fault_event_ = &p.add_event_write<FaultInfo>("fault");
 
@@ -58,51 +61,20 @@ CollaborativeControlForce::CollaborativeControlForce(std::string name, TaskConfi
       *required("master"), crtk::arm::clutch, [this](const ButtonEvent& b) { clutched_ = b.pressed; },
       Need::optional);
   state_.state = config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
-  previous_ = {config_.scale, config_.prediction};
+
+  ComponentDescription::set(description_.kind, "teleoperation");
+  ComponentDescription::set(description_.variant, law_->name());
+  ComponentDescription::set(description_.roles[0], "master");
+  ComponentDescription::set(description_.roles[1], "slave");
 }
 
-void CollaborativeControlForce::add_settings(ProvidedInterface& p) {
-  // Scale and prediction change what the offset is expressed in: the next enabled cycle
-  // re-expresses it (once, however many changes were queued) so the error does not jump.
-  const auto settings_change = [this] {
-    if (!reexpress_pending_) previous_ = {config_.scale, config_.prediction};
-    reexpress_pending_ = true;
-  };
-  p.add_command_write<double>("set_scale", [this, settings_change](const double& s) {
-    Scale next = config_.scale;
-    next.scale = s;
-    if (!next.valid()) return void(++rejected_);
-    settings_change();
-    config_.scale = next;
-  });
-  p.add_command_write<Gains>("set_gains", [this](const Gains& g) {
-    if (!g.valid()) return void(++rejected_);
-    config_.gains = g;
-  });
-  p.add_command_write<ForceLimits>("set_force_limits", [this](const ForceLimits& l) {
-    if (!l.valid()) return void(++rejected_);
-    config_.limits = l;
-  });
-  p.add_command_write<Prediction>("set_prediction", [this, settings_change](const Prediction& pr) {
-    const auto bad = [](double h) { return !(h >= 0 && h <= max_horizon); };
-    if (bad(pr.master_horizon) || bad(pr.slave_horizon)) return void(++rejected_);
-    settings_change();
-    config_.prediction = pr;
-  });
-  // Declared bounds: checked by the bridge and the gateway before a remote value gets here, and
-  // published in the registry so that clients (sawctl, GUIs) refuse the same values at once.
-  p.limit("set_scale", min_scale, max_scale);
-  p.limit("set_gains", 0.0, max_gain);
-  p.limit("set_force_limits", 0.0, max_force_limit);
-  p.add_command_write<Vec3>("set_slave_offset", [this](const Vec3& o) {
-    if (!finite(o[0]) || !finite(o[1]) || !finite(o[2])) return void(++rejected_);
-    config_.slave_offset = o;
-    config_.align = true;
-    slave_offset_.set_target(to_eigen(o));
-  });
+void Teleoperation::startup() {
+  // Connected by now: say which components play each role (a client need not guess by name).
+  ComponentDescription::set(description_.servers[0], required("master")->connected_to());
+  ComponentDescription::set(description_.servers[1], required("slave")->connected_to());
 }
 
-void CollaborativeControlForce::require_side(Side& s, const char* iface) {
+void Teleoperation::require_side(Side& s, const char* iface) {
   auto& r = require(iface);
   crtk::require(r, crtk::arm::measured_cp, s.cp);
   crtk::require(r, crtk::arm::measured_cv, s.cv);
@@ -114,14 +86,14 @@ void CollaborativeControlForce::require_side(Side& s, const char* iface) {
   crtk::require(r, crtk::operating_state, s.state, Need::optional);
 }
 
-void CollaborativeControlForce::set_operating_state(OperatingStateValue s) noexcept {
+void Teleoperation::set_operating_state(OperatingStateValue s) noexcept {
   if (state_.state == s) return;
   state_.state = s;
   if (s != OperatingStateValue::enabled) state_.is_busy = false;  // waits only while enabled
   (void)(*state_event_)(state_);
 }
 
-void CollaborativeControlForce::raise_fault(FaultInfo why) noexcept {
+void Teleoperation::raise_fault(FaultInfo why) noexcept {
   if (state_.state == OperatingStateValue::fault) return;
   why.time = now();
   why.since_start_ns = now() - start_time_;
@@ -134,16 +106,16 @@ void CollaborativeControlForce::raise_fault(FaultInfo why) noexcept {
   set_operating_state(OperatingStateValue::fault);
 }
 
-void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
+void Teleoperation::handle_state_command(StateCommand c) noexcept {
   switch (c) {
     case StateCommand::enable:
-      // Already enabled: nothing to do (re-snapping would drop the force in one step).
+      // Already enabled: nothing to do (re-engaging would drop the force in one step).
       if (state_.state == OperatingStateValue::enabled) break;
       if (fault_.code != FaultCode::none) {
         fault_ = {};
         (void)(*fault_event_)(fault_);
       }
-      snap_pending_ = true;
+      engage_pending_ = true;
       set_operating_state(OperatingStateValue::enabled);
       break;
     case StateCommand::disable:
@@ -154,7 +126,7 @@ void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
       break;
     case StateCommand::resume:
       if (state_.state == OperatingStateValue::paused) {
-        snap_pending_ = true;
+        engage_pending_ = true;
         set_operating_state(OperatingStateValue::enabled);
       }
       break;
@@ -163,7 +135,7 @@ void CollaborativeControlForce::handle_state_command(StateCommand c) noexcept {
   }
 }
 
-Status CollaborativeControlForce::read_time(Side& s, TimeNs row_time, TimeNs& time) noexcept {
+Status Teleoperation::read_time(Side& s, TimeNs row_time, TimeNs& time) noexcept {
   time = row_time;
   if (!s.source_time.is_bound() || !s.delay.is_bound()) return Status::ok;
   // Behind a DelayTask the row is the delay task's, stamped with its own cycle: the age that
@@ -176,7 +148,7 @@ Status CollaborativeControlForce::read_time(Side& s, TimeNs row_time, TimeNs& ti
   return Status::ok;
 }
 
-bool CollaborativeControlForce::read_side(Side& s, Input& out, FaultInfo& why) noexcept {
+bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   Pose pose;
   Twist twist;
   RowStamp stamp;
@@ -187,13 +159,14 @@ bool CollaborativeControlForce::read_side(Side& s, Input& out, FaultInfo& why) n
   // A row from the future (more than a period ahead) would never go stale: refused.
   if (st == Status::ok && time > now() + config().period.count()) st = Status::invalid;
   if (st == Status::ok) {
-    const Input in{to_eigen(pose.position), to_eigen(twist.linear)};
-    s.not_finite = !in.position.allFinite() || !in.velocity.allFinite();
+    const Eigen::Vector3d position = to_eigen(pose.position), velocity = to_eigen(twist.linear);
+    s.not_finite = !position.allFinite() || !velocity.allFinite();
     if (s.not_finite) {
       ++rejected_inputs_;
       st = Status::invalid;
     } else {
-      s.last = in;
+      s.last.position = position;
+      s.last.velocity = velocity;
       s.time = time;
       s.valid = true;
     }
@@ -222,27 +195,15 @@ bool CollaborativeControlForce::read_side(Side& s, Input& out, FaultInfo& why) n
     why = fault_on(s.side, s.not_finite ? FaultCode::input_not_finite : FaultCode::input_missing, st);
     return false;
   }
-  if (const TimeNs age = now() - s.time; age > stale_ns) {
-    why = fault_on(s.side, failed, st, age);
+  s.last.age = now() - s.time;
+  if (s.last.age > stale_ns) {
+    why = fault_on(s.side, failed, st, s.last.age);
     return false;
   }
-  out = s.last;
   return true;
 }
 
-Eigen::Vector3d CollaborativeControlForce::predict(const Input& in, double horizon,
-                                                   const Prediction& pr) const noexcept {
-  if (!pr.enabled || horizon <= 0) return in.position;
-  // Eq. 7, x(t) = x(t−1) + δt·ẋ(t−1), stepped over the horizon with the last known velocity.
-  const double dt = seconds(config());
-  const auto steps = static_cast<int>(std::lround(horizon / dt));
-  Eigen::Vector3d x = in.position;
-  for (int i = 0; i < steps; ++i) x += dt * in.velocity;
-  return x;
-}
-
-void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master,
-                                            const Eigen::Vector3d& f_slave) noexcept {
+void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept {
   Eigen::Vector3d fm = f_master, fs = f_slave;
   if (!fm.allFinite() || !fs.allFinite()) {  // the last check before a device
     raise_fault(
@@ -259,58 +220,20 @@ void CollaborativeControlForce::send_forces(const Eigen::Vector3d& f_master,
   slave_force_ = to_vec3(fs);
 }
 
-void CollaborativeControlForce::snap_offsets(const Input& master, const Input& slave) noexcept {
-  const Prediction& pr = config_.prediction;
-  slave_offset_.reset(cancelling_slave_offset(predict(master, pr.master_horizon, pr), master_offset_,
-                                              predict(slave, pr.slave_horizon, pr), config_.scale));
-}
-
-void CollaborativeControlForce::reexpress_offset(const Input& master, const Input& slave) noexcept {
-  // e_s = d_s − S⁻¹·d_m must not jump: shift o_s (target included) by the difference between
-  // e_s under the settings before the change and after it, for the same inputs and offset.
-  const Eigen::Vector3d o_s = slave_offset_.offset();
-  const auto error = [&](const LawSettings& s) -> Eigen::Vector3d {
-    const Eigen::Vector3d d_m = predict(master, s.prediction.master_horizon, s.prediction) + master_offset_;
-    const Eigen::Vector3d d_s = predict(slave, s.prediction.slave_horizon, s.prediction) + o_s;
-    return d_s - s.scale.master_to_slave().cwiseProduct(d_m);
-  };
-  const Eigen::Vector3d shift = error(previous_) - error({config_.scale, config_.prediction});
-  const Eigen::Vector3d target = slave_offset_.target() + shift;
-  const bool was_moving = slave_offset_.moving();
-  slave_offset_.reset(o_s + shift);
-  if (was_moving) slave_offset_.set_target(target);
-}
-
-void CollaborativeControlForce::step_offset() noexcept {
-  (void)slave_offset_.update();
-  if (slave_offset_.errors() == offset_errors_) return;
-  offset_errors_ = slave_offset_.errors();
+void Teleoperation::note_refusals() noexcept {
+  const std::uint64_t n = law_->refusals();
+  if (n == offset_errors_) return;
+  offset_errors_ = n;
   // Counted in the state table; logged at the 1st, 2nd, 4th, 8th... so a stuck input cannot flood.
-  if ((offset_errors_ & (offset_errors_ - 1)) == 0)
+  if ((n & (n - 1)) == 0)
     saw::log(LogLevel::warning, name().c_str(),
-             "offset trajectory refused (Ruckig result {}), {} times so far", slave_offset_.last_error(),
-             offset_errors_);
+             "offset trajectory refused (Ruckig result {}), {} times so far", law_->last_refusal(), n);
 }
 
-void CollaborativeControlForce::ratchet(const Eigen::Vector3d& p_m, const Eigen::Vector3d& p_s) noexcept {
-  // At a force limit, slip the offset target so the error returns to the limit; the offset
-  // follows the jerk-limited trajectory, the saturated force holds meanwhile.
-  ratcheting_ = false;
-  if (!config_.ratchet) return;
-  const LawOutput at_target = compute_law(p_m, master_offset_, p_s, slave_offset_.target(), config_.scale,
-                                          config_.gains, config_.limits);
-  if (at_target.finite && (at_target.master_saturated || at_target.slave_saturated)) {
-    slave_offset_.set_target(slave_offset_.target() +
-                             ratchet_shift(at_target, config_.scale, config_.gains, config_.limits));
-    ratcheting_ = true;
-  }
-  ratcheting_ = ratcheting_ || slave_offset_.moving();
-}
-
-void CollaborativeControlForce::account(const LawOutput& law) noexcept {
+void Teleoperation::account(const LawCommand& law) noexcept {
   master_error_ = to_vec3(law.master_error);
   slave_error_ = to_vec3(law.slave_error);
-  slave_offset_value_ = to_vec3(slave_offset_.offset());
+  slave_offset_value_ = to_vec3(law.slave_offset);
   tracking_error_ = law.slave_error.norm();
   tracking_sum_sq_ += tracking_error_ * tracking_error_;
   tracking_max_ = std::max(tracking_max_, tracking_error_);
@@ -323,7 +246,7 @@ void CollaborativeControlForce::account(const LawOutput& law) noexcept {
   if (2 * master_age_ >= config().period.count()) ++master_age_late_;
 }
 
-void CollaborativeControlForce::on_input_failure(const FaultInfo& why) noexcept {
+void Teleoperation::on_input_failure(const FaultInfo& why) noexcept {
   // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
   // At start-up, inputs may simply not be published yet: wait up to startup_timeout for them.
   const double grace = config_.startup_timeout > 0 ? config_.startup_timeout : config_.stale_timeout;
@@ -332,12 +255,12 @@ void CollaborativeControlForce::on_input_failure(const FaultInfo& why) noexcept 
   send_forces(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
 }
 
-void CollaborativeControlForce::run() {
+void Teleoperation::run() {
   cycle_body();
   refresh_summary();
 }
 
-void CollaborativeControlForce::refresh_summary() noexcept {
+void Teleoperation::refresh_summary() noexcept {
   summary_.state = state_.state;
   summary_.fault = fault_;
   summary_.tracking_rms = tracking_rms();
@@ -346,13 +269,13 @@ void CollaborativeControlForce::refresh_summary() noexcept {
   summary_.rejected_commands = rejected_;
   summary_.refused_sends = refused_sends_;
   summary_.rejected_inputs = rejected_inputs_;
-  summary_.offset_errors = slave_offset_.errors();
+  summary_.offset_errors = law_->refusals();
   summary_.master_age_mean = master_age_mean();
   summary_.master_age_max = master_age_max_;
   summary_.master_age_late = master_age_late_;
 }
 
-bool CollaborativeControlForce::waiting_for_devices() noexcept {
+bool Teleoperation::waiting_for_devices() noexcept {
   const bool waiting = state_.state == OperatingStateValue::enabled &&
                        !(master_.enabled && slave_.enabled && !master_.busy && !slave_.busy);
   if (!waiting) {
@@ -375,48 +298,37 @@ bool CollaborativeControlForce::waiting_for_devices() noexcept {
   return waiting;
 }
 
-void CollaborativeControlForce::cycle_body() noexcept {
+void Teleoperation::cycle_body() noexcept {
   if (start_time_ < 0) start_time_ = now();
-  Input master, slave;
   FaultInfo why{};
-  if (!read_side(master_, master, why) || !read_side(slave_, slave, why)) return on_input_failure(why);
+  if (!read_side(master_, why) || !read_side(slave_, why)) return on_input_failure(why);
   inputs_seen_ = true;
+  const LawInputs in{master_.last, slave_.last, seconds(config())};
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const bool busy = waiting_for_devices();
   if (state_.state != OperatingStateValue::enabled || clutched_ || busy) {
-    // Forces off; keep the offset cancelling so that enabling or releasing the clutch cannot jump.
-    snap_offsets(master, slave);
+    // Forces off; the law holds, so that enabling or releasing the clutch cannot jump.
+    law_->hold(in);
     // A device's first position after it was busy may jump (a homed Falcon's counts become
-    // absolute in that very row): snap again on that cycle, from that position.
-    snap_pending_ = busy;
-    reexpress_pending_ = false;
+    // absolute in that very row): engage afresh on that cycle, from that position.
+    engage_pending_ = busy;
     ratcheting_ = false;
     send_forces(zero, zero);
     return;
   }
-  const Prediction& pr = config_.prediction;
-  const Eigen::Vector3d p_m = predict(master, pr.master_horizon, pr);
-  const Eigen::Vector3d p_s = predict(slave, pr.slave_horizon, pr);
-  if (snap_pending_) {
-    // A snap expresses the offset in the current settings already: a pending re-expression
-    // on top of it would apply the change twice.
-    snap_offsets(master, slave);
-    if (config_.align) slave_offset_.set_target(to_eigen(config_.slave_offset));
-    snap_pending_ = reexpress_pending_ = false;
-  } else if (reexpress_pending_) {
-    reexpress_offset(master, slave);
-    reexpress_pending_ = false;
+  if (engage_pending_) {
+    law_->reset(in);
+    engage_pending_ = false;
   }
-  step_offset();
-  const LawOutput law = compute_law(p_m, master_offset_, p_s, slave_offset_.offset(), config_.scale,
-                                    config_.gains, config_.limits);
+  const LawCommand law = law_->step(in);
+  note_refusals();
   if (!law.finite) {
-    const bool master_bad = !law.master_error.allFinite() || !std::isfinite(law.master_error.norm());
-    raise_fault(fault_on(master_bad ? FaultSide::master : FaultSide::slave, FaultCode::output_not_finite));
+    raise_fault(fault_on(law.bad_side == FaultSide::none ? FaultSide::slave : law.bad_side,
+                         FaultCode::output_not_finite));
     send_forces(zero, zero);
     return;
   }
-  ratchet(p_m, p_s);
+  ratcheting_ = law.limiting;
   account(law);
   send_forces(law.master_force, law.slave_force);
 }

@@ -1,39 +1,22 @@
-// CollaborativeControlForce: the paper's teleoperation task between a master and a slave device.
+// Teleoperation: the task between a master and a slave device that runs a control law.
 #pragma once
 
 #include <Eigen/Core>
 #include <cmath>
-#include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <string>
 
 #include "saw/crtk.hpp"
+#include "saw/description.hpp"
 #include "saw/task.hpp"
 #include "saw/teleop/fault_info.hpp"
-#include "saw/teleop/offset_trajectory.hpp"
-#include "saw/teleop/teleop_law.hpp"
+#include "saw/teleop/law_registry.hpp"
 
 namespace saw::teleop {
 
-// The local model predicts only the inputs that arrive late: a side's horizon is the delay of
-// the link its positions come over (0 for a device beside this task).
-struct Prediction {
-  static constexpr std::string_view type_name = "saw::teleop::Prediction";
-  static constexpr std::uint32_t layout_version = 1;
-  bool enabled = false;
-  double master_horizon = 0.0;  // s
-  double slave_horizon = 0.0;   // s
-};
-// Crosses processes byte for byte (set_prediction).
-static_assert(sizeof(Prediction) == 24 && offsetof(Prediction, master_horizon) == 8 &&
-              offsetof(Prediction, slave_horizon) == 16);
-
+// The task's own settings (a law's are the law's: see law.hpp).
 struct TeleopConfig {
-  Scale scale;
-  Gains gains;
-  ForceLimits limits;
-  bool ratchet = true;
-  OffsetLimits offset_limits;
-  Prediction prediction;
   // s: an input older than this is a fault. Behind a DelayTask, "older" is judged on the source
   // row's time plus the delay, so a dead source still shows.
   double stale_timeout = 0.01;
@@ -43,10 +26,6 @@ struct TeleopConfig {
   // s: enabled, but a device stays disabled (not busy, not paused) this long: FAULT, naming the
   // side. Meanwhile the task is busy and drives nothing.
   double device_timeout = 5.0;
-  // Aligned mode: after enabling, the slave offset travels (jerk-limited) from the value that
-  // cancels the error to `slave_offset`, pulling the slave smoothly into the configured pose.
-  bool align = false;
-  Vec3 slave_offset{};
   bool start_enabled = true;
 };
 
@@ -68,30 +47,40 @@ struct TeleopSummary {
 // "ENABLED, tracking error |e_s| RMS 0.123 mm, ...": the summary's line for people.
 std::string to_string(const TeleopSummary& s);
 
-// Required interfaces "master" and "slave" (CRTK: measured_cp, measured_cv, servo_cf; optional
-// clutch event on the master; optional source_time and delay, given by a DelayTask). Provided
-// interface "teleop": state_command, set_scale, set_gains, set_force_limits, set_prediction,
-// set_slave_offset; its state as read commands; operating_state and fault events.
-// Inputs are checked before use: a row that is not finite (or stamped in the future) is a failed
-// read, the last good value is held, and FAULT follows after stale_timeout. Every force is
-// checked finite before it is sent; every FAULT records why (fault(), the "fault" column).
-// A device whose operating_state says busy (homing: its positions mean nothing yet) holds the
-// teleoperation as the clutch does: zero force on both sides, the offset kept cancelling, and
-// the cycles are not counted as ENABLED (nor in the tracking figures).
-class CollaborativeControlForce : public Task {
+// Required interfaces "master" and "slave" (CRTK: measured_cp, measured_cv, servo_cf — optional
+// on the master, which may be read-only; optional clutch event on the master; optional
+// source_time and delay, given by a DelayTask; optional operating_state). Provided interface
+// "teleop": state_command; its law's settings as set_<name> commands and as read commands
+// <name> (the values in force); master_force, slave_force, tracking_error, fault,
+// rejected_inputs, offset_errors, and `description` (kind "teleoperation", the law, the
+// components in the master and slave roles); operating_state and fault events.
+//
+// The task owns everything around the law: inputs are checked before use (a row that is not
+// finite or stamped in the future is a failed read, the last good value is held, FAULT follows
+// after stale_timeout); the state machine (enable, disable, pause, resume); the clutch; devices
+// that are busy (homing: their positions mean nothing yet), paused or disabled hold the
+// teleoperation as the clutch does — zero force both sides, the law held, the cycles not
+// counted as ENABLED — and one still disabled after device_timeout faults it; every force is
+// checked finite before it is sent; every FAULT records why (fault(), the "fault" column) and
+// sends zero force both ways until the next enable.
+class Teleoperation : public Task {
  public:
-  CollaborativeControlForce(std::string name, TaskConfig task, TeleopConfig config);
+  Teleoperation(std::string name, TaskConfig task, TeleopConfig config, const LawSpec& law);
 
+  void startup() override;
   void run() override;
+
+  std::string_view law_name() const noexcept { return law_->name(); }
 
   // Readable from the owning thread or, through the state table, from any thread.
   OperatingStateValue operating_state() const noexcept { return state_.state; }
   const OperatingState& state() const noexcept { return state_; }
   const FaultInfo& fault() const noexcept { return fault_; }
   std::uint64_t rejected_commands() const noexcept { return rejected_; }
-  // Input rows refused (not finite, stamped in the future) and Ruckig refusals of the offset.
+  // Input rows refused (not finite, stamped in the future).
   std::uint64_t rejected_inputs() const noexcept { return rejected_inputs_; }
-  std::uint64_t offset_errors() const noexcept { return slave_offset_.errors(); }
+  // What the law refused of itself (the collaborative law: offset trajectories Ruckig refused).
+  std::uint64_t offset_errors() const noexcept { return law_->refusals(); }
   std::uint64_t refused_sends() const noexcept { return refused_sends_; }
   // |e_s| over the cycles spent ENABLED (read after stop, or from the owning thread).
   double tracking_rms() const noexcept {
@@ -107,8 +96,9 @@ class CollaborativeControlForce : public Task {
   }
   TimeNs master_age_max() const noexcept { return master_age_max_; }
   std::uint64_t master_age_late() const noexcept { return master_age_late_; }
+  const ComponentDescription& description() const noexcept { return description_; }
 
-  // State-table columns (for tests and the recorder).
+  // State-table columns (for tests and the recorder); the law's settings have theirs, by name.
   struct Columns {
     StateColumn<OperatingState> operating_state;
     StateColumn<Vec3> master_force, slave_force, master_error, slave_error, slave_offset;
@@ -117,13 +107,11 @@ class CollaborativeControlForce : public Task {
     StateColumn<FaultInfo> fault;
     StateColumn<std::uint64_t> rejected_inputs, offset_errors;
     StateColumn<TeleopSummary> summary;
+    StateColumn<ComponentDescription> description;
   };
   const Columns& columns() const noexcept { return columns_; }
 
  private:
-  struct Input {
-    Eigen::Vector3d position, velocity;
-  };
   // One device: its functions and the last good input read from it.
   struct Side {
     FaultSide side = FaultSide::none;
@@ -132,7 +120,7 @@ class CollaborativeControlForce : public Task {
     FunctionWrite<Wrench> cf;
     FunctionRead<TimeNs> source_time, delay;  // bound when a DelayTask sits in between
     FunctionRead<OperatingState> state;       // bound when the device reports its state
-    Input last{};
+    SideSample last{};
     TimeNs time = 0;  // of the last good input: its row's, or its source row's plus the delay
     bool valid = false, not_finite = false;
     bool busy = false;    // the device said it is busy (homing): not driven meanwhile
@@ -140,14 +128,8 @@ class CollaborativeControlForce : public Task {
     bool paused = false;
     Status status = Status::ok;  // of the last read
   };
-  // What the offset is expressed in: a change re-expresses it so that e_s does not jump.
-  struct LawSettings {
-    Scale scale;
-    Prediction prediction;
-  };
-  void add_settings(ProvidedInterface& p);
   void require_side(Side& s, const char* iface);
-  bool read_side(Side& s, Input& out, FaultInfo& why) noexcept;
+  bool read_side(Side& s, FaultInfo& why) noexcept;
   // True while enabled but a device cannot be driven (busy, paused, disabled): busy, and FAULT
   // once a disabled device has kept it waiting device_timeout.
   bool waiting_for_devices() noexcept;
@@ -157,24 +139,18 @@ class CollaborativeControlForce : public Task {
   void raise_fault(FaultInfo why) noexcept;
   void on_input_failure(const FaultInfo& why) noexcept;
   void send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept;
-  Eigen::Vector3d predict(const Input& in, double horizon, const Prediction& pr) const noexcept;
-  void snap_offsets(const Input& master, const Input& slave) noexcept;
-  void reexpress_offset(const Input& master, const Input& slave) noexcept;
-  void step_offset() noexcept;
-  void ratchet(const Eigen::Vector3d& p_m, const Eigen::Vector3d& p_s) noexcept;
-  void account(const LawOutput& law) noexcept;
+  void note_refusals() noexcept;
+  void account(const LawCommand& law) noexcept;
   void cycle_body() noexcept;
   void refresh_summary() noexcept;
 
   TeleopConfig config_;
-  OffsetTrajectory slave_offset_;
-  Eigen::Vector3d master_offset_ = Eigen::Vector3d::Zero();
-  bool clutched_ = false, ratcheting_ = false, snap_pending_ = true;
-  bool reexpress_pending_ = false;
-  bool inputs_seen_ = false;  // a producer that has not published yet is not a fault, for a while
+  std::unique_ptr<LawModel> law_;
+  bool clutched_ = false, ratcheting_ = false;
+  bool engage_pending_ = true;  // the next engaged cycle (re-)engages the law: reset, not step
+  bool inputs_seen_ = false;    // a producer that has not published yet is not a fault, for a while
   TimeNs start_time_ = -1;
   TimeNs waiting_since_ = -1;  // enabled, a device not: since when
-  LawSettings previous_;
   FaultInfo fault_{};
   std::uint64_t rejected_ = 0, refused_sends_ = 0, rejected_inputs_ = 0, offset_errors_ = 0;
   double tracking_sum_sq_ = 0, tracking_max_ = 0;
@@ -188,6 +164,7 @@ class CollaborativeControlForce : public Task {
   Vec3 master_force_{}, slave_force_{}, master_error_{}, slave_error_{}, slave_offset_value_{};
   double tracking_error_ = 0;
   TeleopSummary summary_{};
+  ComponentDescription description_{};
   Columns columns_;
 
   // Required: master and slave.

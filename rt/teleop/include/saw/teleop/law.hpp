@@ -1,0 +1,80 @@
+// Law: what a teleoperation control law is to the teleoperation task that runs it.
+#pragma once
+
+#include <Eigen/Core>
+#include <concepts>
+#include <cstdint>
+#include <string_view>
+#include <tuple>
+
+#include "saw/clock.hpp"
+#include "saw/teleop/fault_info.hpp"
+
+namespace saw::teleop {
+
+// One device as the task read it this cycle: its last good sample, checked finite.
+struct SideSample {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s
+  TimeNs age = 0;                                      // ns since the sample was taken (delay included)
+};
+
+// What the task gives a law every cycle it drives the devices, or holds them.
+struct LawInputs {
+  SideSample master, slave;
+  double period = 0.001;  // s, the task's
+};
+
+// What a law answers: the forces to send, and what it shows of itself. The task checks the
+// forces finite again before any device sees them.
+struct LawCommand {
+  Eigen::Vector3d master_force = Eigen::Vector3d::Zero();  // N (zero: the master feels nothing)
+  Eigen::Vector3d slave_force = Eigen::Vector3d::Zero();   // N
+  // The tracking errors the law works on (e_m, e_s); |e_s| is the task's tracking figure.
+  Eigen::Vector3d master_error = Eigen::Vector3d::Zero(), slave_error = Eigen::Vector3d::Zero();
+  Eigen::Vector3d slave_offset = Eigen::Vector3d::Zero();  // m, where the slave's goal sits
+  bool limiting = false;                                   // a force is held at its limit (the ratchet slips)
+  // False when the law's arithmetic overflowed (a huge input): the task then faults with zero
+  // force, naming `bad_side`.
+  bool finite = true;
+  FaultSide bad_side = FaultSide::none;
+};
+
+// Built once, outside the RT path, for the task that will run the law.
+struct LawContext {
+  double period = 0.001;  // s
+};
+
+// A control law is a value type:
+//   struct MyLaw {
+//     static constexpr std::string_view name = "my_law", description = "one line";
+//     struct Settings { double gain = 1; ... };           // plain, defaults are the defaults
+//     static constexpr auto declared_settings = std::tuple{Setting<Settings, double>{...}, ...};
+//     MyLaw(const Settings&, const LawContext&);
+//     Settings& settings() noexcept;                        // read back, and written by set_<name>
+//     void reset(const LawInputs&) noexcept;   // (re-)engaging this cycle: start without a force step
+//     LawCommand step(const LawInputs&) noexcept;  // one engaged cycle
+//   };
+// and optionally
+//     void hold(const LawInputs&) noexcept;    // the task drives nothing (disabled, clutch, busy
+//                                              // device): stay ready to engage (default: reset)
+//     void on_set(std::string_view setting, const Settings& before) noexcept;  // after set_<name>
+//     std::uint64_t refusals() const noexcept; int last_refusal() const noexcept;  // e.g. a planner's
+//     static constexpr auto declared_readouts = std::tuple{Readout<MyLaw, double>{...}, ...};
+//                                              // values it computes, shown as the task's state
+// step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
+template <class L>
+concept Law = requires(L law, const LawInputs& in) {
+  { L::name } -> std::convertible_to<std::string_view>;
+  { L::description } -> std::convertible_to<std::string_view>;
+  typename L::Settings;
+  L::declared_settings;
+  requires std::constructible_from<L, const typename L::Settings&, const LawContext&>;
+  { law.settings() } -> std::same_as<typename L::Settings&>;
+  { law.reset(in) }
+  noexcept;
+  { law.step(in) }
+  noexcept->std::same_as<LawCommand>;
+};
+
+}  // namespace saw::teleop

@@ -1,0 +1,18 @@
+// The built-in control laws: one line each.
+#include "saw/teleop/law_registry.hpp"
+#include "saw/teleop/laws/collaborative.hpp"
+#include "saw/teleop/laws/position_position.hpp"
+
+namespace saw::teleop {
+
+LawRegistry& law_registry() {
+  static LawRegistry registry = [] {
+    LawRegistry r;
+    r.add<CollaborativeLaw>();
+    r.add<PositionPositionLaw>();
+    return r;
+  }();
+  return registry;
+}
+
+}  // namespace saw::teleop
