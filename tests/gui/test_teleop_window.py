@@ -63,10 +63,12 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         w.tabs.setCurrentWidget(w.teleop)
         panel = w.teleop
         assert (panel.master, panel.slave) == (d.master, d.slave)
-        # The teleoperation publishes no read-back of its settings: the panel shows none (no
-        # hard-coded 1.0 / 300 / 3.0 the system may not have), and says the bounds it wants.
-        for e in (panel.scale, panel.gain_m, panel.gain_s, panel.lim_m, panel.lim_s):
-            assert e.text() == "" and e.placeholderText().startswith("within ["), (e.text(), e.placeholderText())
+        # The panel shows the settings the system has: the teleoperation's read-back of each (the
+        # deployment's 1 / 300, 300 / 3, 3 here), nothing hard-coded, with the bounds it wants.
+        fields = (panel.scale, panel.gain_m, panel.gain_s, panel.lim_m, panel.lim_s)
+        qtbot.waitUntil(lambda: all(e.text() for e in fields), timeout=LONG)
+        assert [float(e.text()) for e in fields] == [1, 300, 300, 3, 3], [e.text() for e in fields]
+        assert all(e.placeholderText().startswith("within [") for e in fields)
         clicked = time.monotonic()
         qtbot.mouseClick(panel.disable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)
@@ -149,6 +151,9 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         qtbot.waitUntil(lambda: "set_gains rejected" in panel.refusal.text(), timeout=LONG)
         assert "20000 is outside [0, 10000]" in panel.refusal.text(), panel.refusal.text()
         save(w, shots, "teleop-refused")
+        # A setting another client changes is what the panel then shows (read back, not remembered).
+        other.send(f"rt/{d.teleop}/set_force_limits", msgs.MasterSlave(master=2.5, slave=2.0))
+        qtbot.waitUntil(lambda: (panel.lim_m.text(), panel.lim_s.text()) == ("2.5", "2"), timeout=LONG)
 
         # A component's form checks the bounds its component declares (the slave's force range).
         w.tabs.setCurrentWidget(w.components)
