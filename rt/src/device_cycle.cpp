@@ -57,7 +57,7 @@ void Device::describe(const Outcome& why) noexcept {
 void Device::update_fault(const Outcome& why) noexcept {
   if (state_.state != OperatingStateValue::fault) return raise(why);
   describe(why);
-  saw::log(LogLevel::error, name().c_str(), "FAULT, now known: {} {} ({}, detail {})", fault_.source.data(),
+  saw::log(LogLevel::error, name().c_str(), "FAULT, now known: {} {} ({}, detail {:x})", fault_.source.data(),
            why.why, to_string(fault_.code).data(), fault_.detail);
   (void)(*fault_event_)(fault_);
 }
@@ -71,7 +71,7 @@ void Device::raise(const Outcome& why) noexcept {
   command_ = {};
   watchdog_.disarm();
   safe(SafeReason::fault);
-  saw::log(LogLevel::error, name().c_str(), "FAULT ({}): {} {} ({}, detail {})",
+  saw::log(LogLevel::error, name().c_str(), "FAULT ({}): {} {} ({}, detail {:x})",
            to_string(config_.safe_state).data(), fault_.source.data(), why.why, to_string(fault_.code).data(),
            fault_.detail);
   (void)(*fault_event_)(fault_);
