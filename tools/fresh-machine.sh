@@ -13,7 +13,12 @@ command -v debootstrap >/dev/null || {
 root_dir=${1:-/tmp/saw-fresh-root}
 commit=${2:-HEAD}
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-cleanup() { for d in dev/shm dev sys proc; do umount "$root_dir/$d" 2>/dev/null || true; done; }
+# Everything mounted below the root, deepest first: the bind mounts made here, and any a test
+# made inside (`ip netns` mounts /run/netns).
+cleanup() {
+  awk -v r="$root_dir/" 'index($2, r) == 1 { print $2 }' /proc/mounts | sort -r |
+    while read -r m; do umount -l "$m" 2>/dev/null || true; done
+}
 trap cleanup EXIT
 cleanup
 rm -rf "$root_dir"
