@@ -16,7 +16,7 @@ repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # Everything mounted below the root, deepest first: the bind mounts made here, and any a test
 # made inside (`ip netns` mounts /run/netns).
 cleanup() {
-  awk -v r="$root_dir/" 'index($2, r) == 1 { print $2 }' /proc/mounts | sort -r |
+  awk -v r="$root_dir" '$2 == r || index($2, r "/") == 1 { print $2 }' /proc/mounts | sort -r |
     while read -r m; do umount -l "$m" 2>/dev/null || true; done
 }
 trap cleanup EXIT
@@ -45,6 +45,9 @@ if compgen -G "/usr/local/share/ca-certificates/*.crt" >/dev/null; then
   mkdir -p "$root_dir/usr/local/share/ca-certificates"
   cp /usr/local/share/ca-certificates/*.crt "$root_dir/usr/local/share/ca-certificates/"
 fi
+# The root a mount point of its own, as a machine's is: `ip netns exec`/`ip -n` remount it
+# (`mount --make-rslave /`), which fails on a plain directory.
+mount --bind "$root_dir" "$root_dir"
 for d in proc sys dev dev/shm; do mount --bind "/$d" "$root_dir/$d"; done
 cp /etc/resolv.conf "$root_dir/etc/resolv.conf"
 mkdir -p "$root_dir/root/sawrt"
