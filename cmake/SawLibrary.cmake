@@ -57,3 +57,21 @@ function(saw_package name)
   saw_warnings(${target})
   set_property(GLOBAL APPEND PROPERTY SAW_PACKAGE_MODULES ${target})
 endfunction()
+
+# saw_mapping_module(name SOURCES ... LIBS ...): a package's DDS mappings as saw-gateway and
+# sawctl load them (SAW_MAPPINGS), a module in lib/sawrt/mappings of the build tree and
+# ${CMAKE_INSTALL_LIBDIR}/sawrt/mappings installed. The gateway links no package: it loads every
+# module of that directory at start, in-tree ones and a lab's alike.
+function(saw_mapping_module name)
+  cmake_parse_arguments(P "" "" "SOURCES;LIBS" ${ARGN})
+  set(target saw_mappings_${name})
+  add_library(${target} MODULE ${P_SOURCES})
+  target_link_libraries(${target} PRIVATE saw::gateway ${P_LIBS})
+  set_target_properties(${target} PROPERTIES
+    OUTPUT_NAME ${name} PREFIX "libsawrt-"
+    LIBRARY_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/lib/sawrt/mappings
+    INSTALL_RPATH "$ORIGIN/../..")  # from <libdir>/sawrt/mappings to <libdir>
+  install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/sawrt/mappings COMPONENT runtime)
+  saw_warnings(${target})
+  set_property(GLOBAL APPEND PROPERTY SAW_MAPPING_MODULES ${target})
+endfunction()

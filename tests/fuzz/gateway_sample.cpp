@@ -1,24 +1,44 @@
 // Fuzz target: what a remote DDS peer controls in the gateway. Its serialized samples (CDR, as
-// received) are deserialized and converted to rt values by every mapping of type_map.cpp; its
+// received) are deserialized and converted to rt values by every registered mapping; its
 // qualified-read requests (saw_msgs/Query) are deserialized and its replies' client filter
 // evaluated; sawctl's text values are parsed. A conversion either rejects with a reason or yields
 // a valid rt value (finite numbers, unit quaternion, a known state, at most max_joints joints).
 //
 // Input: byte 0 chooses what (see LLVMFuzzerTestOneInput), the rest is the sample or text.
-// The conversions live in type_map.cpp's anonymous namespace: this file includes it.
+// The reply filter lives in reply_filter.cpp's anonymous namespace: this file includes it.
 #include <fastdds/rtps/common/SerializedPayload.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
+#include "core_conversions.hpp"
+#include "crtk_conversions.hpp"
+#include "crtk_msgs/msg/OperatingStatePubSubTypes.h"
+#include "crtk_msgs/msg/StringStampedPubSubTypes.h"
+#include "geometry_msgs/msg/PoseStampedPubSubTypes.h"
+#include "geometry_msgs/msg/TwistStampedPubSubTypes.h"
+#include "geometry_msgs/msg/Vector3StampedPubSubTypes.h"
+#include "geometry_msgs/msg/WrenchStampedPubSubTypes.h"
 #include "reply_filter.cpp"
+#include "saw/teleop/dds/mappings.hpp"
+#include "saw/teleop/dds/master_slave.hpp"
+#include "saw/teleop/teleop_law.hpp"
+#include "saw_msgs/msg/ComponentDescriptionPubSubTypes.h"
+#include "saw_msgs/msg/MasterSlavePubSubTypes.h"
 #include "saw_msgs/msg/QueryPubSubTypes.h"
-#include "type_map.cpp"
+#include "saw_msgs/msg/TaskStatisticsPubSubTypes.h"
+#include "sensor_msgs/msg/JointStatePubSubTypes.h"
+#include "sensor_msgs/msg/JoyPubSubTypes.h"
+#include "std_msgs/msg/BoolPubSubTypes.h"
+#include "std_msgs/msg/Float64PubSubTypes.h"
+#include "std_msgs/msg/Int64PubSubTypes.h"
 
 namespace saw::gateway {
 namespace {
 
+using namespace conversions;
+using teleop::dds::MasterSlaveConv;
 using Payload = eprosima::fastrtps::rtps::SerializedPayload_t;
 
 [[noreturn]] void defect(const char* what) {
@@ -82,6 +102,13 @@ void check(const teleop::Gains& g) {
 void check(const teleop::ForceLimits& l) {
   if (!std::isfinite(l.master) || !std::isfinite(l.slave)) defect("force limits not finite");
 }
+void check(const ComponentDescription& d) {
+  if (d.setting_count > ComponentDescription::max_settings) defect("too many settings");
+  for (std::size_t i = 0; i < d.setting_count; ++i)
+    if (!(d.settings[i].min <= d.settings[i].max)) defect("setting bounds not in order");
+  for (const auto& r : d.roles)
+    if (r.back() != '\0') defect("role not terminated");
+}
 
 // A sample of message Msg from a peer, as Typed<...>::take converts it.
 template <class Rt, class Msg, class PubSub, class Conv>
@@ -107,7 +134,7 @@ void sample(const std::uint8_t* data, std::size_t size) {
 template <class Rt, class Msg, class PubSub, class Conv>
 struct Entry {
   static void run(const std::uint8_t* d, std::size_t n) { sample<Rt, Msg, PubSub, Conv>(d, n); }
-  // This list must be type_map.cpp's: the same rt type for the same DDS type.
+  // This list must be the registry's: the same rt type for the same DDS type.
   static bool listed() {
     const Mapping* m = find_mapping(type_info_of<Rt>().name);
     return m != nullptr && m->dds_type() == PubSub().getName();
@@ -137,7 +164,9 @@ using Samples = std::tuple<
     Entry<teleop::ForceLimits, saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType,
           MasterSlaveConv<teleop::ForceLimits>>,
     Entry<TaskStatistics, saw_msgs::msg::TaskStatistics, saw_msgs::msg::TaskStatisticsPubSubType,
-          TaskStatisticsConv>>;
+          TaskStatisticsConv>,
+    Entry<ComponentDescription, saw_msgs::msg::ComponentDescription,
+          saw_msgs::msg::ComponentDescriptionPubSubType, DescriptionConv>>;
 constexpr std::size_t sample_kinds = std::tuple_size_v<Samples>;
 
 void run_sample(std::size_t kind, const std::uint8_t* d, std::size_t n) {
@@ -148,12 +177,13 @@ void run_sample(std::size_t kind, const std::uint8_t* d, std::size_t n) {
 }
 
 const bool list_checked = [] {
+  teleop::dds::register_mappings(mapping_registry());  // the teleop package's, as its module does
   const bool all = [&]<std::size_t... I>(std::index_sequence<I...>) {
     return (std::tuple_element_t<I, Samples>::listed() && ...);
   }
   (std::make_index_sequence<sample_kinds>{});
-  if (!all || mappings().size() != sample_kinds)
-    defect("the fuzzer's list differs from type_map.cpp's mappings");
+  if (!all || mapping_registry().all().size() != sample_kinds)
+    defect("the fuzzer's list differs from the registry's mappings");
   return true;
 }();
 
@@ -178,7 +208,7 @@ void reply_filter(const std::uint8_t* d, std::size_t n) {
 // sawctl call: text parsed into a value and validated as a sample.
 void from_text(const std::uint8_t* d, std::size_t n) {
   if (n == 0) return;
-  const Mapping& m = *mappings()[d[0] % sample_kinds];
+  const Mapping& m = *mapping_registry().all()[d[0] % sample_kinds];
   alignas(16) std::byte value[sizeof(JointState)];
   std::string why;
   if (!m.from_text(std::string_view(reinterpret_cast<const char*>(d + 1), n - 1), value, why) && why.empty())

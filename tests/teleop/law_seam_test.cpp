@@ -120,6 +120,40 @@ TEST(TeleopSeam, TheTaskDescribesItselfAndItsRoles) {
   EXPECT_EQ(D::get(d.servers[0]), "master.arm");
   EXPECT_EQ(D::get(d.roles[1]), "slave");
   EXPECT_EQ(D::get(d.servers[1]), "slave.arm");
+  // The law's declared settings, in declaration order, as a client builds its forms from them.
+  ASSERT_EQ(d.setting_count, std::tuple_size_v<decltype(PositionPositionLaw::declared_settings)>);
+  EXPECT_EQ(D::get(d.settings[0].name), "scale");
+  EXPECT_EQ(D::get(d.settings[1].name), "stiffness");
+  EXPECT_EQ(D::get(d.settings[1].unit), "N/m");
+  EXPECT_EQ(d.settings[1].min, 0.0);
+  EXPECT_EQ(d.settings[1].max, saw::teleop::max_gain);
+  EXPECT_EQ(d.settings[1].count, 1U);
+  EXPECT_TRUE(d.settings[1].command);
+}
+
+TEST(TeleopSeam, TheCollaborativeLawDescribesTheShapeOfItsSettings) {
+  saw::testing::Rig rig(saw::testing::basic());
+  saw::ComponentDescription d;
+  d = rig.teleop.description();
+  using D = saw::ComponentDescription;
+  const auto& rows = saw::teleop::law_registry().find("collaborative")->rows;
+  ASSERT_EQ(d.setting_count, rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    SCOPED_TRACE(rows[i].name);
+    EXPECT_EQ(D::get(d.settings[i].name), rows[i].name);
+    EXPECT_EQ(D::get(d.settings[i].unit), rows[i].unit);
+    EXPECT_EQ(d.settings[i].command, !rows[i].command.empty());
+  }
+  const auto at = [&](std::string_view n) {
+    for (std::size_t i = 0; i < d.setting_count; ++i)
+      if (D::get(d.settings[i].name) == n) return d.settings[i];
+    return saw::DeclaredSetting{};
+  };
+  EXPECT_EQ(at("gains").count, 2U);
+  EXPECT_EQ(at("gains").max, saw::teleop::max_gain);
+  EXPECT_EQ(at("slave_offset").count, 3U);
+  EXPECT_EQ(at("scale").count, 1U);
+  EXPECT_FALSE(at("ratchet").command);
 }
 
 // Every setting the component accepts is published; each command setting is set_<name>.

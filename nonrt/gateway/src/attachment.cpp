@@ -11,6 +11,7 @@
 #include "crtk_msgs/msg/OperatingState.h"
 #include "crtk_msgs/msg/StringStamped.h"
 #include "saw/crtk.hpp"
+#include "saw/description.hpp"
 #include "saw/detail/access.hpp"
 #include "saw/fault.hpp"
 #include "saw/task.hpp"
@@ -174,15 +175,16 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
         const bool event_too = std::any_of(p.events().begin(), p.events().end(),
                                            [&](const auto& e) { return e->name() == c->name; });
         if (!event_too) {
-          // An operating state without an event is latched and published on change.
-          const bool latched = m == operating_state;
+          // An operating state without an event, and a description, are latched and published on
+          // change (a late joiner gets them at once; a description would otherwise cost every row).
+          const bool latched = gateway::latched(m);
           auto* w = dds_.publisher->create_datawriter(
               dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::state));
           (latched ? changed_states_ : states_).push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
           // A task's statistics are cumulative: a tenth of the rows tells a GUI as much, for a
           // tenth of the samples every subscriber takes.
           if (m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
-          if (latched && fault_writer_ == nullptr) fault_writer_ = w;
+          if (m == operating_state && fault_writer_ == nullptr) fault_writer_ = w;
         }
       } else {
         auto* r = dds_.subscriber->create_datareader(dds_.topic(info.topic, *m),

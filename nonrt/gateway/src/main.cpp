@@ -11,6 +11,7 @@
 
 #include "saw/gateway/gateway.hpp"
 #include "saw/gateway/settings.hpp"
+#include "saw/gateway/type_map.hpp"
 #include "security_cli.hpp"
 
 namespace {
@@ -115,6 +116,7 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   try {
+    saw::gateway::load_mapping_modules();  // the packages' types (the teleoperation's settings, a lab's)
     saw::gateway::Gateway gateway(config);
     std::printf("saw-gateway %s: %zu endpoints\n", gateway.name().c_str(), gateway.endpoints().size());
     saw::gateway::print_security(config.dds);

@@ -54,10 +54,10 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
     if (m == nullptr || (e.saw_size != 0 && m->size() != e.saw_size)) continue;
     const TypeInfo t = type(e.saw_type, e.saw_size, e.saw_version);
     if (e.kind == "read") {
-      // An operating state is published on change only (latched): a mirror that joins later
-      // takes the last one the writer keeps, or it would show the default (DISABLED) until the
-      // next change.
-      const bool latched = m == find_mapping(type_info_of<saw::OperatingState>().name);
+      // An operating state and a description are published on change only (latched): a mirror that joins
+      // later takes the last one the writer keeps, or it would show the default (DISABLED) until the next
+      // change.
+      const bool latched = gateway::latched(m);
       auto* r = dds_.subscriber->create_datareader(
           dds_.topic(e.topic, *m), DdsContext::reader_qos(latched ? Flow::latched : Flow::state));
       states_.push_back({m, r, std::make_unique<std::byte[]>(m->size())});

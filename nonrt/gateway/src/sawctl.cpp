@@ -115,7 +115,7 @@ int echo(Session& s, const std::string& topic, int count, double timeout) {
   // Latched topics (operating states): the newest sample at once, however long ago it was
   // written. Others best effort: that matches both the state writers (best effort) and the event
   // writers (reliable).
-  const bool latched = m == find_mapping(saw::type_info_of<saw::OperatingState>().name);
+  const bool latched = saw::gateway::latched(m);
   auto* r = s.ctx.subscriber->create_datareader(
       s.ctx.topic(topic, *m), DdsContext::reader_qos(latched ? Flow::latched : Flow::state));
   if (r == nullptr) return refused("read", topic);
@@ -224,6 +224,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (security.chosen()) return security.run();
   try {
+    load_mapping_modules();  // the packages' types, as the gateway maps them
     Session s(dds);
     if (*list_cmd) return list(s, timeout);
     if (*echo_cmd) return echo(s, topic, count, timeout);

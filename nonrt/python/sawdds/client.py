@@ -26,11 +26,11 @@ from . import msgs, security  # noqa: E402
 
 XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 
-# The gateway latches operating states (RELIABLE, TRANSIENT_LOCAL, keep last 1, published when it
+# The gateway latches operating states and descriptions (RELIABLE, TRANSIENT_LOCAL, keep last 1, published when it
 # attaches) and keeps its error topic's last 16 (TRANSIENT_LOCAL): a reader that asks for
 # TRANSIENT_LOCAL gets them the moment it matches. (A TRANSIENT_LOCAL reader would not match a
 # VOLATILE writer: this is the one place that says which topics are latched.)
-LATCHED_TYPES = ("crtk_msgs::msg::dds_::OperatingState_",)
+LATCHED_TYPES = ("crtk_msgs::msg::dds_::OperatingState_", "saw_msgs::msg::dds_::ComponentDescription_")
 
 
 def latched(endpoint) -> bool:

@@ -66,6 +66,7 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
   ComponentDescription::set(description_.variant, law_->name());
   ComponentDescription::set(description_.roles[0], "master");
   ComponentDescription::set(description_.roles[1], "slave");
+  law_->describe(description_);
 }
 
 void Teleoperation::startup() {

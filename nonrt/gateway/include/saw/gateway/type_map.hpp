@@ -2,6 +2,7 @@
 #pragma once
 
 #include <fastdds/dds/topic/TypeSupport.hpp>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -60,10 +61,45 @@ class Mapping {
 // the gateway and clients (sawctl) make, the bridge's; `why` names the first number outside.
 bool within_limits(const Mapping& m, const void* value, const Limits& limits, std::string& why);
 
+// The mappings this process knows: the rt core's types (registered by the gateway itself) and
+// those each package adds for its own types, with one line per type
+// (`registry.add<Rt, PubSub, Conv>()`, saw/gateway/typed_mapping.hpp) in its registration
+// function, loaded as a mapping module (saw/gateway/mapping_plugin.hpp).
+class MappingRegistry {
+ public:
+  // Throws std::invalid_argument when `saw_type` is mapped already to another DDS type; the same
+  // mapping again (a module loaded twice) is no change. Mappings sharing one DDS type are found by
+  // that type in the order they were added.
+  void add(std::unique_ptr<Mapping> m);
+  template <class Rt, class PubSub, class Conv>
+  void add();  // typed_mapping.hpp
+
+  const Mapping* find(std::string_view saw_type) const;
+  const Mapping* find_by_dds(std::string_view dds_type) const;
+  const std::vector<std::unique_ptr<Mapping>>& all() const noexcept { return mappings_; }
+
+ private:
+  std::vector<std::unique_ptr<Mapping>> mappings_;
+};
+
+// The process's registry: the core types from the start; a package's once its module is loaded.
+MappingRegistry& mapping_registry();
+
+// Loads every mapping module (lib*.so) of $SAW_MAPPING_PATH (colon-separated), else of the
+// mapping directory of this installation (<libdir>/sawrt/mappings beside bin/, or the build
+// tree's lib/sawrt/mappings), in name order, once per process. Throws std::runtime_error naming
+// the module (not a mapping module, another plug-in ABI, a type mapped twice differently).
+void load_mapping_modules();
+// The directories load_mapping_modules() reads.
+std::vector<std::string> mapping_directories();
+
 // The mapping for an rt type name (TypeInfo::name), or nullptr if it has none.
 const Mapping* find_mapping(std::string_view saw_type);
 // The mapping whose DDS type is `dds_type`, or nullptr.
 const Mapping* find_mapping_by_dds(std::string_view dds_type);
+// Whether a read of this type is latched: published on change, kept for late joiners (an
+// operating state, a component's description), rather than every row.
+bool latched(const Mapping* m);
 // Void commands travel as std_msgs/Empty.
 const Mapping& empty_mapping();
 

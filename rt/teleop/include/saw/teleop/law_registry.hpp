@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "saw/deploy/params.hpp"
+#include "saw/description.hpp"
 #include "saw/provided_interface.hpp"
 #include "saw/state_table.hpp"
 #include "saw/teleop/law.hpp"
@@ -32,6 +33,9 @@ class LawModel {
   // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`. Each declared
   // read-out as a state column and read command.
   virtual void provide_settings(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected) = 0;
+  // Its declared settings (name, unit, bounds, numbers, whether set_<name> exists) into `d`, in
+  // declaration order; those beyond ComponentDescription::max_settings are left out.
+  virtual void describe(ComponentDescription& d) const noexcept = 0;
 };
 
 namespace detail {
@@ -72,9 +76,24 @@ class LawHolder final : public LawModel {
           },
           L::declared_readouts);
   }
+  void describe(ComponentDescription& d) const noexcept override {
+    d.setting_count = 0;
+    std::apply([&](const auto&... s) { (describe(d, s), ...); }, L::declared_settings);
+  }
   L& law() noexcept { return law_; }
 
  private:
+  template <class T>
+  static void describe(ComponentDescription& d, const Setting<typename L::Settings, T>& s) noexcept {
+    if (d.setting_count >= ComponentDescription::max_settings) return;
+    DeclaredSetting& out = d.settings[d.setting_count++];
+    ComponentDescription::set(out.name, s.name);
+    ComponentDescription::set(out.unit, s.unit);
+    out.min = s.min;
+    out.max = s.max;
+    if constexpr (requires { SettingCodec<T>::count; }) out.count = SettingCodec<T>::count;
+    out.command = s.command;
+  }
   template <class T>
   void provide(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected,
                const Setting<typename L::Settings, T>& s) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -52,13 +53,15 @@ inline std::string setting_number(double v) {
 }
 
 // How a value type is read from a deployment, checked and shown. Specialise it for a setting
-// of another type (the collaborative law's Prediction and OffsetLimits are examples).
+// of another type (the collaborative law's Prediction and OffsetLimits are examples); `count`,
+// the numbers in a value, is what the component's description says of it (0 when absent).
 template <class T>
 struct SettingCodec;
 
 template <>
 struct SettingCodec<double> {
   static constexpr std::string_view shape = "number";
+  static constexpr std::uint32_t count = 1;
   static constexpr bool declares_limits = true;
   static bool within(const double& v, double lo, double hi) noexcept {
     return std::isfinite(v) && v >= lo && v <= hi;
@@ -78,6 +81,7 @@ struct SettingCodec<double> {
 template <>
 struct SettingCodec<bool> {
   static constexpr std::string_view shape = "true/false";
+  static constexpr std::uint32_t count = 1;
   static constexpr bool declares_limits = false;
   static bool within(const bool&, double, double) noexcept { return true; }
   static bool parse(const deploy::Params& p, const std::string& key, double, double, bool fallback) {
@@ -89,6 +93,7 @@ struct SettingCodec<bool> {
 template <>
 struct SettingCodec<Vec3> {
   static constexpr std::string_view shape = "[x, y, z]";
+  static constexpr std::uint32_t count = 3;
   static constexpr bool declares_limits = true;
   static bool within(const Vec3& v, double lo, double hi) noexcept {
     for (double x : v)
@@ -118,6 +123,7 @@ requires requires(T t) {
 }
 struct SettingCodec<T> {
   static constexpr std::string_view shape = "{master, slave}";
+  static constexpr std::uint32_t count = 2;
   static constexpr bool declares_limits = true;
   static bool within(const T& v, double lo, double hi) noexcept {
     return SettingCodec<double>::within(v.master, lo, hi) && SettingCodec<double>::within(v.slave, lo, hi);

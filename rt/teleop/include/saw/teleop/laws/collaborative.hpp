@@ -32,6 +32,7 @@ static_assert(sizeof(Prediction) == 24 && offsetof(Prediction, master_horizon) =
 template <>
 struct SettingCodec<Prediction> {
   static constexpr std::string_view shape = "{enabled, master, slave}";
+  static constexpr std::uint32_t count = 3;
   static constexpr bool declares_limits = false;  // a bool beside the horizons
   static bool within(const Prediction& v, double lo, double hi) noexcept {
     return SettingCodec<double>::within(v.master_horizon, lo, hi) &&
@@ -46,6 +47,7 @@ struct SettingCodec<Prediction> {
 template <>
 struct SettingCodec<OffsetLimits> {
   static constexpr std::string_view shape = "{velocity, acceleration, jerk}";
+  static constexpr std::uint32_t count = 3;
   static constexpr bool declares_limits = false;
   static constexpr double min = 1e-6, max_velocity = 10, max_acceleration = 1e3, max_jerk = 1e5;
   static bool within(const OffsetLimits& v, double, double) noexcept;
