@@ -18,13 +18,13 @@ os.environ.setdefault("PYTHONDONTWRITEBYTECODE", "1")
 DEPLOYMENT = """deployment:
   name: gui-{tag}
 components:
-  - name: master_{tag}
+  - name: {master}
     type: sim_haptic_device
     task: {{period: 1ms, priority: 80}}
     params:
       model: omni
       hand: {{type: sinusoid, amplitude: [0.03, 0.0, 0.0], frequency: 0.5, stiffness: 200, damping: 2}}
-  - name: slave_{tag}
+  - name: {slave}
     type: sim_haptic_device
     task: {{period: 1ms, priority: 80}}
     params: {{model: omni}}
@@ -32,33 +32,46 @@ components:
     type: teleop
     task: {{period: 1ms, priority: 79, offset: 300us}}
     params:
-      scale: 1.0
-      gains: {{master: 300, slave: 300}}
-      force_limits: {{master: 3.0, slave: 3.0}}
+{law_params}
       # A shared test machine stalls for tens of ms now and then: the shipped 20 ms would fault.
       stale_timeout: 500ms
 connections:
-  - {{client: teleop_{tag}, required: master, server: master_{tag}, provided: arm}}
-  - {{client: teleop_{tag}, required: slave, server: slave_{tag}, provided: arm}}
+  - {{client: teleop_{tag}, required: master, server: {master}, provided: arm}}
+  - {{client: teleop_{tag}, required: slave, server: {slave}, provided: arm}}
 exports:
-  - {{component: master_{tag}, provided: arm}}
-  - {{component: slave_{tag}, provided: arm}}
+  - {{component: {master}, provided: arm}}
+  - {{component: {slave}, provided: arm}}
   - {{component: teleop_{tag}, provided: teleop}}
 gateway:
   domain: {domain}
 """
 
 
+# The teleoperation's law and its settings (the deployment's keys are the law's declared settings).
+LAWS = {
+    "collaborative": """      scale: 1.0
+      gains: {master: 300, slave: 300}
+      force_limits: {master: 3.0, slave: 3.0}""",
+    "position_position": """      law: position_position
+      scale: 1.0
+      stiffness: 250
+      damping: 5
+      force_limit: 2.5""",
+}
+
+
 class Deployment:
     """saw-rt running the simulated teleoperation, its gateway started by the deployment."""
 
-    def __init__(self, saw_rt: str):
+    def __init__(self, saw_rt: str, law: str = "collaborative", names=("master", "slave")):
+        """`names`: the master's and the slave's component names (before the tag)."""
         self.tag = f"g{os.getpid()}"
         self.domain = 200 + os.getpid() % 29  # 229: tests/python's headless sawgui
-        self.master, self.slave, self.teleop = (f"{n}_{self.tag}" for n in ("master", "slave", "teleop"))
+        self.master, self.slave, self.teleop = (f"{n}_{self.tag}" for n in (*names, "teleop"))
         fd, self.yaml = tempfile.mkstemp(suffix=".yaml", prefix="sawgui-")
         with os.fdopen(fd, "w") as f:
-            f.write(DEPLOYMENT.format(tag=self.tag, domain=self.domain))
+            f.write(DEPLOYMENT.format(tag=self.tag, domain=self.domain, master=self.master, slave=self.slave,
+                                      law_params=LAWS[law]))
         self.saw_rt = saw_rt
         self.rt = subprocess.Popen([saw_rt, self.yaml], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
@@ -99,12 +112,25 @@ class Deployment:
         self._unlink_segments()
 
 
-@pytest.fixture
-def deployment():
+def saw_rt_path():
     saw_rt = os.environ.get("SAW_RT")
     if not saw_rt:
         pytest.skip("SAW_RT (the saw-rt executable) not set: run through run_under_xvfb.py")
-    d = Deployment(saw_rt)
+    return saw_rt
+
+
+@pytest.fixture
+def deployment():
+    d = Deployment(saw_rt_path())
+    yield d
+    d.close()
+
+
+@pytest.fixture
+def position_position_deployment():
+    """The position-position law, its arms named so that neither their names nor their order say
+    which is the master: the right one is, the left one the slave."""
+    d = Deployment(saw_rt_path(), law="position_position", names=("right", "left"))
     yield d
     d.close()
 

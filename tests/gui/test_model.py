@@ -134,3 +134,42 @@ def test_a_batch_becomes_one_message_not_one_per_sample(monkeypatch):
     assert s.count == 1000 and s.last.pose.position.x == 0.999
     names, _, rows = s.names, *s.window_arrays(10**6)
     assert names[0] == "pose.position.x" and rows[-1][0] == 0.999 and len(rows) == 1000
+
+
+class DescribedLive:
+    """Components with endpoints and (some) descriptions, as Live has them."""
+
+    def __init__(self, components, descriptions):
+        self._components, self._descriptions = components, descriptions
+
+    def components(self):
+        return {n: {"endpoints": eps, "gone_at": None} for n, eps in self._components.items()}
+
+    def endpoints(self, component):
+        return self._components.get(component, [])
+
+    def description(self, component):
+        return self._descriptions.get(component)
+
+
+def test_a_teleoperation_is_what_its_description_says_not_what_its_commands_are_named():
+    f64 = "std_msgs::msg::dds_::Float64_"
+    # A component with a teleoperation's command names but no description, and one named like
+    # nothing in particular that says it is a teleoperation, its master the arm named "zz".
+    lookalike = [endpoint("set_scale", "write", f64, "rt/l/set_scale"),
+                 endpoint("tracking_error", "read", f64, "rt/l/tracking_error")]
+    ops = [endpoint("set_stiffness", "write", f64, "rt/ops/set_stiffness"),
+           endpoint("stiffness", "read", f64, "rt/ops/stiffness")]
+    declared = [msgs.DeclaredSetting(name="stiffness", unit="N/m", min=0.0, max=1e4, count=1, command=True),
+                msgs.DeclaredSetting(name="mirror", unit="", min=-math.inf, max=math.inf, count=3, command=False)]
+    d = msgs.ComponentDescription(kind="teleoperation", variant="position_position", roles=["master", "slave"],
+                                  servers=["zz.arm", "aa_master.arm"], settings=declared)
+    live = DescribedLive({"lookalike": lookalike, "ops": ops, "zz": [], "aa_master": []}, {"ops": d})
+    assert model.teleop_components(live) == ["ops"]
+    assert model.teleop_sides(live, "ops") == ("zz", "aa_master")
+    settings = model.declared_settings(live, "ops")
+    assert [s.name for s in settings] == ["stiffness", "mirror"]
+    assert settings[0].label() == "stiffness (N/m)  [0, 10000]"
+    assert settings[0].fields == [("data", float)] and settings[0].write.topic == "rt/ops/set_stiffness"
+    assert settings[1].label() == "mirror" and settings[1].finite_bounds is None
+    assert settings[1].read is None and settings[1].write is None  # not served: the row says so

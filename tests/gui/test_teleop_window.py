@@ -63,12 +63,22 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         w.tabs.setCurrentWidget(w.teleop)
         panel = w.teleop
         assert (panel.master, panel.slave) == (d.master, d.slave)
-        # The panel shows the settings the system has: the teleoperation's read-back of each (the
-        # deployment's 1 / 300, 300 / 3, 3 here), nothing hard-coded, with the bounds it wants.
-        fields = (panel.scale, panel.gain_m, panel.gain_s, panel.lim_m, panel.lim_s)
+        # The panel's rows are the settings the law declares (its description), each showing what
+        # the system has: the teleoperation's read-back (the deployment's 1 / 300, 300 / 3, 3
+        # here), nothing hard-coded, with the bounds and unit the law declares.
+        qtbot.waitUntil(lambda: "gains" in panel.rows, timeout=LONG)
+        assert list(panel.rows) == ["scale", "mirror", "gains", "force_limits", "ratchet", "offset_limits",
+                                    "prediction", "align", "slave_offset"], list(panel.rows)
+        gains, limits = panel.rows["gains"], panel.rows["force_limits"]
+        fields = (panel.rows["scale"].edit(), gains.edits["master"], gains.edits["slave"], limits.edits["master"],
+                  limits.edits["slave"])
         qtbot.waitUntil(lambda: all(e.text() for e in fields), timeout=LONG)
         assert [float(e.text()) for e in fields] == [1, 300, 300, 3, 3], [e.text() for e in fields]
         assert all(e.placeholderText().startswith("within [") for e in fields)
+        assert gains.setting.label() == "gains (N/m)  [0, 10000]", gains.setting.label()
+        # A setting the deployment fixes is shown, not offered (ratchet: read back, no command).
+        qtbot.waitUntil(lambda: panel.rows["ratchet"].edit().text() == "true", timeout=LONG)
+        assert panel.rows["ratchet"].button is None and panel.rows["ratchet"].edit().isReadOnly()
         clicked = time.monotonic()
         qtbot.mouseClick(panel.disable, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: panel.badge.state == "DISABLED", timeout=LONG)
@@ -85,8 +95,8 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         qtbot.waitUntil(lambda: 0.8 < ratio(panel) < 1.25, timeout=LONG)
         before = ratio(panel)
 
-        panel.scale.setText("2.0")
-        qtbot.mouseClick(panel.apply_scale, QtCore.Qt.MouseButton.LeftButton)
+        panel.rows["scale"].edit().setText("2.0")
+        qtbot.mouseClick(panel.rows["scale"].button, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: "delivered" in panel.outcome.text(), timeout=LONG)
         # The master's 2 s sinusoid, scaled twice: the slave's excursion doubles (once a cycle has passed).
         qtbot.waitUntil(lambda: ratio(panel) > 1.7, timeout=LONG)
@@ -134,15 +144,15 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
 
         # Gains: in range, delivered; out of range, refused by the panel with the bounds the registry
         # carries (the component's own), nothing sent.
-        panel.gain_m.setText("350")
-        panel.gain_s.setText("350")
-        qtbot.mouseClick(panel.apply_gains, QtCore.Qt.MouseButton.LeftButton)
+        gains.edits["master"].setText("350")
+        gains.edits["slave"].setText("350")
+        qtbot.mouseClick(gains.button, QtCore.Qt.MouseButton.LeftButton)
         qtbot.waitUntil(lambda: "set_gains: delivered" in panel.outcome.text(), timeout=LONG)
-        panel.gain_m.setText("20000")
-        qtbot.mouseClick(panel.apply_gains, QtCore.Qt.MouseButton.LeftButton)
+        gains.edits["master"].setText("20000")
+        qtbot.mouseClick(gains.button, QtCore.Qt.MouseButton.LeftButton)
         assert "outside [0, 10000]" in panel.outcome.text(), panel.outcome.text()
-        panel.scale.setText("nan")
-        qtbot.mouseClick(panel.apply_scale, QtCore.Qt.MouseButton.LeftButton)
+        panel.rows["scale"].edit().setText("nan")
+        qtbot.mouseClick(panel.rows["scale"].button, QtCore.Qt.MouseButton.LeftButton)
         assert "not finite" in panel.outcome.text(), panel.outcome.text()
         # Another peer (sawdds, as a script would) sends that gain anyway: the gateway refuses it, and
         # the panel shows the gateway's reason, from the teleoperation's error topic.
@@ -153,7 +163,8 @@ def test_operating_the_teleoperation_from_the_window(qtbot, deployment, shots):
         save(w, shots, "teleop-refused")
         # A setting another client changes is what the panel then shows (read back, not remembered).
         other.send(f"rt/{d.teleop}/set_force_limits", msgs.MasterSlave(master=2.5, slave=2.0))
-        qtbot.waitUntil(lambda: (panel.lim_m.text(), panel.lim_s.text()) == ("2.5", "2"), timeout=LONG)
+        qtbot.waitUntil(lambda: (limits.edits["master"].text(), limits.edits["slave"].text()) == ("2.5", "2"),
+                        timeout=LONG)
 
         # A component's form checks the bounds its component declares (the slave's force range).
         w.tabs.setCurrentWidget(w.components)

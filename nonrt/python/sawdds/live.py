@@ -29,6 +29,9 @@ from . import cdr, msgs, values
 ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 
 FAULT = "FAULT"
+# What a component says it is (kind, variant, roles and the servers playing them, declared
+# settings): every component's is read, as its operating state is.
+DESCRIPTION = "saw_msgs::msg::dds_::ComponentDescription_"
 
 
 class Series:
@@ -183,6 +186,16 @@ class Live:
         with self._lock:
             c = self._components.get(component)
             return list(c["endpoints"]) if c else []
+
+    def description(self, component: str):
+        """The saw_msgs/ComponentDescription `component` publishes (latched), or None before it
+        arrives or when the component has none."""
+        with self._lock:
+            c = self._components.get(component)
+            for e in c["endpoints"] if c else []:
+                if e.kind == "read" and e.dds_type == DESCRIPTION and e.topic in self._readers:
+                    return self._readers[e.topic][1].last
+            return None
 
     def watch(self, topic: str):
         """Starts taking `topic`'s samples (now, or when a gateway serves it)."""
@@ -377,7 +390,7 @@ class Live:
             for name, c in self._components.items():
                 if c["gone_at"] is None:
                     for e in c["endpoints"]:
-                        if e.name == "operating_state" and e.topic and e.kind == "read":
+                        if e.topic and e.kind == "read" and (e.name == "operating_state" or e.dds_type == DESCRIPTION):
                             self._wanted.add(e.topic)
                 if name not in self._errors:
                     self._errors[name] = (self.client.error_reader(name),

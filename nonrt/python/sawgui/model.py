@@ -1,7 +1,9 @@
 """What the GUI shows, without Qt: which topics its views read (the headless mode and the scale
 benchmark subscribe to the same), the teleoperation's settings and their limits, and the
 words a person reads for a state."""
-from sawdds import values
+import math
+
+from sawdds import msgs, values
 
 
 
@@ -52,14 +54,27 @@ STATE_COLORS = {"ENABLED": "#1f9d3a", "DISABLED": "#6b6b6b", "PAUSED": "#c98a00"
                 "GONE": "#404040", "": "#909090"}
 
 
+TELEOPERATION = "teleoperation"
+
+
 def teleop_components(live) -> list:
-    """Components that look like a teleoperation (a scale setting and a tracking error)."""
+    """Components that say they are a teleoperation: the kind in their description (the read
+    `description`, saw_msgs/ComponentDescription), whatever their commands are named."""
     out = []
     for name, c in sorted(live.components().items()):
-        names = {e.name for e in c["endpoints"]}
-        if {"set_scale", "tracking_error"} <= names:
+        d = live.description(name)
+        if d is not None and d.kind == TELEOPERATION and c.get("gone_at") is None:
             out.append(name)
     return out
+
+
+def role_servers(live, component: str) -> dict:
+    """{role: component name} of the roles a component declares, from the servers its
+    description names ("component.interface"); a role not connected has None."""
+    d = live.description(component)
+    if d is None:
+        return {}
+    return {role: (server.rsplit(".", 1)[0] or None) if server else None for role, server in zip(d.roles, d.servers)}
 
 
 def endpoint(live, component: str, name: str, kinds=("read", "write", "void", "write_event", "void_event")):
@@ -70,14 +85,46 @@ def endpoint(live, component: str, name: str, kinds=("read", "write", "void", "w
 
 
 def teleop_sides(live, teleop: str):
-    """(master, slave) component names of a teleoperation: the arms of the same gateway, by name."""
-    comps = live.components()
-    gw = comps.get(teleop, {}).get("gateway")
-    arms = [n for n, c in sorted(comps.items()) if c["gateway"] == gw and n != teleop and
-            any(e.name == "measured_cp" for e in c["endpoints"])]
-    master = next((a for a in arms if "master" in a), arms[0] if arms else None)
-    slave = next((a for a in arms if "slave" in a), arms[-1] if arms else None)
-    return master, slave
+    """(master, slave) component names of a teleoperation: the components its description says
+    play the roles "master" and "slave"."""
+    roles = role_servers(live, teleop)
+    return roles.get("master"), roles.get("slave")
+
+
+class DeclaredSetting:
+    """One setting a component declares (its description): name, unit, bounds, how many numbers,
+    whether it is a command; with its read-back endpoint `name` and its write endpoint
+    `set_<name>` (None when the gateway does not serve or map them) and the message class of each."""
+
+    def __init__(self, declared, read, write):
+        self.name, self.unit, self.count, self.command = declared.name, declared.unit, declared.count, declared.command
+        self.bounds = (declared.min, declared.max)
+        self.read = read if read is not None and read.topic and read.dds_type in msgs.BY_DDS_NAME else None
+        self.write = write if write is not None and write.topic and write.dds_type in msgs.BY_DDS_NAME else None
+        source = self.write or self.read
+        self.cls = msgs.BY_DDS_NAME[source.dds_type] if source is not None else None
+        self.fields = values.form_fields(self.cls) if self.cls is not None else []
+
+    @property
+    def finite_bounds(self):
+        """The bounds when both are finite (the form checks them), else None."""
+        return self.bounds if all(math.isfinite(b) for b in self.bounds) else None
+
+    def label(self) -> str:
+        unit = f" ({self.unit})" if self.unit else ""
+        lim = self.finite_bounds
+        return f"{self.name}{unit}" + (f"  [{lim[0]:g}, {lim[1]:g}]" if lim else "")
+
+
+def declared_settings(live, component: str) -> list:
+    """The settings a component declares, in its declaration order (DeclaredSetting each); empty
+    before its description arrives."""
+    d = live.description(component)
+    if d is None:
+        return []
+    return [DeclaredSetting(s, endpoint(live, component, s.name, kinds=("read",)),
+                            endpoint(live, component, "set_" + s.name, kinds=("write",)) if s.command else None)
+            for s in d.settings]
 
 
 def teleop_topics(live, teleop: str) -> list:

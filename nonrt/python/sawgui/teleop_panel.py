@@ -1,4 +1,5 @@
-"""The teleoperation panel: enable/disable, clutch, scale, gains and force limits (checked against
+"""The teleoperation panel: enable/disable, clutch, a row per setting the teleoperation's law declares
+(made from its description: name, unit, bounds; the value its read-back publishes; checked against
 the bounds the component accepts), the tracking error and both arms' positions, state and last fault."""
 import time
 
@@ -36,41 +37,16 @@ class TeleopPanel(QtWidgets.QWidget):
         self.clutch.pressed.connect(lambda: self.state_command("pause"))
         self.clutch.released.connect(lambda: self.state_command("resume"))
 
-        settings = QtWidgets.QGroupBox("settings")
-        form = QtWidgets.QGridLayout(settings)
-        # Empty until the component publishes the setting's current value (model.read_back): a
-        # hard-coded default would show a setting the system may not have.
-        self.scale = QtWidgets.QLineEdit("")
-        self.gain_m, self.gain_s = QtWidgets.QLineEdit(""), QtWidgets.QLineEdit("")
-        self.lim_m, self.lim_s = QtWidgets.QLineEdit(""), QtWidgets.QLineEdit("")
-        self.apply_scale = QtWidgets.QPushButton("Apply scale")
-        self.apply_gains = QtWidgets.QPushButton("Apply gains")
-        self.apply_limits = QtWidgets.QPushButton("Apply force limits")
-        rows = [("scale (slave/master)", "set_scale", [self.scale], self.apply_scale),
-                ("gains master, slave (N/m)", "set_gains", [self.gain_m, self.gain_s], self.apply_gains),
-                ("force limits master, slave (N)", "set_force_limits", [self.lim_m, self.lim_s], self.apply_limits)]
-        for r, (label, command, edits, button) in enumerate(rows):
-            lim = model.limits(model.endpoint(live, teleop, command, kinds=("write",)))
-            bounds = f"  [{lim[0]:g}, {lim[1]:g}]" if lim else ""
-            form.addWidget(QtWidgets.QLabel(label + bounds), r, 0)
-            for j, e in enumerate(edits):
-                e.setPlaceholderText(model.placeholder(lim))
-                if lim:
-                    e.setToolTip(f"within [{lim[0]:g}, {lim[1]:g}], as the component declares")
-                form.addWidget(e, r, 1 + j)
-            form.addWidget(button, r, 3)
+        # One row per setting the law declares (its description), made once it has arrived: the
+        # panel knows no setting of its own, so another law shows its own rows.
+        self.settings_box = QtWidgets.QGroupBox("settings")
+        self.form = QtWidgets.QGridLayout(self.settings_box)
+        self.rows = {}  # setting name -> SettingRow
         self.outcome = Outcome()
-        form.addWidget(self.outcome, len(rows), 0, 1, 4)
         self.refusal = QtWidgets.QLabel("")
         self.refusal.setWordWrap(True)
-        form.addWidget(self.refusal, len(rows) + 1, 0, 1, 4)
-        self.settings = {command: (edits, model.read_back(live, teleop, model.endpoint(live, teleop, command,
-                                                                                    kinds=("write",))))
-                         for _, command, edits, _ in rows}
         self.filled = {}  # edit -> the text last filled from a read-back (not edited since)
-        self.apply_scale.clicked.connect(self.send_scale)
-        self.apply_gains.clicked.connect(lambda: self.send_pair("set_gains", [self.gain_m, self.gain_s]))
-        self.apply_limits.clicked.connect(lambda: self.send_pair("set_force_limits", [self.lim_m, self.lim_s]))
+        self.build_settings()
 
         self.fault = QtWidgets.QLabel("last fault: none")
         self.fault.setWordWrap(True)
@@ -83,18 +59,14 @@ class TeleopPanel(QtWidgets.QWidget):
         plots.addWidget(self.slave_plot, 1, 1)
 
         # The commands' writers now: the first click must not wait for one to be made and matched.
-        for name in ("state_command", "set_scale", "set_gains", "set_force_limits"):
-            e = model.endpoint(live, teleop, name, kinds=("write", "void"))
-            if e is not None and e.topic:
-                live.prepare(e.topic)
-        for _, source in self.settings.values():
-            if source is not None:
-                live.watch(source.topic)
+        e = model.endpoint(live, teleop, "state_command", kinds=("write", "void"))
+        if e is not None and e.topic:
+            live.prepare(e.topic)
         self.attached = None  # (gateway, served, since): the refusals shown are those since it serves
         self.badge.set_state(model.shown_state(live.components().get(teleop, {})))  # no empty first frame
         lay = QtWidgets.QVBoxLayout(self)
         lay.addLayout(top)
-        lay.addWidget(settings)
+        lay.addWidget(self.settings_box)
         lay.addWidget(self.fault)
         lay.addLayout(plots, 1)
 
@@ -114,26 +86,36 @@ class TeleopPanel(QtWidgets.QWidget):
     def state_command(self, command: str):
         self._send("state_command", msgs.StringStamped(string=command))
 
-    def _limits(self, name):
-        return model.limits(model.endpoint(self.live, self.teleop, name, kinds=("write",)))
-
-    def send_scale(self):
-        try:
-            s = values.parse_number("scale", self.scale.text(), float, self._limits("set_scale"))
-        except values.Invalid as e:
-            self.outcome.refused(str(e))
+    def build_settings(self):
+        """The rows of the declared settings, once the description is there (again: no-op)."""
+        declared = model.declared_settings(self.live, self.teleop)
+        if not declared or self.rows:
             return
-        self._send("set_scale", msgs.Float64(data=s))
+        for r, setting in enumerate(declared):
+            row = SettingRow(setting, self.live)
+            self.rows[setting.name] = row
+            self.form.addWidget(QtWidgets.QLabel(setting.label()), r, 0)
+            for j, edit in enumerate(row.edits.values()):
+                self.form.addWidget(edit, r, 1 + j)
+            self.form.addWidget(row.note if row.button is None else row.button, r, 4)
+            if row.button is not None:
+                row.button.clicked.connect(lambda _=False, n=setting.name: self.send_setting(n))
+                self.live.prepare(setting.write.topic)
+            if setting.read is not None:
+                self.live.watch(setting.read.topic)
+        self.form.addWidget(self.outcome, len(declared), 0, 1, 5)
+        self.form.addWidget(self.refusal, len(declared) + 1, 0, 1, 5)
 
-    def send_pair(self, name, edits):
-        """A (master, slave) setting, checked against the bounds the registry carries for it."""
+    def send_setting(self, name):
+        """set_<name> from its row, checked against the bounds the registry carries for it (the
+        component's own), else those it declares."""
+        row = self.rows[name]
         try:
-            vals = [values.parse_number(f"{name} {side}", e.text(), float, self._limits(name))
-                    for side, e in zip(("master", "slave"), edits)]
+            sample = values.build(row.setting.cls, {f: e.text() for f, e in row.edits.items()}, row.limits)
         except values.Invalid as e:
-            self.outcome.refused(str(e))
+            self.outcome.refused(f"set_{name}: {e}")
             return
-        self._send(name, msgs.MasterSlave(master=vals[0], slave=vals[1]))
+        self._send("set_" + name, sample)
 
     def refresh(self):
         comp = self.live.components().get(self.teleop, {})
@@ -168,15 +150,54 @@ class TeleopPanel(QtWidgets.QWidget):
 
     def fill_settings(self):
         """Each setting's fields from the value the component publishes, unless edited since."""
-        for command, (edits, source) in self.settings.items():
-            if source is None:
+        self.build_settings()
+        for row in self.rows.values():
+            if row.setting.read is None:
                 continue
-            sample, _ = self.live.latest(source.topic)
+            sample, _ = self.live.latest(row.setting.read.topic)
             if sample is None:
                 continue
-            texts = [f"{sample.data:.6g}"] if isinstance(sample, msgs.Float64) else \
-                [f"{sample.master:.6g}", f"{sample.slave:.6g}"] if isinstance(sample, msgs.MasterSlave) else []
-            for e, text in zip(edits, texts):
-                if e.text() == self.filled.get(e, "") and e.text() != text:
+            texts = model.form_texts(sample, row.setting.fields)
+            for field, e in row.edits.items():
+                text = texts.get(field)
+                if text is not None and e.text() == self.filled.get(e, "") and e.text() != text:
                     e.setText(text)
                     self.filled[e] = text
+
+
+class SettingRow:
+    """The widgets of one declared setting: a field per number of its message (form_fields), an
+    Apply button when it is a command the gateway maps, else a note saying why not."""
+
+    def __init__(self, setting, live):
+        self.setting = setting
+        self.limits = model.limits(setting.write) or setting.finite_bounds
+        self.edits = {}
+        for field, kind in setting.fields:
+            e = QtWidgets.QLineEdit("")
+            e.setObjectName(f"{setting.name}.{field}")
+            if kind is bool:
+                e.setPlaceholderText("true or false")
+            else:
+                e.setPlaceholderText(model.placeholder(self.limits))
+            tip = f"{setting.name}.{field}"
+            if self.limits:
+                tip += f": within [{self.limits[0]:g}, {self.limits[1]:g}], as the component declares"
+            e.setToolTip(tip)
+            self.edits[field] = e
+        self.button, self.note = None, None
+        if setting.command and setting.write is not None:
+            self.button = QtWidgets.QPushButton(f"Apply {setting.name}")
+        else:
+            for e in self.edits.values():
+                e.setReadOnly(True)
+            why = ("fixed by the deployment" if not setting.command else
+                   "not mapped to DDS: set it in the deployment")
+            if not self.edits:
+                why = "not mapped to DDS (" + ("set it in the deployment" if setting.command else "fixed by the deployment") + ")"
+            self.note = QtWidgets.QLabel(why)
+            self.note.setStyleSheet("QLabel { color: #707070; }")
+
+    def edit(self, field=None):
+        """The field `field` (default: the only or first one)."""
+        return self.edits[field] if field is not None else next(iter(self.edits.values()))
