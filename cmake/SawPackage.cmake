@@ -16,6 +16,7 @@ configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/sawrtConfig.cmake.in
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/sawrtConfigVersion.cmake
                                  COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/sawrtConfig.cmake ${PROJECT_BINARY_DIR}/sawrtConfigVersion.cmake
+              ${PROJECT_SOURCE_DIR}/cmake/SawIdl.cmake
         DESTINATION ${config_dir} COMPONENT dev)
 
 set(SAW_DATA_DIR ${CMAKE_INSTALL_DATADIR}/sawrt)

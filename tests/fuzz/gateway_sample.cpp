@@ -21,8 +21,8 @@
 #include "geometry_msgs/msg/Vector3StampedPubSubTypes.h"
 #include "geometry_msgs/msg/WrenchStampedPubSubTypes.h"
 #include "reply_filter.cpp"
+#include "saw/gateway/fields_conversion.hpp"
 #include "saw/teleop/dds/mappings.hpp"
-#include "saw/teleop/dds/master_slave.hpp"
 #include "saw/teleop/teleop_law.hpp"
 #include "saw_msgs/msg/ComponentDescriptionPubSubTypes.h"
 #include "saw_msgs/msg/MasterSlavePubSubTypes.h"
@@ -38,7 +38,6 @@ namespace saw::gateway {
 namespace {
 
 using namespace conversions;
-using teleop::dds::MasterSlaveConv;
 using Payload = eprosima::fastrtps::rtps::SerializedPayload_t;
 
 [[noreturn]] void defect(const char* what) {
@@ -160,9 +159,9 @@ using Samples = std::tuple<
     Data<std::int64_t, std_msgs::msg::Int64, std_msgs::msg::Int64PubSubType>,
     Data<bool, std_msgs::msg::Bool, std_msgs::msg::BoolPubSubType>,
     Entry<teleop::Gains, saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType,
-          MasterSlaveConv<teleop::Gains>>,
+          FieldsConv<teleop::Gains, saw_msgs::msg::MasterSlave>>,
     Entry<teleop::ForceLimits, saw_msgs::msg::MasterSlave, saw_msgs::msg::MasterSlavePubSubType,
-          MasterSlaveConv<teleop::ForceLimits>>,
+          FieldsConv<teleop::ForceLimits, saw_msgs::msg::MasterSlave>>,
     Entry<TaskStatistics, saw_msgs::msg::TaskStatistics, saw_msgs::msg::TaskStatisticsPubSubType,
           TaskStatisticsConv>,
     Entry<ComponentDescription, saw_msgs::msg::ComponentDescription,

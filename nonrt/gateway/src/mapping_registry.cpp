@@ -53,15 +53,6 @@ MappingRegistry& mapping_registry() {
 
 std::vector<std::string> mapping_directories() {
   std::vector<std::string> dirs;
-  if (const char* env = std::getenv("SAW_MAPPING_PATH"); env != nullptr) {
-    const std::string list = env;
-    for (std::size_t start = 0; start <= list.size();) {
-      const auto end = std::min(list.find(':', start), list.size());
-      if (end > start) dirs.push_back(list.substr(start, end - start));
-      start = end + 1;
-    }
-    return dirs;
-  }
   std::error_code ec;
   const fs::path bin = fs::read_symlink("/proc/self/exe", ec).parent_path();
   for (const fs::path& candidate :
@@ -69,6 +60,15 @@ std::vector<std::string> mapping_directories() {
     const fs::path dir = fs::weakly_canonical(candidate, ec);
     if (!ec && fs::is_directory(dir) && std::find(dirs.begin(), dirs.end(), dir.string()) == dirs.end())
       dirs.push_back(dir.string());
+  }
+  // A lab's modules, besides the installation's (a lab's module adds its types; it replaces none).
+  if (const char* env = std::getenv("SAW_MAPPING_PATH"); env != nullptr) {
+    const std::string list = env;
+    for (std::size_t start = 0; start <= list.size();) {
+      const auto end = std::min(list.find(':', start), list.size());
+      if (end > start) dirs.push_back(list.substr(start, end - start));
+      start = end + 1;
+    }
   }
   return dirs;
 }

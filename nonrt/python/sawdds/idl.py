@@ -293,13 +293,14 @@ def classes(structs):
     return {name: builder.cls(name) for name in builder.structs}
 
 
-def load(root):
-    """The classes of every ``*.idl`` file under ``root`` (``<pkg>/msg/<Type>.idl``), by IDL name."""
-    root = Path(root)
-    files = sorted(root.rglob("*.idl"))
-    if not files:
-        raise IdlError(f"{root}: no IDL file")
+def load(*roots):
+    """The classes of every ``*.idl`` file under each of ``roots`` (``<pkg>/msg/<Type>.idl``), by IDL
+    name; names resolve across all of them (a lab's IDL including std_msgs/Header)."""
     structs = []
-    for f in files:
-        structs += parse(f.read_text(encoding="utf-8"), str(f.relative_to(root)))
+    for root in map(Path, roots):
+        files = sorted(root.rglob("*.idl"))
+        if not files:
+            raise IdlError(f"{root}: no IDL file")
+        for f in files:
+            structs += parse(f.read_text(encoding="utf-8"), str(f.relative_to(root)) if len(roots) == 1 else str(f))
     return classes(structs)

@@ -73,6 +73,10 @@ class MappingRegistry {
   void add(std::unique_ptr<Mapping> m);
   template <class Rt, class PubSub, class Conv>
   void add();  // typed_mapping.hpp
+  // Rt's `fields` carried as PubSub's message of the same members, no conversion written by hand
+  // (fields_conversion.hpp); throws std::invalid_argument when the members do not match.
+  template <class Rt, class PubSub>
+  void add_fields();
 
   const Mapping* find(std::string_view saw_type) const;
   const Mapping* find_by_dds(std::string_view dds_type) const;
@@ -85,10 +89,11 @@ class MappingRegistry {
 // The process's registry: the core types from the start; a package's once its module is loaded.
 MappingRegistry& mapping_registry();
 
-// Loads every mapping module (lib*.so) of $SAW_MAPPING_PATH (colon-separated), else of the
-// mapping directory of this installation (<libdir>/sawrt/mappings beside bin/, or the build
-// tree's lib/sawrt/mappings), in name order, once per process. Throws std::runtime_error naming
-// the module (not a mapping module, another plug-in ABI, a type mapped twice differently).
+// Loads every mapping module (lib*.so) of the mapping directory of this installation
+// (<libdir>/sawrt/mappings beside bin/, or the build tree's lib/sawrt/mappings), then of the
+// directories of $SAW_MAPPING_PATH (colon-separated: a lab's), each directory in name order, once
+// per process. Throws std::runtime_error naming the module (not a mapping module, another ABI, a
+// type mapped twice differently) or a directory that cannot be read.
 void load_mapping_modules();
 // The directories load_mapping_modules() reads.
 std::vector<std::string> mapping_directories();

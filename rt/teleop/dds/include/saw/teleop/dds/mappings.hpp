@@ -5,7 +5,8 @@
 
 namespace saw::teleop::dds {
 
-// One line per type: set_gains and set_force_limits (and their read-backs) as saw_msgs/MasterSlave.
+// One line per type: Gains and ForceLimits (set_gains, set_force_limits, their read-backs) as
+// saw_msgs/MasterSlave.
 void register_mappings(gateway::MappingRegistry& registry);
 
 }  // namespace saw::teleop::dds
