@@ -1,7 +1,8 @@
 // What a late joiner needs is there when it joins: a component's operating state is latched on
 // its DDS topic (transient local, keep last 1) and published when the gateway attaches, so a
-// reader created long after the last change still gets it at once; a gateway that leaves because
-// its RT process died says FAULT first. Real Fast DDS on loopback, through the real bridge.
+// reader created long after the last change still gets it at once; so is a setting's read-back
+// (`gain` beside `set_gain`), and the manifest says which topics are latched; a gateway that
+// leaves because its RT process died says FAULT first. Real Fast DDS on loopback, through the real bridge.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -22,6 +23,7 @@
 #include "saw/manager.hpp"
 #include "saw/testing/unique_name.hpp"
 #include "saw/testing/wait_for.hpp"
+#include "std_msgs/msg/Float64PubSubTypes.h"
 
 namespace {
 
@@ -37,12 +39,17 @@ class StatefulDevice : public saw::Task {
     auto& p = provide("arm");
     p.add_command_read("operating_state", state_table().add_column("operating_state", &state_));
     changed_ = &p.add_event_write<saw::OperatingState>("operating_state");
+    // A setting: written with set_gain, read back as gain.
+    p.add_command_write<double>("set_gain", [this](const double& g) { gain_ = g; });
+    p.add_command_read("gain", state_table().add_column("gain", &gain_));
+    p.add_command_read("cycles", state_table().add_column("cycles", &cycles_));
     state_.state = saw::OperatingStateValue::enabled;
   }
   void request(saw::OperatingStateValue v) {
     requested_.store(static_cast<int>(v), std::memory_order_release);
   }
   void run() override {
+    ++cycles_;
     const int r = requested_.exchange(-1, std::memory_order_acq_rel);
     if (r < 0) return;
     state_.state = static_cast<saw::OperatingStateValue>(r);
@@ -51,6 +58,8 @@ class StatefulDevice : public saw::Task {
 
  private:
   saw::OperatingState state_;
+  double gain_ = 2.5;
+  std::int64_t cycles_ = 0;
   saw::EventWrite<saw::OperatingState>* changed_;
   std::atomic<int> requested_{-1};
 };
@@ -172,6 +181,41 @@ TEST_F(GatewayLatching, AGatewayLeavingForItsDeadRtProcessSaysFaultFirst) {
   EXPECT_EQ(late.states().front(), "FAULT") << late.all();
   late.close(participant);
   reader.close(participant);
+}
+
+TEST_F(GatewayLatching, ASettingsReadBackIsLatchedAndTheManifestSaysWhich) {
+  const auto latched = [&](const std::string& name) {
+    for (const auto& e : served.gateway->endpoints())
+      if (e.name == name && e.kind == "read") return e.latched;
+    ADD_FAILURE() << "no read " << name;
+    return false;
+  };
+  EXPECT_TRUE(latched("operating_state"));
+  EXPECT_TRUE(latched("gain")) << "the read-back of set_gain";
+  EXPECT_FALSE(latched("cycles")) << "a value of every row";
+  // A reader joining long after the value was set gets it at once, though it never changed.
+  fdds::TypeSupport type(new std_msgs::msg::Float64PubSubType());
+  type.register_type(participant);
+  auto* gain =
+      participant->create_topic("rt/" + served.name + "/gain", type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+  auto* sub = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
+  q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+  q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+  q.data_sharing().off();
+  auto* reader = sub->create_datareader(gain, q);
+  std::vector<double> seen;
+  ASSERT_TRUE(wait_for([&] {
+    std_msgs::msg::Float64 m;
+    fdds::SampleInfo info;
+    while (reader->take_next_sample(&m, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data) seen.push_back(m.data());
+    return !seen.empty();
+  }));
+  EXPECT_EQ(seen.front(), 2.5);
+  sub->delete_datareader(reader);
+  participant->delete_subscriber(sub);
+  participant->delete_topic(gain);
 }
 
 }  // namespace

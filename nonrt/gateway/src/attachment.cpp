@@ -102,6 +102,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
       info.dds_type = m->dds_type();
       info.topic = prefix + e->name();
       const bool latched = m == operating_state;
+      info.latched = latched;
       out->writer = dds_.publisher->create_datawriter(
           dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::event));
       if (latched) {
@@ -174,10 +175,15 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
         // A read and an event of the same name share the topic: the event (on change, reliable) serves it.
         const bool event_too = std::any_of(p.events().begin(), p.events().end(),
                                            [&](const auto& e) { return e->name() == c->name; });
+        // An operating state, a description and a setting's read-back (`X` beside `set_X`, of the
+        // same type) are latched and published on change: a late joiner gets them at once, and a
+        // value that changes when someone sets it costs no sample every row.
+        const Command* set = p.find_command("set_" + c->name);
+        const bool read_back = set != nullptr && set->signature.kind == CommandKind::write &&
+                               set->signature.arg.name == sig.arg.name;
+        info.latched = event_too ? m == operating_state : gateway::latched(m) || read_back;
         if (!event_too) {
-          // An operating state without an event, and a description, are latched and published on
-          // change (a late joiner gets them at once; a description would otherwise cost every row).
-          const bool latched = gateway::latched(m);
+          const bool latched = info.latched;
           auto* w = dds_.publisher->create_datawriter(
               dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::state));
           (latched ? changed_states_ : states_).push_back({c.get(), m, w, std::vector<std::byte>(m->size())});

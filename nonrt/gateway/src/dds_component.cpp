@@ -40,8 +40,8 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
     const Mapping* m = find_mapping_by_dds(e.dds_type);
     if (m == nullptr || (e.saw_size != 0 && m->size() != e.saw_size)) continue;  // not decodable here
     if (e.kind == "read") {
-      auto* r =
-          ctx.subscriber->create_datareader(ctx.topic(e.topic, *m), DdsContext::reader_qos(Flow::state));
+      auto* r = ctx.subscriber->create_datareader(
+          ctx.topic(e.topic, *m), DdsContext::reader_qos(e.latched ? Flow::latched : Flow::state));
       states_.push_back(std::make_unique<State>(State{m, r, std::make_unique<std::byte[]>(m->size())}));
       Command c;
       c.name = e.name;

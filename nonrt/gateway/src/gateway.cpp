@@ -143,6 +143,7 @@ void Gateway::publish_manifest() {
     out.limited(e.limited);
     out.limit_min(e.limit_min);
     out.limit_max(e.limit_max);
+    out.latched(e.latched);
     out.dds_type(e.dds_type);
     out.topic(e.topic);
     m.endpoints().push_back(std::move(out));

@@ -57,7 +57,7 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
       // An operating state and a description are published on change only (latched): a mirror that joins
       // later takes the last one the writer keeps, or it would show the default (DISABLED) until the next
       // change.
-      const bool latched = gateway::latched(m);
+      const bool latched = e.latched;
       auto* r = dds_.subscriber->create_datareader(
           dds_.topic(e.topic, *m), DdsContext::reader_qos(latched ? Flow::latched : Flow::state));
       states_.push_back({m, r, std::make_unique<std::byte[]>(m->size())});
@@ -139,7 +139,8 @@ std::vector<EndpointInfo> find_remote(DdsContext& dds, const std::string& compon
             e.kind() != "mirror")
           mine.push_back({e.component_name(), e.interface_name(), e.name(), e.kind(), e.saw_type(),
                           e.saw_size(), e.saw_version(), e.dds_type(), e.topic(), e.result_type(),
-                          e.result_size(), e.result_version(), e.limited(), e.limit_min(), e.limit_max()});
+                          e.result_size(), e.result_version(), e.limited(), e.limit_min(), e.limit_max(),
+                          e.latched()});
       if (!mine.empty()) found = std::move(mine);
     }
     if (!found.empty()) break;

@@ -112,10 +112,10 @@ int echo(Session& s, const std::string& topic, int count, double timeout) {
                  e->dds_type().c_str());
     return 1;
   }
-  // Latched topics (operating states): the newest sample at once, however long ago it was
-  // written. Others best effort: that matches both the state writers (best effort) and the event
-  // writers (reliable).
-  const bool latched = saw::gateway::latched(m);
+  // Latched topics (operating states, descriptions, settings' read-backs: the manifest says): the
+  // newest sample at once, however long ago it was written. Others best effort: that matches both
+  // the state writers (best effort) and the event writers (reliable).
+  const bool latched = e->latched();
   auto* r = s.ctx.subscriber->create_datareader(
       s.ctx.topic(topic, *m), DdsContext::reader_qos(latched ? Flow::latched : Flow::state));
   if (r == nullptr) return refused("read", topic);

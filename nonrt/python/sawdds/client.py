@@ -26,16 +26,16 @@ from . import msgs, security  # noqa: E402
 
 XCDR1 = Policy.DataRepresentation(use_cdrv0_representation=True)
 
-# The gateway latches operating states and descriptions (RELIABLE, TRANSIENT_LOCAL, keep last 1, published when it
-# attaches) and keeps its error topic's last 16 (TRANSIENT_LOCAL): a reader that asks for
-# TRANSIENT_LOCAL gets them the moment it matches. (A TRANSIENT_LOCAL reader would not match a
-# VOLATILE writer: this is the one place that says which topics are latched.)
-LATCHED_TYPES = ("crtk_msgs::msg::dds_::OperatingState_", "saw_msgs::msg::dds_::ComponentDescription_")
+# The gateway latches operating states, descriptions and settings' read-backs (RELIABLE,
+# TRANSIENT_LOCAL, keep last 1, published on change) and keeps its error topic's last 16
+# (TRANSIENT_LOCAL): a reader that asks for TRANSIENT_LOCAL gets them the moment it matches. Which
+# topics are latched its manifest says (Endpoint.latched). (A TRANSIENT_LOCAL reader would not
+# match a VOLATILE writer; a VOLATILE reader of a latched topic would wait for the next change.)
 
 
 def latched(endpoint) -> bool:
     """Whether the gateway latches `endpoint`'s topic (its readers are then TRANSIENT_LOCAL, keep last 1)."""
-    return endpoint.dds_type in LATCHED_TYPES
+    return bool(getattr(endpoint, "latched", False))
 
 
 def interface_uri(interface: str = "lo", peers=("127.0.0.1",)) -> str:

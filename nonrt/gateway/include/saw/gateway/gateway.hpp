@@ -46,6 +46,9 @@ struct EndpointInfo {
   std::uint32_t result_size = 0, result_version = 0;
   bool limited = false;  // a write command's declared bounds on each of its numbers
   double limit_min = 0, limit_max = 0;
+  // Published on change and kept for late joiners (TRANSIENT_LOCAL): an operating state, a
+  // description, the read-back `X` of a setting `set_X`. Its readers ask for TRANSIENT_LOCAL.
+  bool latched = false;
   std::string label() const {  // "Pose v1"
     return saw_type.empty() ? "" : saw_type + " v" + std::to_string(saw_version);
   }
