@@ -42,6 +42,7 @@ class TeleopPanel(QtWidgets.QWidget):
         self.settings_box = QtWidgets.QGroupBox("settings")
         self.form = QtWidgets.QGridLayout(self.settings_box)
         self.rows = {}  # setting name -> SettingRow
+        self.row_widgets, self.built = [], None  # the rows' widgets; what they were made from
         self.outcome = Outcome()
         self.refusal = QtWidgets.QLabel("")
         self.refusal.setWordWrap(True)
@@ -87,17 +88,29 @@ class TeleopPanel(QtWidgets.QWidget):
         self._send("state_command", msgs.StringStamped(string=command))
 
     def build_settings(self):
-        """The rows of the declared settings, once the description is there (again: no-op)."""
+        """The rows of the declared settings, once the description is there; made again when what
+        it declares or how the gateway serves it changes (saw-rt restarted with another law)."""
         declared = model.declared_settings(self.live, self.teleop)
-        if not declared or self.rows:
+        shape = [(d.name, d.unit, d.bounds, d.read and d.read.topic, d.write and d.write.topic,
+                  model.limits(d.write)) for d in declared]
+        if not declared or shape == self.built:
             return
+        for w in self.row_widgets:
+            self.form.removeWidget(w)
+            w.deleteLater()
+        for w in (self.outcome, self.refusal):
+            self.form.removeWidget(w)
+        self.rows, self.row_widgets, self.filled, self.built = {}, [], {}, shape
         for r, setting in enumerate(declared):
             row = SettingRow(setting, self.live)
             self.rows[setting.name] = row
-            self.form.addWidget(QtWidgets.QLabel(setting.label()), r, 0)
+            widgets = [QtWidgets.QLabel(setting.label()), *row.edits.values(),
+                       row.note if row.button is None else row.button]
+            self.form.addWidget(widgets[0], r, 0)
             for j, edit in enumerate(row.edits.values()):
                 self.form.addWidget(edit, r, 1 + j)
-            self.form.addWidget(row.note if row.button is None else row.button, r, 4)
+            self.form.addWidget(widgets[-1], r, 4)
+            self.row_widgets += widgets
             if row.button is not None:
                 row.button.clicked.connect(lambda _=False, n=setting.name: self.send_setting(n))
                 self.live.prepare(setting.write.topic)
