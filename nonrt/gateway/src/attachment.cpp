@@ -189,7 +189,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
           (latched ? changed_states_ : states_).push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
           // A task's statistics are cumulative: a tenth of the rows tells a GUI as much, for a
           // tenth of the samples every subscriber takes.
-          if (m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
+          if (!latched && m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
           if (m == operating_state && fault_writer_ == nullptr) fault_writer_ = w;
         }
       } else {
