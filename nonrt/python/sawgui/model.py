@@ -112,7 +112,8 @@ class DeclaredSetting:
 
     def label(self) -> str:
         unit = f" ({self.unit})" if self.unit else ""
-        lim = self.finite_bounds
+        flag = bool(self.fields) and all(kind is bool for _, kind in self.fields)
+        lim = None if flag else self.finite_bounds  # a flag's [0, 1] says nothing
         return f"{self.name}{unit}" + (f"  [{lim[0]:g}, {lim[1]:g}]" if lim else "")
 
 
