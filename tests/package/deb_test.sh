@@ -28,6 +28,14 @@ for f in usr/bin/saw-rt usr/bin/saw-gateway usr/bin/sawctl usr/lib/systemd/syste
   [ -e "$root/$f" ] || { echo "FAIL: $f is not installed" >&2; exit 1; }
 done
 find "$root/usr/lib" -path "*/cmake/sawrt/sawrtConfig.cmake" | grep -q . || { echo "FAIL: no sawrtConfig.cmake" >&2; exit 1; }
+# The gateway's mapping modules (the teleoperation's types), and what a lab's own message type
+# needs: sawrt's IDL and saw_idl_library.
+find "$root/usr/lib" -path "*/sawrt/mappings/libsawrt-teleop.so" | grep -q . ||
+  { echo "FAIL: no teleop mapping module in <libdir>/sawrt/mappings" >&2; exit 1; }
+for f in usr/share/sawrt/idl/std_msgs/msg/Header.idl usr/share/sawrt/examples/lab_message/lab_msgs_mappings.cpp; do
+  [ -e "$root/$f" ] || { echo "FAIL: $f is not installed" >&2; exit 1; }
+done
+find "$root/usr/lib" -path "*/cmake/sawrt/SawIdl.cmake" | grep -q . || { echo "FAIL: no SawIdl.cmake" >&2; exit 1; }
 grep -q "^ExecStart=/usr/bin/saw-rt " "$root/usr/lib/systemd/system/saw-rt@.service" ||
   { echo "FAIL: the unit does not start the installed saw-rt" >&2; exit 1; }
 
