@@ -104,8 +104,11 @@ TEST(CanopenDeployment, ErrorsNameFileLineAndKey) {
              "key 'components[0].params.joints.a.counts_per_revolution': required parameter is missing");
   EXPECT_HAS(error_of("chain: [a, b]", "chain: [a, c]"),
              "key 'components[0].params.joints.c': the chain names joint 'c'");
-  EXPECT_HAS(error_of("bus: virtual:nowhere", "bus: can0"),
-             "cfg.yaml:7:12: key 'components[0].params.bus': 'can0' is not a bus");
+  EXPECT_HAS(error_of("bus: virtual:nowhere", "bus: can:0"),
+             "cfg.yaml:7:12: key 'components[0].params.bus': 'can:0' is not a bus");
+  // A bus named (a canopen_bus component's) is a client's: the master's heartbeat is the bus's.
+  EXPECT_HAS(error_of("bus: virtual:nowhere", "bus: can0\n      master_heartbeat: {period: 50ms}"),
+             "key 'components[0].params.master_heartbeat': the master's heartbeat is the bus's");
   EXPECT_HAS(error_of("timeout: 60ms", "timeout: 10ms"),
              "key 'components[0].params.heartbeat.timeout': must be above the heartbeat period");
   EXPECT_HAS(error_of("min: -1, max: 1}", "min: 1, max: -1}"),

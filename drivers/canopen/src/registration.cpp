@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/canopen_arm.hpp"
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
+#include "registration_params.hpp"
 
 namespace saw::canopen {
 namespace {
@@ -22,6 +24,10 @@ struct CanopenSpec {
   TaskConfig task;
   CanopenArmConfig config;
 };
+
+}  // namespace
+
+namespace params {
 
 TimeNs duration(const Params& p, const std::string& key, std::chrono::nanoseconds fallback,
                 std::chrono::nanoseconds lo, std::chrono::nanoseconds hi) {
@@ -127,6 +133,24 @@ std::vector<SdoWrite> parse_writes(const Params& p) {
   return out;
 }
 
+std::string parse_bus(const Params& p) {
+  const std::string bus = p.get<std::string>("bus");
+  if (is_bus_uri(bus)) return bus;
+  if (bus.empty() || bus.find(':') != std::string::npos)
+    p.fail_at("bus", "'" + bus + "' is not a bus: virtual:<name>, socketcan:<interface>, or the name of a "
+              "canopen_bus component");
+  return bus;
+}
+
+}  // namespace params
+
+namespace {
+
+using params::duration;
+using params::parse_mode;
+using params::parse_pdos;
+using params::parse_writes;
+
 // A joint's drive: node, units, limits, and (arm) its place in the chain.
 JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode mode, const Params& shared,
                         const std::string& directory, ChainJoint* kinematics) {
@@ -178,9 +202,7 @@ JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode m
 // What both types share: the bus, the mode, heartbeats, timeouts, the start-up.
 void parse_common(const ComponentContext& ctx, Params& p, const std::string& type, CanopenSpec& s) {
   CanopenArmConfig& c = s.config;
-  c.bus = p.get<std::string>("bus");
-  if (!c.bus.starts_with("virtual:") && !c.bus.starts_with("socketcan:"))
-    p.fail_at("bus", "'" + c.bus + "' is not a bus: virtual:<name> or socketcan:<interface>");
+  c.bus = params::parse_bus(p);
   c.mode = parse_mode(p);
   s.task = deploy::periodic_task(ctx, p, type);
   const auto period = s.task.period;
@@ -188,6 +210,8 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
   c.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
   c.heartbeat_timeout = duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.heartbeat_period), 1ms, 600s);
   if (c.heartbeat_timeout <= c.heartbeat_period) hb.fail_at("timeout", "must be above the heartbeat period");
+  if (!is_bus_uri(c.bus) && p.has("master_heartbeat"))
+    p.fail_at("master_heartbeat", "the master's heartbeat is the bus's: set it on canopen_bus '" + c.bus + "'");
   const Params master = p.child("master_heartbeat");
   c.master_node = static_cast<std::uint8_t>(master.get_in_range("node", 1, 127, 127));
   c.master_heartbeat_period = duration(master, "period", 100ms, 1ms, 65535ms);
@@ -349,6 +373,7 @@ void register_components(deploy::ComponentRegistry& registry) {
   registry.add("canopen_arm", "CiA 402 drives on one CAN bus as a CRTK arm (KDL chain; csp, csv or cst)",
                parse_arm, make);
   registry.add_summary_format<CanopenStatus>(summary_line);
+  register_bus_components(registry);
 }
 
 }  // namespace saw::canopen
