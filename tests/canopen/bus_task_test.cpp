@@ -1,93 +1,17 @@
 // Two CANopen components on one bus task, against in-process drives on an in-memory bus.
+#include "saw/canopen/bus_task.hpp"
+
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <stdexcept>
 
-#include "arm_rig.hpp"
-#include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/canopen_arm.hpp"
 #include "saw/detail/access.hpp"
+#include "shared_rig.hpp"
 
 namespace saw::canopen::test {
 namespace {
-
-// The bus task owns its bus; the network owns the test's ports: a bus that forwards to one.
-class Borrowed final : public can::Bus {
- public:
-  explicit Borrowed(can::Bus& b) : b_(b) {}
-  std::size_t receive(std::span<can::Received> out) noexcept override { return b_.receive(out); }
-  std::size_t send(std::span<const can::Frame> f) noexcept override { return b_.send(f); }
-  can::BusState state() const noexcept override { return b_.state(); }
-  can::BusCounters counters() const noexcept override { return b_.counters(); }
-  const std::string& name() const noexcept override { return b_.name(); }
-
- private:
-  can::Bus& b_;
-};
-
-CanopenArmConfig client(const std::string& bus, std::vector<std::uint8_t> nodes) {
-  CanopenArmConfig c = arm_config(cia402::csp, nodes.size());
-  c.bus = bus;
-  c.chain.reset();
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    c.joints[i].node = nodes[i];
-    c.joints[i].name = "n" + std::to_string(nodes[i]);
-  }
-  c.start_enabled = true;
-  c.feedback_timeout = 20 * ms;
-  return c;
-}
-
-struct SharedRig {
-  SharedRig() : bus_port(network.attach("shared")), spy(network.attach("spy")) {
-    BusTaskConfig k;
-    k.heartbeat_period = 10 * ms;
-    k.heartbeat_timeout = 50 * ms;
-    task = std::make_shared<BusTask>(std::make_unique<Borrowed>(bus_port), k);
-    publish_bus_task(name, task);
-    for (const int node : {1, 2, 3}) {
-      TestDriveConfig d;
-      d.node = static_cast<std::uint8_t>(node);
-      drives.list.push_back(std::make_unique<TestDrive>(network, d));
-    }
-  }
-  ~SharedRig() { withdraw_bus_task(name); }
-  std::unique_ptr<CanopenArm> make(const std::string& who, std::vector<std::uint8_t> nodes) {
-    CanopenArmConfig c = client(name, std::move(nodes));
-    c.startup_pause = [this] {
-      drives.step(now);
-      now += ms;
-      bus_port.now = now;
-      return now;
-    };
-    auto arm = std::make_unique<CanopenArm>(who, TaskConfig::periodic(std::chrono::milliseconds(1), 0), c);
-    arm->state_table().finalize();
-    return arm;
-  }
-  // One period: the bus task, then its clients, then the drives (their TPDOs for the next).
-  void cycle(std::initializer_list<CanopenArm*> arms, int n = 1) {
-    for (int i = 0; i < n; ++i) {
-      bus_port.now = now;
-      task->cycle(now);
-      for (CanopenArm* a : arms) detail::Access::step(*a, now);
-      drives.step(now);
-      now += ms;
-      can::Received r[64];
-      for (std::size_t k; (k = spy.receive(r)) > 0;)
-        for (std::size_t j = 0; j < k; ++j) seen.push_back(r[j].frame);
-    }
-  }
-
-  std::vector<can::Frame> seen;  // every frame on the bus during cycle()
-  const std::string name = "shared-test-bus";
-  RingNetwork network;
-  RingPort& bus_port;
-  RingPort& spy;
-  Drives drives{network, {}};
-  std::shared_ptr<BusTask> task;
-  TimeNs now = 0;
-};
 
 std::vector<can::Frame> drain(RingPort& p) {
   std::vector<can::Frame> out;
@@ -183,7 +107,8 @@ TEST(CanopenBusTask, RefusesANodeOrIdentifierTakenAndTheMastersOwnNode) {
   EXPECT_THROW((void)rig.task->attach("x", master, {}), std::invalid_argument);
   // A bus that is no canopen_bus of this process.
   CanopenArmConfig c = client("no-such-bus", {5});
-  EXPECT_THROW(CanopenArm("lost", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c), std::runtime_error);
+  EXPECT_THROW(CanopenArm("lost", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c),
+               std::runtime_error);
 }
 
 TEST(CanopenBusTask, NodesOfAClientThatNeverShutThemDownGoPreOperationalWithTheBusTask) {
@@ -196,6 +121,54 @@ TEST(CanopenBusTask, NodesOfAClientThatNeverShutThemDownGoPreOperationalWithTheB
   ASSERT_EQ(last.size(), 1u);
   EXPECT_EQ(last[0].data[0], 0x80);
   EXPECT_EQ(last[0].data[1], 9);
+}
+
+}  // namespace
+}  // namespace saw::canopen::test
+
+namespace saw::canopen::test {
+namespace {
+
+TEST(CanopenBusTask, AnArmAndAGripperIoNodeShareTheBusAndFaultAlone) {
+  SharedRig rig;
+  auto arm = rig.make("arm", {1, 2});
+  auto gripper = rig.make_io("gripper", 10);
+  Client client(*gripper);
+  arm->startup();
+  gripper->startup();
+  EXPECT_EQ(rig.io_node->state, 0x05) << "configured and started";
+  rig.cycle({arm.get(), gripper.get()}, 60);
+  ASSERT_EQ(arm->operating_state().state, OperatingStateValue::enabled);
+  ASSERT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);
+  // Not commanded yet: the jaw's safe opening (0.02 m, 2000 counts) goes out, and is measured.
+  EXPECT_EQ(rig.io_node->output, 2000);
+  EXPECT_NEAR(gripper->measured_js().position[0], 0.02, 1e-9);
+  // servo_jp to 0.03 m: 3000 counts in RPDO1, the input follows (50 counts per SYNC).
+  for (int i = 0; i < 40; ++i) {
+    client.jp(0.02 + 0.00025 * std::min(i, 40));
+    rig.cycle({arm.get(), gripper.get()});
+  }
+  rig.cycle({arm.get(), gripper.get()}, 10);
+  EXPECT_EQ(rig.io_node->output, 2975);
+  EXPECT_NEAR(gripper->measured_js().position[0], 0.02975, 1e-9);
+  // The node's heartbeat and TPDOs stop: the gripper faults, the arm goes on.
+  rig.io_node->silent = true;
+  rig.cycle({arm.get(), gripper.get()}, 60);
+  EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::fault);
+  EXPECT_EQ(arm->operating_state().state, OperatingStateValue::enabled);
+  EXPECT_EQ(rig.io_node->output, 2000) << "its safe output at the fault";
+  // At exit: the safe output, a SYNC and NMT pre-operational for the node.
+  rig.keep = false;
+  (void)drain(rig.spy);
+  gripper->cleanup();
+  arm->cleanup();
+  const auto last = drain(rig.spy);
+  bool safe = false, pre_op = false;
+  for (const can::Frame& f : last) {
+    if ((f.can_id() & CAN_SFF_MASK) == 0x20A && !pre_op) safe = f.data[0] == 0xD0 && f.data[1] == 0x07;
+    if (f.can_id() == 0 && f.len == 2 && f.data[0] == 0x80 && f.data[1] == 10) pre_op = true;
+  }
+  EXPECT_TRUE(safe && pre_op);
 }
 
 }  // namespace

@@ -93,7 +93,8 @@ BusPort& BusTask::attach(const std::string& client, std::span<const std::uint8_t
   const auto index = static_cast<std::uint8_t>(ports_.size() + 1);
   std::array<std::uint8_t, 2048> routes = routes_;
   const auto take = [&](std::uint32_t id, const std::string& what) {
-    if (id >= routes.size()) throw std::invalid_argument(client + ": " + what + " is not an 11-bit identifier");
+    if (id >= routes.size())
+      throw std::invalid_argument(client + ": " + what + " is not an 11-bit identifier");
     if (routes[id] != 0)
       throw std::invalid_argument(client + ": " + what + " (identifier " + std::to_string(id) + ") is '" +
                                   ports_[routes[id] - 1u]->client_ + "''s already on bus " + bus_->name());
@@ -208,8 +209,8 @@ std::shared_ptr<BusTask> find_bus_task(const std::string& name) {
   std::shared_ptr<BusTask> t = it == bus_tasks().end() ? nullptr : it->second.lock();
   if (t == nullptr)
     throw std::runtime_error("bus '" + name +
-                             "' is no canopen_bus component of this deployment (a canopen_bus named '" + name +
-                             "' must come before the components on it)");
+                             "' is no canopen_bus component of this deployment (a canopen_bus named '" +
+                             name + "' must come before the components on it)");
   return t;
 }
 
@@ -217,8 +218,8 @@ BusClaim::BusClaim(std::string bus, const std::string& owner) : bus_(std::move(b
   const std::lock_guard lock(registry_mutex);
   const auto [it, fresh] = claims().emplace(bus_, owner);
   if (!fresh)
-    throw std::runtime_error("CAN bus " + bus_ + " has a CANopen master in this process already ('" + it->second +
-                             "'): put its components on one canopen_bus");
+    throw std::runtime_error("CAN bus " + bus_ + " has a CANopen master in this process already ('" +
+                             it->second + "'): put its components on one canopen_bus");
 }
 
 BusClaim::~BusClaim() {

@@ -6,7 +6,8 @@ namespace saw::canopen {
 namespace {
 
 std::shared_ptr<BusTask> open_task(const CanopenBusConfig& c, const TaskConfig& t) {
-  if (!t.is_periodic()) throw std::invalid_argument("a canopen_bus's task must be periodic (one SYNC per cycle)");
+  if (!t.is_periodic())
+    throw std::invalid_argument("a canopen_bus's task must be periodic (one SYNC per cycle)");
   can::BusConfig b;
   b.uri = c.uri;
   BusTaskConfig k;
@@ -23,8 +24,8 @@ CanopenBus::CanopenBus(std::string name, TaskConfig task, CanopenBusConfig confi
     : Task(std::move(name), task), claim_(config.uri, this->name()), task_(open_task(config, task)) {
   publish_bus_task(this->name(), task_);
   status_.node = config.node;
-  provide("canopen_bus").add_command_read("status",
-                                          state_table().add_column("status", &status_, ColumnUse::summary));
+  provide("canopen_bus")
+      .add_command_read("status", state_table().add_column("status", &status_, ColumnUse::summary));
 }
 
 CanopenBus::~CanopenBus() { withdraw_bus_task(name()); }

@@ -21,8 +21,10 @@ CanopenIoConfig checked(CanopenIoConfig c, const TaskConfig& task) {
   c.node.inputs.clear();
   for (const IoChannel& ch : c.channels) {
     if (!ch.output) throw std::invalid_argument("channel '" + ch.name + "': no output object");
-    if (!(ch.scale != 0) || !std::isfinite(ch.scale) || !(ch.min < ch.max) || ch.safe < ch.min || ch.safe > ch.max)
-      throw std::invalid_argument("channel '" + ch.name + "': scale must not be 0, min below max, safe within");
+    if (!(ch.scale != 0) || !std::isfinite(ch.scale) || !(ch.min < ch.max) || ch.safe < ch.min ||
+        ch.safe > ch.max)
+      throw std::invalid_argument("channel '" + ch.name +
+                                  "': scale must not be 0, min below max, safe within");
     c.node.outputs.push_back(*ch.output);
     if (ch.input) c.node.inputs.push_back(*ch.input);
   }
@@ -51,7 +53,8 @@ std::vector<std::uint32_t> tpdo_ids(const IoNodeConfig& n) {
 }  // namespace
 
 CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
-    : Device(std::move(name), task, contract_of(checked(config, task))), config_(checked(std::move(config), task)) {
+    : Device(std::move(name), task, contract_of(checked(config, task))),
+      config_(checked(std::move(config), task)) {
   check(config_.node);
   const std::uint8_t nodes[] = {config_.node.node};
   const auto tpdos = tpdo_ids(config_.node);
@@ -125,7 +128,9 @@ Outcome CanopenIo::check_node() noexcept {
     rebooted_ = true;
   }
   if (rebooted_) {
-    if (says) saw::log(LogLevel::error, name().c_str(), "node {} rebooted (boot-up seen): its configuration is gone", node);
+    if (says)
+      saw::log(LogLevel::error, name().c_str(), "node {} rebooted (boot-up seen): its configuration is gone",
+               node);
     return failure("node rebooted", FaultCode::device_lost);
   }
   if (h.emcy_count != emcy_seen_) {

@@ -66,12 +66,14 @@ void check(const IoNodeConfig& c) {
     if (find(c.pdos, PdoKind::rpdo, e.address).pdo < 0)
       fail("no RPDO maps its output " + to_string(e.address));
   for (const PdoEntry& e : c.inputs)
-    if (find(c.pdos, PdoKind::tpdo, e.address).pdo < 0) fail("no TPDO maps its input " + to_string(e.address));
+    if (find(c.pdos, PdoKind::tpdo, e.address).pdo < 0)
+      fail("no TPDO maps its input " + to_string(e.address));
 }
 
 NodeSetup setup_of(const IoNodeConfig& c) {
   check(c);
-  NodeSetup s{c.name, c.node, c.identity, node_writes(c.pdos, c.heartbeat_period, c.master_node, c.master_timeout)};
+  NodeSetup s{c.name, c.node, c.identity,
+              node_writes(c.pdos, c.heartbeat_period, c.master_node, c.master_timeout)};
   for (const SdoWrite& w : c.writes) s.writes.push_back({w, false});
   return s;
 }
@@ -108,7 +110,8 @@ IoNode::IoNode(can::Bus& bus, IoNodeConfig config) : impl_(std::make_unique<Impl
     else
       m.tpdos.emplace_back(p);
   }
-  for (const PdoEntry& e : m.config.outputs) m.outputs.push_back(find(m.config.pdos, PdoKind::rpdo, e.address));
+  for (const PdoEntry& e : m.config.outputs)
+    m.outputs.push_back(find(m.config.pdos, PdoKind::rpdo, e.address));
   for (const PdoEntry& e : m.config.inputs) m.inputs.push_back(find(m.config.pdos, PdoKind::tpdo, e.address));
   m.heartbeats.watch(m.config.node, m.config.heartbeat_timeout);
   m.outbox.resize(m.rpdos.size() + 2);

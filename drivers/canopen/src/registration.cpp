@@ -6,12 +6,12 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "registration_params.hpp"
 #include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/canopen_arm.hpp"
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
-#include "registration_params.hpp"
 
 namespace saw::canopen {
 namespace {
@@ -137,8 +137,9 @@ std::string parse_bus(const Params& p) {
   const std::string bus = p.get<std::string>("bus");
   if (is_bus_uri(bus)) return bus;
   if (bus.empty() || bus.find(':') != std::string::npos)
-    p.fail_at("bus", "'" + bus + "' is not a bus: virtual:<name>, socketcan:<interface>, or the name of a "
-              "canopen_bus component");
+    p.fail_at("bus", "'" + bus +
+                         "' is not a bus: virtual:<name>, socketcan:<interface>, or the name of a "
+                         "canopen_bus component");
   return bus;
 }
 
@@ -211,7 +212,8 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
   c.heartbeat_timeout = duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.heartbeat_period), 1ms, 600s);
   if (c.heartbeat_timeout <= c.heartbeat_period) hb.fail_at("timeout", "must be above the heartbeat period");
   if (!is_bus_uri(c.bus) && p.has("master_heartbeat"))
-    p.fail_at("master_heartbeat", "the master's heartbeat is the bus's: set it on canopen_bus '" + c.bus + "'");
+    p.fail_at("master_heartbeat",
+              "the master's heartbeat is the bus's: set it on canopen_bus '" + c.bus + "'");
   const Params master = p.child("master_heartbeat");
   c.master_node = static_cast<std::uint8_t>(master.get_in_range("node", 1, 127, 127));
   c.master_heartbeat_period = duration(master, "period", 100ms, 1ms, 65535ms);

@@ -66,12 +66,15 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   c.node.node = static_cast<std::uint8_t>(node);
   const Params hb = p.child("heartbeat");
   c.node.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
-  c.node.heartbeat_timeout = duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.node.heartbeat_period), 1ms, 600s);
-  if (c.node.heartbeat_timeout <= c.node.heartbeat_period) hb.fail_at("timeout", "must be above the heartbeat period");
+  c.node.heartbeat_timeout =
+      duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.node.heartbeat_period), 1ms, 600s);
+  if (c.node.heartbeat_timeout <= c.node.heartbeat_period)
+    hb.fail_at("timeout", "must be above the heartbeat period");
   if (is_bus_uri(c.bus))
     parse_master(p, c.master_node, c.master_heartbeat_period, c.master_heartbeat_timeout);
   else if (p.has("master_heartbeat"))
-    p.fail_at("master_heartbeat", "the master's heartbeat is the bus's: set it on canopen_bus '" + c.bus + "'");
+    p.fail_at("master_heartbeat",
+              "the master's heartbeat is the bus's: set it on canopen_bus '" + c.bus + "'");
   const auto names = p.get<std::vector<std::string>>("channels");
   if (names.empty() || names.size() > JointState::max_joints) p.fail_at("channels", "1 to 8 channels");
   const Params joints = p.child("joints");
@@ -83,7 +86,8 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
     ch.name = name;
     if (name.size() > JointState::max_name) j.fail("a channel's name has at most 31 characters");
     ch.output = entry(j, "output");
-    if (!ch.output) j.fail_at("output", "required parameter is missing (the RPDO-mapped object, 0x6411:01:i16)");
+    if (!ch.output)
+      j.fail_at("output", "required parameter is missing (the RPDO-mapped object, 0x6411:01:i16)");
     ch.input = entry(j, "input");
     ch.scale = j.get_in_range("scale", -1e9, 1e9, 1);
     if (ch.scale == 0) j.fail_at("scale", "must not be 0");
@@ -146,27 +150,31 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
 
 std::string bus_line(const CanopenBusStatus& s) {
   char b[320];
-  std::snprintf(b, sizeof b,
-                "bus %s, %u components, master node %u: %llu SYNC, %llu heartbeats, %llu frames received, %llu "
-                "sent (%llu refused), %llu for no component, %llu dropped (a component's queue full)",
-                std::string(can::to_string(static_cast<can::BusState>(s.bus_state))).c_str(), s.clients, s.node,
-                static_cast<unsigned long long>(s.syncs), static_cast<unsigned long long>(s.heartbeats),
-                static_cast<unsigned long long>(s.frames_received), static_cast<unsigned long long>(s.frames_sent),
-                static_cast<unsigned long long>(s.send_refused), static_cast<unsigned long long>(s.foreign_frames),
-                static_cast<unsigned long long>(s.dropped));
+  std::snprintf(
+      b, sizeof b,
+      "bus %s, %u components, master node %u: %llu SYNC, %llu heartbeats, %llu frames received, %llu "
+      "sent (%llu refused), %llu for no component, %llu dropped (a component's queue full)",
+      std::string(can::to_string(static_cast<can::BusState>(s.bus_state))).c_str(), s.clients, s.node,
+      static_cast<unsigned long long>(s.syncs), static_cast<unsigned long long>(s.heartbeats),
+      static_cast<unsigned long long>(s.frames_received), static_cast<unsigned long long>(s.frames_sent),
+      static_cast<unsigned long long>(s.send_refused), static_cast<unsigned long long>(s.foreign_frames),
+      static_cast<unsigned long long>(s.dropped));
   return b;
 }
 
 }  // namespace
 
 void register_bus_components(deploy::ComponentRegistry& registry) {
-  registry.add(
-      "canopen_bus",
-      "the bus task of one CAN bus that CANopen components share (SYNC, the master's heartbeat; `bus: <its name>`)",
-      parse_bus_task,
-      [](const std::string& name, const BusSpec& s) { return std::make_unique<CanopenBus>(name, s.task, s.config); });
-  registry.add("canopen_io", "a generic CANopen I/O node (its PDO-mapped objects) as CRTK joints (servo_jp)", parse_io,
-               [](const std::string& name, const IoSpec& s) { return std::make_unique<CanopenIo>(name, s.task, s.config); });
+  registry.add("canopen_bus",
+               "the bus task of one CAN bus that CANopen components share (SYNC, the master's heartbeat; "
+               "`bus: <its name>`)",
+               parse_bus_task, [](const std::string& name, const BusSpec& s) {
+                 return std::make_unique<CanopenBus>(name, s.task, s.config);
+               });
+  registry.add("canopen_io", "a generic CANopen I/O node (its PDO-mapped objects) as CRTK joints (servo_jp)",
+               parse_io, [](const std::string& name, const IoSpec& s) {
+                 return std::make_unique<CanopenIo>(name, s.task, s.config);
+               });
   registry.add_summary_format<CanopenBusStatus>(bus_line);
 }
 

@@ -44,7 +44,8 @@ std::vector<StartupWrite> node_writes(std::span<const PdoMapping> pdos, TimeNs h
   out.push_back({{{0x1017, 0}, DataType::unsigned16, heartbeat_ms}, false});
   if (master_timeout > 0) {
     const auto consumer_ms = static_cast<std::uint32_t>(master_timeout / 1'000'000);
-    out.push_back({{{0x1016, 1}, DataType::unsigned32, std::uint32_t{master_node} << 16 | consumer_ms}, false});
+    out.push_back(
+        {{{0x1016, 1}, DataType::unsigned32, std::uint32_t{master_node} << 16 | consumer_ms}, false});
   }
   return out;
 }
@@ -82,7 +83,9 @@ Number startup_value(const SdoWrite& w) noexcept {
 
 struct StartupSequence::Node {
   Node(NodeSetup a, TimeNs sdo_timeout)
-      : axis(std::move(a)), sdo(SdoClientConfig{SdoChannel::of_node(axis.node), sdo_timeout, 64}), writes(axis.writes) {}
+      : axis(std::move(a)),
+        sdo(SdoClientConfig{SdoChannel::of_node(axis.node), sdo_timeout, 64}),
+        writes(axis.writes) {}
   NodeSetup axis;
   SdoClient sdo;
   std::vector<StartupWrite> writes;

@@ -1,4 +1,5 @@
-// The task of one CAN bus that several components share: the bus's only reader and writer, SYNC, the master's heartbeat.
+// The task of one CAN bus that several components share: the bus's only reader and writer, SYNC, the master's
+// heartbeat.
 #pragma once
 
 #include <array>
@@ -10,8 +11,8 @@
 #include <vector>
 
 #include "saw/can/bus.hpp"
-#include "saw/canopen/sync.hpp"
 #include "saw/canopen/heartbeat.hpp"
+#include "saw/canopen/sync.hpp"
 #include "saw/clock.hpp"
 
 namespace saw::canopen {
@@ -32,7 +33,7 @@ struct BusTaskCounters {
   std::uint64_t cycles = 0;
   std::uint64_t frames_received = 0;
   std::uint64_t frames_sent = 0;
-  std::uint64_t send_refused = 0;    // frames the bus did not take (full, down)
+  std::uint64_t send_refused = 0;  // frames the bus did not take (full, down)
   std::uint64_t syncs = 0;
   std::uint64_t heartbeats = 0;      // the master's own
   std::uint64_t foreign_frames = 0;  // frames for no client (another master's, unknown nodes)

@@ -1,4 +1,5 @@
-// CanopenBus: the bus task of one CAN bus as a periodic RT component that other CANopen components name as their `bus`.
+// CanopenBus: the bus task of one CAN bus as a periodic RT component that other CANopen components name as
+// their `bus`.
 #pragma once
 
 #include <cstdint>
@@ -19,12 +20,11 @@ struct CanopenBusStatus {
   std::uint8_t node = 0;  // the master's heartbeat node-ID
   std::uint64_t syncs = 0, heartbeats = 0;
   std::uint64_t frames_received = 0, frames_sent = 0, send_refused = 0, foreign_frames = 0, dropped = 0;
-  static constexpr auto fields =
-      std::tuple{&CanopenBusStatus::bus_state,       &CanopenBusStatus::clients,     &CanopenBusStatus::node,
-                 &CanopenBusStatus::syncs,           &CanopenBusStatus::heartbeats,
-                 &CanopenBusStatus::frames_received, &CanopenBusStatus::frames_sent,
-                 &CanopenBusStatus::send_refused,    &CanopenBusStatus::foreign_frames,
-                 &CanopenBusStatus::dropped};
+  static constexpr auto fields = std::tuple{
+      &CanopenBusStatus::bus_state,   &CanopenBusStatus::clients,      &CanopenBusStatus::node,
+      &CanopenBusStatus::syncs,       &CanopenBusStatus::heartbeats,   &CanopenBusStatus::frames_received,
+      &CanopenBusStatus::frames_sent, &CanopenBusStatus::send_refused, &CanopenBusStatus::foreign_frames,
+      &CanopenBusStatus::dropped};
 };
 
 struct CanopenBusConfig {
@@ -44,7 +44,7 @@ class CanopenBus : public Task {
   BusTask& bus_task() noexcept { return *task_; }
   const CanopenBusStatus& status() const noexcept { return status_; }
 
- void run() override;  // the cycle: BusTask::cycle()
+  void run() override;  // the cycle: BusTask::cycle()
 
  private:
   BusClaim claim_;

@@ -1,4 +1,5 @@
-// CanopenIo: a generic CANopen I/O node (a gripper's controller, analog/digital I/O) as a CRTK device, a client of a bus.
+// CanopenIo: a generic CANopen I/O node (a gripper's controller, analog/digital I/O) as a CRTK device, a
+// client of a bus.
 #pragma once
 
 #include <array>
@@ -28,7 +29,7 @@ struct IoChannel {
 struct CanopenIoConfig {
   std::string bus;  // the name of a canopen_bus component, or a URI (then it runs a bus task of its own)
   std::string interface_name = "io";
-  IoNodeConfig node;  // master_node and master_timeout: the bus task's
+  IoNodeConfig node;                // master_node and master_timeout: the bus task's
   std::vector<IoChannel> channels;  // 1..8
   TimeNs command_timeout = 0;       // 0: 3 periods; no servo_jp for this long: hold
   TimeNs feedback_timeout = 0;      // no TPDO for this long faults; 0: 10 periods (at least 10 ms)
@@ -54,6 +55,7 @@ class CanopenIo : public Device {
   ~CanopenIo() override;
   IoNode& node() noexcept { return *io_; }
   BusPort& port() noexcept { return *link_.port; }
+  const JointState& measured_js() const noexcept { return measured().js; }
 
  protected:
   void open() override;

@@ -1,4 +1,5 @@
-// A generic CANopen I/O node as the master runs it: values out through its RPDOs, values in from its TPDOs, its health.
+// A generic CANopen I/O node as the master runs it: values out through its RPDOs, values in from its TPDOs,
+// its health.
 #pragma once
 
 #include <cstdint>
@@ -20,9 +21,9 @@ namespace saw::canopen {
 struct IoNodeConfig {
   std::string name;  // what faults and logs call it
   std::uint8_t node = 1;
-  std::vector<PdoMapping> pdos;       // what the start-up configures (disabled ones: not valid)
-  std::vector<PdoEntry> outputs;      // each mapped by an enabled RPDO: set_output() packs it
-  std::vector<PdoEntry> inputs;       // each mapped by an enabled TPDO: input() reads it
+  std::vector<PdoMapping> pdos;            // what the start-up configures (disabled ones: not valid)
+  std::vector<PdoEntry> outputs;           // each mapped by an enabled RPDO: set_output() packs it
+  std::vector<PdoEntry> inputs;            // each mapped by an enabled TPDO: input() reads it
   TimeNs heartbeat_period = 100'000'000;   // 0x1017
   TimeNs heartbeat_timeout = 300'000'000;  // lost after this long without one
   std::uint8_t master_node = 127;          // 0x1016:01: the master it watches ...
@@ -55,9 +56,9 @@ class IoNode {
   Codec set_output(std::size_t i, double value) noexcept;
   // Input i from the last TPDO that carried it; false before one came.
   bool input(std::size_t i, double& value) const noexcept;
-  bool valid() const noexcept;              // every enabled TPDO arrived at least once
-  bool fresh() const noexcept;              // a TPDO arrived in the last receive()
-  TimeNs last_received() const noexcept;    // when (the cycle's time)
+  bool valid() const noexcept;                // every enabled TPDO arrived at least once
+  bool fresh() const noexcept;                // a TPDO arrived in the last receive()
+  TimeNs last_received() const noexcept;      // when (the cycle's time)
   const AxisHealth& health() const noexcept;  // heartbeat, NMT state, EMCY, boot-ups, bad PDOs
   std::uint64_t foreign_frames() const noexcept;
   void transmit(TimeNs now) noexcept;
