@@ -1,5 +1,6 @@
 // A shared bus's cycle (the bus task routing frames to its clients, an arm of two CiA 402 drives and
-// a gripper's I/O node each on its port, faults of each and their recovery) allocates, locks, waits
+// a gripper's I/O node each on its port, faults of each and their recovery, the I/O node rebooted
+// and configured again from the cycle) allocates, locks, waits
 // and prints nothing: checked by the RT guard on every cycle, the in-process nodes included.
 #include <gtest/gtest.h>
 
@@ -43,6 +44,8 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
         (void)rig.io_node->port.send(std::span(&f, 1));
       }
       if (i == 1600) client.command(StateCommand::enable);
+      if (i == 2000) rig.io_node->reboot();  // configured again by the next enable, from the cycle
+      if (i == 2100) client.command(StateCommand::enable);
       rig.cycle({arm.get(), gripper.get()});
       const OperatingStateValue g = gripper->operating_state().state;
       gripper_faults += g == OperatingStateValue::fault && previous != OperatingStateValue::fault;
@@ -52,7 +55,8 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
     }
   }
   const auto counts = window.counts();
-  EXPECT_EQ(gripper_faults, 2) << "the silent node, then its EMCY";
+  EXPECT_EQ(gripper_faults, 3) << "the silent node, its EMCY, its reboot";
+  EXPECT_TRUE(rig.io_node->configured) << "configured again after its reboot";
   EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);
   EXPECT_EQ(arm->operating_state().state, OperatingStateValue::fault) << "its drive's fault, not re-enabled";
   EXPECT_EQ(arm->fault_reason(), FaultReason::emcy);

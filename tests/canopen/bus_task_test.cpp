@@ -157,6 +157,24 @@ TEST(CanopenBusTask, AnArmAndAGripperIoNodeShareTheBusAndFaultAlone) {
   EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::fault);
   EXPECT_EQ(arm->operating_state().state, OperatingStateValue::enabled);
   EXPECT_EQ(rig.io_node->output, 2000) << "its safe output at the fault";
+  // The node reboots: the gripper faults (node rebooted); the next enable configures it again
+  // from the cycle (SDO, NMT start) and it runs again, the arm enabled throughout.
+  rig.io_node->silent = false;
+  rig.cycle({arm.get(), gripper.get()}, 20);  // its heartbeat back first: an enable before faults again
+  client.command(StateCommand::enable);
+  rig.cycle({arm.get(), gripper.get()}, 30);
+  ASSERT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);
+  rig.io_node->reboot();
+  rig.cycle({arm.get(), gripper.get()}, 5);
+  EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::fault);
+  EXPECT_EQ(gripper->device_status().reason_text(), "node rebooted");
+  EXPECT_FALSE(rig.io_node->configured);
+  client.command(StateCommand::enable);
+  rig.cycle({arm.get(), gripper.get()}, 100);
+  EXPECT_TRUE(rig.io_node->configured);
+  EXPECT_EQ(rig.io_node->state, 0x05);
+  EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);
+  EXPECT_EQ(arm->operating_state().state, OperatingStateValue::enabled);
   // At exit: the safe output, a SYNC and NMT pre-operational for the node.
   rig.keep = false;
   (void)drain(rig.spy);

@@ -83,6 +83,7 @@ struct FakeIoNode {
           break;
       }
     } else if (id == 0x600u + node && f.len == 8 && (f.data[0] >> 5) == 1) {
+      configured = true;
       send(0x580u + node, {0x60, f.data[1], f.data[2], f.data[3], 0, 0, 0, 0});
     } else if (id == 0x200u + node && f.len == 2 && state == 0x05) {
       output = static_cast<std::int16_t>(f.data[0] | f.data[1] << 8);
@@ -92,8 +93,15 @@ struct FakeIoNode {
            {static_cast<std::uint8_t>(input & 0xFF), static_cast<std::uint8_t>((input >> 8) & 0xFF)});
     }
   }
+  // A power cycle: what the master configured is gone; a boot-up, then pre-operational.
+  void reboot() noexcept {
+    state = 0x7F;
+    configured = false;
+    send(0x700u + node, {0x00});
+  }
   RingPort& port;
   std::uint8_t node;
+  bool configured = false;  // an SDO download came since the last reboot
   std::uint8_t state = 0x7F;
   std::int16_t output = 0, input = 0;
   bool silent = false;

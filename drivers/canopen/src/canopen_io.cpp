@@ -1,6 +1,7 @@
 // CanopenIo: the start-up, the cycle and the safe state of a generic I/O node (RT code in the cycle).
 #include "saw/canopen/canopen_io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -128,6 +129,7 @@ Outcome CanopenIo::check_node() noexcept {
     rebooted_ = true;
   }
   if (rebooted_) {
+    if (enabling()) return Outcome::done();  // the enable configures it again
     if (says)
       saw::log(LogLevel::error, name().c_str(), "node {} rebooted (boot-up seen): its configuration is gone",
                node);
@@ -146,13 +148,38 @@ Outcome CanopenIo::check_node() noexcept {
                to_string(h.nmt_state).data());
     return failure("left NMT operational", FaultCode::device_lost, static_cast<std::uint32_t>(h.nmt_state));
   }
-  const TimeNs age = now() - (io_->valid() ? io_->last_received() : start_time_);
+  const TimeNs age = now() - (io_->valid() ? io_->last_received() : std::max(start_time_, watch_from_));
   if (age > config_.feedback_timeout) return failure("feedback stale", FaultCode::input_stale, 0, age);
   return Outcome::done();
 }
 
+// A node that rebooted lost its PDO maps and heartbeats: the enable runs its configuration again
+// (the start-up's writes, NMT start) before waiting for its TPDOs.
 Outcome CanopenIo::enable() {
-  if (rebooted_) return failure("node rebooted", FaultCode::device_lost);  // restart the component
+  if (rebooted_) {
+    if (!reconfiguring_) {
+      io_->reconfigure(now());
+      reconfiguring_ = true;
+    }
+    const Reconfiguration& r = io_->reconfiguration();
+    switch (r.state) {
+      case Reconfiguration::State::idle:
+      case Reconfiguration::State::busy:
+        return Outcome::pending();
+      case Reconfiguration::State::done:
+        rebooted_ = reconfiguring_ = false;
+        watch_from_ = now();  // its TPDOs come from the next SYNC on
+        saw::log(LogLevel::info, name().c_str(), "node {} configured again after its reboot",
+                 unsigned{config_.node.node});
+        break;
+      case Reconfiguration::State::failed:
+        reconfiguring_ = false;  // the next enable tries again
+        saw::log(LogLevel::error, name().c_str(), "node {}: configuring it again failed at {:x}:{}: {}",
+                 unsigned{config_.node.node}, unsigned{r.object.index}, unsigned{r.object.subindex},
+                 r.object.index == 0 ? "no operational heartbeat" : to_string(r.abort).data());
+        return failure("node rebooted", FaultCode::device_lost, static_cast<std::uint32_t>(r.abort));
+    }
+  }
   return io_->valid() ? Outcome::done() : Outcome::pending();
 }
 

@@ -8,6 +8,7 @@
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/heartbeat.hpp"
 #include "saw/canopen/nmt.hpp"
+#include "saw/canopen/sdo_client.hpp"
 #include "saw/canopen/sync.hpp"
 #include "saw/log.hpp"
 
@@ -78,8 +79,19 @@ NodeSetup setup_of(const IoNodeConfig& c) {
   return s;
 }
 
+// One start-up write, encoded at construction: the cycle only sends it.
+struct Encoded {
+  ObjectAddress address;
+  std::array<std::uint8_t, 8> bytes{};
+  std::size_t size = 0;
+  bool optional = false;
+};
+
 struct IoNode::Impl {
-  Impl(can::Bus& b, IoNodeConfig c) : bus(b), config(std::move(c)) {}
+  Impl(can::Bus& b, IoNodeConfig c)
+      : bus(b),
+        config(std::move(c)),
+        sdo(SdoClientConfig{SdoChannel::of_node(config.node), 500'000'000, 64}) {}
   can::Bus& bus;
   IoNodeConfig config;
   std::vector<PdoPacker> rpdos;
@@ -94,6 +106,15 @@ struct IoNode::Impl {
   std::uint64_t foreign = 0;
   std::array<can::Received, 32> inbox{};
   std::vector<can::Frame> outbox;
+  // Re-configuration (a node that rebooted).
+  SdoClient sdo;
+  std::vector<Encoded> writes;
+  Reconfiguration reconfig;
+  std::size_t next = 0;
+  bool started = false, starting = false;
+  TimeNs since = 0;
+
+  void step_reconfiguration(std::size_t& n, TimeNs now) noexcept;
 
   void on_frame(const can::Frame& f, TimeNs now) noexcept;
   void heartbeat_events(TimeNs now) noexcept;
@@ -114,7 +135,19 @@ IoNode::IoNode(can::Bus& bus, IoNodeConfig config) : impl_(std::make_unique<Impl
     m.outputs.push_back(find(m.config.pdos, PdoKind::rpdo, e.address));
   for (const PdoEntry& e : m.config.inputs) m.inputs.push_back(find(m.config.pdos, PdoKind::tpdo, e.address));
   m.heartbeats.watch(m.config.node, m.config.heartbeat_timeout);
-  m.outbox.resize(m.rpdos.size() + 2);
+  for (const StartupWrite& w : setup_of(m.config).writes) {
+    Encoded e;
+    e.address = w.write.address;
+    e.size = size_of(w.write.type);
+    e.optional = w.optional;
+    if (e.size > e.bytes.size() ||
+        encode(w.write.type, startup_value(w.write), std::span(e.bytes.data(), e.size)) != Codec::ok)
+      throw std::invalid_argument("I/O node '" + m.config.name + "': value " + std::to_string(w.write.value) +
+                                  " does not fit " + to_string(w.write.address));
+    m.writes.push_back(e);
+  }
+  // The RPDOs, then room for an SDO request and NMT start (or a SYNC and NMT at the end).
+  m.outbox.resize(m.rpdos.size() + 4);
 }
 
 IoNode::~IoNode() = default;
@@ -160,7 +193,8 @@ void IoNode::Impl::on_frame(const can::Frame& f, TimeNs now) noexcept {
     last_received = now;
     return;
   }
-  ++foreign;  // its SDO responses too: the node's SDO is the start-up's
+  if (id == cob::sdo_tx + node) return sdo.on_frame(f, now);
+  ++foreign;
 }
 
 void IoNode::Impl::heartbeat_events(TimeNs now) noexcept {
@@ -238,11 +272,59 @@ bool IoNode::input(std::size_t i, double& value) const noexcept {
   return true;
 }
 
-void IoNode::transmit(TimeNs) noexcept {
+void IoNode::transmit(TimeNs now) noexcept {
   Impl& m = *impl_;
   std::size_t n = 0;
   for (const PdoPacker& p : m.rpdos) m.outbox[n++] = p.frame();
+  m.step_reconfiguration(n, now);
   m.send(n);
+}
+
+void IoNode::reconfigure(TimeNs now) noexcept {
+  Impl& m = *impl_;
+  m.reconfig = {};
+  m.reconfig.state = Reconfiguration::State::busy;
+  m.next = 0;
+  m.started = m.starting = false;
+  m.since = now;
+  m.tpdo_seen = 0;  // its TPDOs, once it sends them again, decide
+}
+
+const Reconfiguration& IoNode::reconfiguration() const noexcept { return impl_->reconfig; }
+
+void IoNode::Impl::step_reconfiguration(std::size_t& n, TimeNs now) noexcept {
+  if (reconfig.state != Reconfiguration::State::busy) return;
+  if (starting) {
+    if (health.nmt_state == NmtState::operational)
+      reconfig.state = Reconfiguration::State::done;
+    else if (now - since > 2'000'000'000)
+      reconfig.state = Reconfiguration::State::failed;  // no operational heartbeat within 2 s
+    return;
+  }
+  if (started && !sdo.busy()) {
+    const Encoded& w = writes[next];
+    const SdoResult& r = sdo.result();
+    const bool missing = r.abort == SdoAbort::no_object || r.abort == SdoAbort::no_subindex;
+    if (r.status != SdoStatus::done && !(w.optional && missing)) {
+      reconfig.state = Reconfiguration::State::failed;
+      reconfig.object = w.address;
+      reconfig.abort = r.abort;
+      return;
+    }
+    ++next;
+    started = false;
+  }
+  if (!started && next < writes.size()) {
+    const Encoded& w = writes[next];
+    started = sdo.download(w.address, std::span(w.bytes.data(), w.size), now);
+  }
+  while (const auto f = sdo.poll(now))
+    if (n < outbox.size()) outbox[n++] = *f;
+  if (!started && next >= writes.size() && n < outbox.size()) {
+    outbox[n++] = nmt_frame(NmtCommand::start, config.node);
+    starting = true;
+    since = now;
+  }
 }
 
 void IoNode::shut_down(TimeNs) noexcept {

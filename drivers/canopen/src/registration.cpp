@@ -295,13 +295,21 @@ std::string hex(std::uint16_t v) {
 std::string summary_line(const CanopenStatus& s) {
   char b[512];
   std::string out;
-  std::snprintf(
-      b, sizeof b, "%s, bus %s: %llu SYNC, %llu frames received, %llu sent (%llu refused), %llu for others",
-      std::string(to_string(s.state)).c_str(),
-      std::string(can::to_string(static_cast<can::BusState>(s.bus_state))).c_str(),
-      static_cast<unsigned long long>(s.syncs), static_cast<unsigned long long>(s.frames_received),
-      static_cast<unsigned long long>(s.frames_sent), static_cast<unsigned long long>(s.send_refused),
-      static_cast<unsigned long long>(s.foreign_frames));
+  const std::string state(to_string(s.state)), bus(can::to_string(static_cast<can::BusState>(s.bus_state)));
+  if (s.shared_bus != 0)  // SYNC and the master's heartbeat are its bus task's (its own summary line)
+    std::snprintf(
+        b, sizeof b,
+        "%s, bus %s (a client of its bus task): %llu frames received, %llu sent (%llu refused), %llu "
+        "for others",
+        state.c_str(), bus.c_str(), static_cast<unsigned long long>(s.frames_received),
+        static_cast<unsigned long long>(s.frames_sent), static_cast<unsigned long long>(s.send_refused),
+        static_cast<unsigned long long>(s.foreign_frames));
+  else
+    std::snprintf(
+        b, sizeof b, "%s, bus %s: %llu SYNC, %llu frames received, %llu sent (%llu refused), %llu for others",
+        state.c_str(), bus.c_str(), static_cast<unsigned long long>(s.syncs),
+        static_cast<unsigned long long>(s.frames_received), static_cast<unsigned long long>(s.frames_sent),
+        static_cast<unsigned long long>(s.send_refused), static_cast<unsigned long long>(s.foreign_frames));
   out += b;
   if (s.faults != 0) {
     const FaultReason reason = s.fault.code == FaultCode::none ? FaultReason::none : s.reason;

@@ -76,9 +76,11 @@ class CanopenIo : public Device {
   std::unique_ptr<IoNode> io_;
   std::array<double, JointState::max_joints> target_{};
   TimeNs start_time_ = -1;
+  TimeNs watch_from_ = 0;  // not valid: stale counts from here (a re-configuration's end), or the start
   std::uint64_t emcy_seen_ = 0;
   std::uint32_t boot_ups_seen_ = 0;
   bool rebooted_ = false;
+  bool reconfiguring_ = false;  // this enable re-runs its configuration
 };
 
 }  // namespace saw::canopen

@@ -10,6 +10,7 @@
 
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
+#include "saw/canopen/bus_master.hpp"
 #include "saw/canopen/pdo.hpp"
 #include "saw/canopen/startup.hpp"
 #include "saw/clock.hpp"
@@ -62,6 +63,11 @@ class IoNode {
   const AxisHealth& health() const noexcept;  // heartbeat, NMT state, EMCY, boot-ups, bad PDOs
   std::uint64_t foreign_frames() const noexcept;
   void transmit(TimeNs now) noexcept;
+  // Starts running the node's configuration again (a node that rebooted: its PDOs, heartbeat and
+  // consumer are gone): the start-up's SDO writes, NMT start, an operational heartbeat, stepped by
+  // transmit(); its inputs count as not received until its TPDOs come again.
+  void reconfigure(TimeNs now) noexcept;
+  const Reconfiguration& reconfiguration() const noexcept;
   // The last frames of a master that stops: the RPDOs with the outputs as set (the caller set
   // the safe ones), one SYNC so that the node takes them at once, NMT enter pre-operational.
   void shut_down(TimeNs now) noexcept;
