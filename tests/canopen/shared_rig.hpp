@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -145,8 +146,10 @@ struct SharedRig {
     }
   }
   ~SharedRig() { withdraw_bus_task(name); }
-  std::unique_ptr<CanopenArm> make(const std::string& who, std::vector<std::uint8_t> nodes) {
+  std::unique_ptr<CanopenArm> make(const std::string& who, std::vector<std::uint8_t> nodes,
+                                   const std::function<void(CanopenArmConfig&)>& edit = {}) {
     CanopenArmConfig c = client(name, std::move(nodes));
+    if (edit) edit(c);
     c.startup_pause = [this] {
       drives.step(now);
       now += ms;
