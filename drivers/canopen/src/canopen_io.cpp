@@ -76,6 +76,9 @@ CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
   config_.node.name = this->name();
   io_ = std::make_unique<IoNode>(*link_.bus, config_.node);
   set_safe_outputs();
+  status_.node = config_.node.node;
+  provide("canopen").add_command_read("status",
+                                      state_table().add_column("status", &status_, ColumnUse::summary));
 }
 
 CanopenIo::~CanopenIo() = default;
@@ -168,6 +171,7 @@ Outcome CanopenIo::enable() {
         return Outcome::pending();
       case Reconfiguration::State::done:
         rebooted_ = reconfiguring_ = false;
+        ++status_.reconfigurations;
         watch_from_ = now();  // its TPDOs come from the next SYNC on
         saw::log(LogLevel::info, name().c_str(), "node {} configured again after its reboot",
                  unsigned{config_.node.node});
@@ -193,6 +197,16 @@ Outcome CanopenIo::write(const Setpoint& s) {
     }
   }  // following without a fresh command: the last outputs stay
   io_->transmit(now());
+  const AxisHealth& h = io_->health();
+  status_.state = operating_state().state;
+  status_.nmt_state = static_cast<std::uint8_t>(h.nmt_state);
+  status_.bus_state = static_cast<std::uint8_t>(link_.port->state());
+  status_.emcy = h.emcy_count;
+  status_.last_emcy = h.last_emcy;
+  status_.error_register = h.error_register;
+  status_.heartbeat_losses = h.heartbeat_losses;
+  status_.boot_ups = h.boot_ups;
+  status_.bad_pdos = h.bad_pdos;
   return Outcome::done();
 }
 

@@ -6,6 +6,7 @@
 #include "saw/canopen/canopen_bus.hpp"
 #include "saw/canopen/canopen_io.hpp"
 #include "saw/canopen/cob.hpp"
+#include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
 
 namespace saw::canopen {
@@ -162,6 +163,26 @@ std::string bus_line(const CanopenBusStatus& s) {
   return b;
 }
 
+std::string io_line(const CanopenIoStatus& s) {
+  char b[320];
+  std::snprintf(b, sizeof b,
+                "%s, node %u %s, bus %s: %llu EMCY, %u heartbeat losses, %u boot-ups (%llu configured "
+                "again), %llu bad PDOs",
+                std::string(to_string(s.state)).c_str(), s.node,
+                std::string(to_string(static_cast<NmtState>(s.nmt_state))).c_str(),
+                std::string(can::to_string(static_cast<can::BusState>(s.bus_state))).c_str(),
+                static_cast<unsigned long long>(s.emcy), s.heartbeat_losses, s.boot_ups,
+                static_cast<unsigned long long>(s.reconfigurations),
+                static_cast<unsigned long long>(s.bad_pdos));
+  std::string out = b;
+  if (s.emcy != 0) {
+    std::snprintf(b, sizeof b, "; the last EMCY 0x%04X (%s), error register 0x%02X", s.last_emcy,
+                  std::string(emcy_name(s.last_emcy)).c_str(), s.error_register);
+    out += b;
+  }
+  return out;
+}
+
 }  // namespace
 
 void register_bus_components(deploy::ComponentRegistry& registry) {
@@ -176,6 +197,7 @@ void register_bus_components(deploy::ComponentRegistry& registry) {
                  return std::make_unique<CanopenIo>(name, s.task, s.config);
                });
   registry.add_summary_format<CanopenBusStatus>(bus_line);
+  registry.add_summary_format<CanopenIoStatus>(io_line);
 }
 
 }  // namespace saw::canopen

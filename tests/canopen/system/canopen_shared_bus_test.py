@@ -150,6 +150,8 @@ def run():
     check("slave: FAULT" not in err and "faults; the last" not in out.split("slave:", 1)[1].split("\n", 1)[0],
           f"the arm faulted\n{text}")
     check(re.search(r"can0: bus error-active, 2 components", out) is not None, f"no bus task summary\n{text}")
+    check(re.search(r"gripper: FAULT, node 10 operational.*1 EMCY.*the last EMCY 0x5000 \(device hardware\)", out)
+          is not None, f"the gripper's summary does not show its node's EMCY\n{text}")
     # The arm went on after the gripper's fault: SYNCs and its RPDOs over the next second.
     after = [f for f in frames if f[0] > emcy_at + 0.1]
     syncs_after = sum(1 for f in after if f[1] == 0x080)

@@ -26,6 +26,32 @@ struct IoChannel {
   double safe = 0;               // SI: sent while not enabled, at a fault and at exit
 };
 
+// An I/O component's node as the last cycle saw it: a summary column (printed when a run ends).
+struct CanopenIoStatus {
+  static constexpr std::string_view type_name = "saw::canopen::CanopenIoStatus";
+  static constexpr std::uint32_t layout_version = 1;
+  OperatingStateValue state = OperatingStateValue::disabled;
+  std::uint8_t node = 0;
+  std::uint8_t nmt_state = 0;  // NmtState, from its heartbeat
+  std::uint8_t bus_state = 0;  // can::BusState
+  std::uint64_t emcy = 0;      // EMCYs with an error code
+  std::uint16_t last_emcy = 0;
+  std::uint8_t error_register = 0;
+  std::uint32_t heartbeat_losses = 0, boot_ups = 0;
+  std::uint64_t bad_pdos = 0, reconfigurations = 0;
+  static constexpr auto fields = std::tuple{&CanopenIoStatus::state,
+                                            &CanopenIoStatus::node,
+                                            &CanopenIoStatus::nmt_state,
+                                            &CanopenIoStatus::bus_state,
+                                            &CanopenIoStatus::emcy,
+                                            &CanopenIoStatus::last_emcy,
+                                            &CanopenIoStatus::error_register,
+                                            &CanopenIoStatus::heartbeat_losses,
+                                            &CanopenIoStatus::boot_ups,
+                                            &CanopenIoStatus::bad_pdos,
+                                            &CanopenIoStatus::reconfigurations};
+};
+
 struct CanopenIoConfig {
   std::string bus;  // the name of a canopen_bus component, or a URI (then it runs a bus task of its own)
   std::string interface_name = "io";
@@ -43,12 +69,12 @@ struct CanopenIoConfig {
 };
 
 // Provided `<interface_name>` (CRTK, by the device base): measured_js (the channels), servo_jp,
-// state_command, operating_state, fault. Start-up: NMT reset, identity, PDOs, 0x1017, 0x1016,
-// the deployment's writes, NMT start (StartupSequence). Each cycle: the TPDOs into measured_js;
-// a FAULT (this component's only) on a lost heartbeat, a heartbeat not operational, a boot-up,
-// an EMCY with an error code (logged in hex with its name), TPDOs older than feedback_timeout,
-// bus off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs are
-// the channels' safe values; at exit also one SYNC and NMT enter pre-operational.
+// state_command, operating_state, fault. Provided "canopen": status (CanopenIoStatus). Start-up: NMT reset,
+// identity, PDOs, 0x1017, 0x1016, the deployment's writes, NMT start (StartupSequence). Each cycle: the TPDOs
+// into measured_js; a FAULT (this component's only) on a lost heartbeat, a heartbeat not operational, a
+// boot-up, an EMCY with an error code (logged in hex with its name), TPDOs older than feedback_timeout, bus
+// off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs are the channels' safe
+// values; at exit also one SYNC and NMT enter pre-operational.
 class CanopenIo : public Device {
  public:
   CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config);
@@ -56,6 +82,7 @@ class CanopenIo : public Device {
   IoNode& node() noexcept { return *io_; }
   BusPort& port() noexcept { return *link_.port; }
   const JointState& measured_js() const noexcept { return measured().js; }
+  const CanopenIoStatus& status() const noexcept { return status_; }
 
  protected:
   void open() override;
@@ -81,6 +108,7 @@ class CanopenIo : public Device {
   std::uint32_t boot_ups_seen_ = 0;
   bool rebooted_ = false;
   bool reconfiguring_ = false;  // this enable re-runs its configuration
+  CanopenIoStatus status_{};
 };
 
 }  // namespace saw::canopen
