@@ -12,8 +12,11 @@ the canopen_io its clients.
          ENABLED, SYNC and its RPDOs go on). After saw-rt's end the bus log shows, for each
          drive, controlword 0 (disable voltage) then NMT enter pre-operational, and for the I/O
          node its safe output then NMT enter pre-operational; the python node is pre-operational.
-  kill9  saw-rt killed with SIGKILL: the I/O node's own heartbeat consumer (0x1016, written by
-         the gripper component with the bus task's node and time) notices the master gone.
+  sigterm  saw-rt stopped by SIGTERM mid-run: the same exit frames for every node.
+  kill9  saw-rt killed with SIGKILL while the drives are enabled: the I/O node's own heartbeat
+         consumer (0x1016, written by the gripper component with the bus task's node and time)
+         notices the master gone, and so do saw-can-sim's drives (0x1016 written by the arm, the
+         same master), which leave operation enabled by themselves (0x6007).
 
 Usage: canopen_shared_bus_test.py <saw-rt> <saw-can-sim> <saw-socketcand> <canopen-shared-bus.yaml> [case ...]
 Exits 77 (skipped) when the tools venv has no `canopen`.
@@ -101,17 +104,20 @@ class Rig:
         return out, err
 
     def close(self):
+        """Stops everything; returns what saw-can-sim printed (its drives' states at the end)."""
         self.io.close()
         self.network.disconnect()
+        outputs = []
         for p in (self.sim, self.server):
             p.terminate()
-            p.communicate(timeout=30)
+            outputs.append(p.communicate(timeout=30)[0])
         for f in (self.config, self.record, self.log):
             if os.path.exists(f):
                 os.unlink(f)
         shm = f"/dev/shm/saw-can.{self.bus}"
         if os.path.exists(shm):
             os.unlink(shm)
+        return outputs[0] or ""
 
     def frames(self):
         """(time, identifier, bytes) of every frame on the bus, in order."""
@@ -122,6 +128,24 @@ class Rig:
                 if m:
                     out.append((float(m.group(1)), int(m.group(2), 16), bytes.fromhex(m.group(3))))
         return out
+
+
+def check_exit_frames(frames, io):
+    """The last frames: every node walked to its safe state, then NMT pre-operational."""
+    last_nmt = {}
+    for i, (_, ident, data) in enumerate(frames):
+        if ident == 0x000 and len(data) == 2 and data[0] == 0x80:
+            last_nmt[data[1]] = i
+    for node in DRIVES + (IO_NODE,):
+        check(node in last_nmt, f"node {node}: no NMT enter pre-operational at exit")
+    for node in DRIVES:
+        before = [d for _, ident, d in frames[:last_nmt[node]] if ident == 0x200 + node]
+        check(before and before[-1][:2] == b"\x00\x00",
+              f"node {node}: the last RPDO before NMT pre-operational is not controlword 0: {before[-1:]}")
+    before = [d for _, ident, d in frames[:last_nmt[IO_NODE]] if ident == 0x200 + IO_NODE]
+    check(before and int.from_bytes(before[-1][:2], "little", signed=True) == SAFE_COUNTS,
+          f"the I/O node's last RPDO is not its safe output: {before[-1:]}")
+    check(io.nmt_state() == "PRE-OPERATIONAL", f"the I/O node is {io.nmt_state()} after saw-rt's end")
 
 
 def run():
@@ -160,21 +184,7 @@ def run():
           f"SYNC and the arm's RPDOs stopped after the gripper's fault ({syncs_after}, {rpdos_after})")
     # The jaw measured where the node said (recorded measured_js), in SI.
     check(jaw and abs(max(jaw) - SAFE_COUNTS * 1e-5) < 1e-9, f"the recorded jaw never read 0.02 m: {jaw[-3:]}")
-    # The last frames: every node walked to its safe state, then NMT pre-operational.
-    last_nmt = {}
-    for i, (_, ident, data) in enumerate(frames):
-        if ident == 0x000 and len(data) == 2 and data[0] == 0x80:
-            last_nmt[data[1]] = i
-    for node in DRIVES + (IO_NODE,):
-        check(node in last_nmt, f"node {node}: no NMT enter pre-operational at exit")
-    for node in DRIVES:
-        before = [d for _, ident, d in frames[:last_nmt[node]] if ident == 0x200 + node]
-        check(before and before[-1][:2] == b"\x00\x00",
-              f"node {node}: the last RPDO before NMT pre-operational is not controlword 0: {before[-1:]}")
-    before = [d for _, ident, d in frames[:last_nmt[IO_NODE]] if ident == 0x200 + IO_NODE]
-    check(before and int.from_bytes(before[-1][:2], "little", signed=True) == SAFE_COUNTS,
-          f"the I/O node's last RPDO is not its safe output: {before[-1:]}")
-    check(r.io.nmt_state() == "PRE-OPERATIONAL", f"the I/O node is {r.io.nmt_state()} after saw-rt's end")
+    check_exit_frames(frames, r.io)
     print(f"ok run: the gripper faulted on its node's EMCY, the arm stayed ENABLED ({syncs_after} SYNC after); "
           "every node safe and pre-operational at exit")
 
@@ -185,12 +195,23 @@ def recorded_jaw(r):
     return [float(row["gripper.measured_js.q0"]) for row in rows if row.get("gripper.measured_js.q0")]
 
 
+def drives_enabled(r):
+    """Each drive's newest TPDO1 (statusword first) on the bus says operation enabled."""
+    time.sleep(0.05)
+    newest = {}
+    for _, ident, data in r.frames()[-400:]:
+        if 0x181 <= ident <= 0x183 and len(data) >= 2:
+            newest[ident] = int.from_bytes(data[:2], "little")
+    return len(newest) == 3 and all(sw & 0x6F == 0x27 for sw in newest.values())
+
+
 def kill9():
     r = Rig("kill9")
     try:
         r.start()
         r.wait_for(lambda: len(r.io.outputs) > 200 and 127 in r.io.last_heartbeat, 30,
                    "the gripper's node running and watching the master")
+        r.wait_for(lambda: drives_enabled(r), 30, "the arm's drives in operation enabled (their TPDO1)")
         jaw = None
         r.rt.send_signal(signal.SIGKILL)
         killed = time.monotonic()
@@ -203,17 +224,43 @@ def kill9():
             jaw = recorded_jaw(r)
         except (OSError, KeyError):
             jaw = None
+        time.sleep(0.5)  # the drives' consumers have the same time as the node's
     finally:
-        r.close()
+        drives = r.close()
     check(events and events[0][0] == 127, f"the I/O node's consumer did not fire for node 127: {events}")
+    # saw-can-sim's drives watched the same master (0x1016 from the arm, 0x6007 quick stop).
+    states = []
+    for node in DRIVES:
+        row = re.search(rf"^\s*{node}\s+\S+\s+(.+?)\s{{2,}}", drives, re.MULTILINE)
+        check(row is not None and "operation enabled" not in row.group(1),
+              f"drive {node} still enabled after saw-rt was killed:\n{drives}")
+        states.append(row.group(1))
     after = events[0][1] - killed
     # The timeout is 1 s here (the shipped 150 ms raised for the machine's stalls).
     check(after < 3.0, f"the consumer fired {after:.3f} s after SIGKILL")
-    print(f"ok kill9: the I/O node's consumer fired {after * 1000:.0f} ms after SIGKILL of saw-rt"
+    print(f"ok kill9: the I/O node's consumer fired {after * 1000:.0f} ms after SIGKILL of saw-rt; the drives: "
+          f"{', '.join(states)}"
           + (f"; the jaw was recorded at {jaw[-1]:.4f} m" if jaw else ""))
 
 
-CASES = [run, kill9]
+def sigterm():
+    """Stopped as a service manager stops it, mid-run: the same exit frames."""
+    r = Rig("sigterm")
+    try:
+        r.start()
+        r.wait_for(lambda: len(r.io.outputs) > 200 and r.io._get(0x6401, 1) == SAFE_COUNTS, 30,
+                   "the gripper's node commanded and at its safe opening")
+        r.rt.send_signal(signal.SIGTERM)
+        out, err = r.finish()
+        frames = r.frames()
+        check(r.rt.returncode == 0, f"saw-rt exited {r.rt.returncode} on SIGTERM\n{out}\n{err}")
+        check_exit_frames(frames, r.io)
+    finally:
+        r.close()
+    print("ok sigterm: every node safe and pre-operational after SIGTERM")
+
+
+CASES = [run, sigterm, kill9]
 
 if __name__ == "__main__":
     wanted = sys.argv[5:]
