@@ -224,11 +224,20 @@ def kill9():
             jaw = recorded_jaw(r)
         except (OSError, KeyError):
             jaw = None
-        time.sleep(0.5)  # the drives' consumers have the same time as the node's
+        # The drives' consumers fire too: each one's EMCY 0x8130 (heartbeat event) on the bus.
+        end = time.monotonic() + 10
+        while time.monotonic() < end and not all(
+                any(ident == 0x80 + n and data[:2] == b"\x30\x81" for _, ident, data in r.frames())
+                for n in DRIVES):
+            time.sleep(0.05)
+        emcys = r.frames()
     finally:
         drives = r.close()
     check(events and events[0][0] == 127, f"the I/O node's consumer did not fire for node 127: {events}")
     # saw-can-sim's drives watched the same master (0x1016 from the arm, 0x6007 quick stop).
+    for node in DRIVES:
+        check(any(ident == 0x80 + node and data[:2] == b"\x30\x81" for _, ident, data in emcys),
+              f"drive {node}: no EMCY 0x8130 (heartbeat event) after saw-rt was killed")
     states = []
     for node in DRIVES:
         row = re.search(rf"^\s*{node}\s+\S+\s+(.+?)\s{{2,}}", drives, re.MULTILINE)
@@ -240,7 +249,7 @@ def kill9():
     check(after < 3.0, f"the consumer fired {after:.3f} s after SIGKILL")
     print(f"ok kill9: the I/O node's consumer fired {after * 1000:.0f} ms after SIGKILL of saw-rt; the drives: "
           f"{', '.join(states)}"
-          + (f"; the jaw was recorded at {jaw[-1]:.4f} m" if jaw else ""))
+          + (f"; the jaw was recorded up to {max(jaw):.4f} m" if jaw else ""))
 
 
 def sigterm():
