@@ -124,7 +124,9 @@ class Rig:
         out = []
         with open(self.log) as f:
             for line in f:
-                m = re.match(r"\((\d+\.\d+)\) \S+ ([0-9A-F]{3})#([0-9A-F]*)$", line.strip())
+                if not line.endswith("\n"):
+                    break  # saw-socketcand is still writing it (the log is read while it runs)
+                m = re.match(r"\((\d+\.\d+)\) \S+ ([0-9A-F]{3})#((?:[0-9A-F]{2})*)$", line.strip())
                 if m:
                     out.append((float(m.group(1)), int(m.group(2), 16), bytes.fromhex(m.group(3))))
         return out
