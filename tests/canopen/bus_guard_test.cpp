@@ -1,6 +1,6 @@
 // A shared bus's cycle (the bus task routing frames to its clients, an arm of two CiA 402 drives and
 // a gripper's I/O node each on its port, faults of each and their recovery, the I/O node rebooted
-// and configured again from the cycle) allocates, locks, waits
+// and configured again from the cycle, its runtime SDO) allocates, locks, waits
 // and prints nothing: checked by the RT guard on every cycle, the in-process nodes included.
 #include <gtest/gtest.h>
 
@@ -26,7 +26,7 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
   rig.keep = false;  // the spy's frames are not kept (a vector would grow in the cycle)
 
   constexpr int cycles = 3000;
-  int both_enabled = 0, gripper_faults = 0;
+  int both_enabled = 0, gripper_faults = 0, sdo_ok = 0;
   OperatingStateValue previous = OperatingStateValue::disabled;
   {
     saw::RtContextScope rt;
@@ -46,6 +46,13 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
       if (i == 1600) client.command(StateCommand::enable);
       if (i == 2000) rig.io_node->reboot();  // configured again by the next enable, from the cycle
       if (i == 2100) client.command(StateCommand::enable);
+      if (i % 200 == 100) {  // a runtime SDO upload of the I/O node's device type
+        SdoRequest q;
+        q.node = 10;
+        q.index = 0x1000;
+        (void)gripper->node().sdo_queue().submit(q);
+      }
+      for (SdoReply r; gripper->node().sdo_queue().take_reply(r);) sdo_ok += r.ok();
       rig.cycle({arm.get(), gripper.get()});
       const OperatingStateValue g = gripper->operating_state().state;
       gripper_faults += g == OperatingStateValue::fault && previous != OperatingStateValue::fault;
@@ -61,6 +68,7 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
   EXPECT_EQ(arm->operating_state().state, OperatingStateValue::fault) << "its drive's fault, not re-enabled";
   EXPECT_EQ(arm->fault_reason(), FaultReason::emcy);
   EXPECT_GT(both_enabled, 400);
+  EXPECT_GE(sdo_ok, 10) << "runtime SDO uploads (one may meet the re-configuration or the silent node)";
   EXPECT_EQ(rig.task->counters().syncs, static_cast<std::uint64_t>(cycles));
   EXPECT_EQ(rig.task->counters().dropped, 0u);
   EXPECT_EQ(counts.cycles, 2u * cycles) << "each client's task cycle is one";

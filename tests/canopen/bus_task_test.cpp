@@ -151,6 +151,27 @@ TEST(CanopenBusTask, AnArmAndAGripperIoNodeShareTheBusAndFaultAlone) {
   rig.cycle({arm.get(), gripper.get()}, 10);
   EXPECT_EQ(rig.io_node->output, 2975);
   EXPECT_NEAR(gripper->measured_js().position[0], 0.02975, 1e-9);
+  // A runtime SDO upload through the gripper's queue (the cycle runs it); one for a node not its own is
+  // refused.
+  SdoRequest q;
+  q.node = 10;
+  q.index = 0x1000;
+  q.tag = 7;
+  ASSERT_EQ(gripper->node().sdo_queue().submit(q), Status::ok);
+  q.node = 3;
+  q.tag = 8;
+  ASSERT_EQ(gripper->node().sdo_queue().submit(q), Status::ok);
+  rig.cycle({arm.get(), gripper.get()}, 10);
+  SdoReply r1, r2;
+  ASSERT_TRUE(gripper->node().sdo_queue().take_reply(r1));
+  ASSERT_TRUE(gripper->node().sdo_queue().take_reply(r2));
+  EXPECT_TRUE(r1.ok());
+  EXPECT_EQ(r1.tag, 7u);
+  EXPECT_EQ(r1.size, 4u);
+  EXPECT_EQ(r1.data[0], 0x91);
+  EXPECT_EQ(r1.data[2], 0x0C);
+  EXPECT_EQ(r2.tag, 8u);
+  EXPECT_EQ(r2.status, Status::invalid);
   // The node's heartbeat and TPDOs stop: the gripper faults, the arm goes on.
   rig.io_node->silent = true;
   rig.cycle({arm.get(), gripper.get()}, 60);

@@ -83,6 +83,11 @@ struct FakeIoNode {
         default:
           break;
       }
+    } else if (id == 0x600u + node && f.len == 8 && (f.data[0] >> 5) == 2) {  // upload: 0x1000's value
+      const bool type = f.data[1] == 0x00 && f.data[2] == 0x10;
+      send(0x580u + node,
+           {0x43, f.data[1], f.data[2], f.data[3], static_cast<std::uint8_t>(type ? 0x91 : 0),
+            static_cast<std::uint8_t>(type ? 0x01 : 0), static_cast<std::uint8_t>(type ? 0x0C : 0), 0});
     } else if (id == 0x600u + node && f.len == 8 && (f.data[0] >> 5) == 1) {
       configured = true;
       send(0x580u + node, {0x60, f.data[1], f.data[2], f.data[3], 0, 0, 0, 0});

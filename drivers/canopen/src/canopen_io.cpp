@@ -77,8 +77,10 @@ CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
   io_ = std::make_unique<IoNode>(*link_.bus, config_.node);
   set_safe_outputs();
   status_.node = config_.node.node;
-  provide("canopen").add_command_read("status",
-                                      state_table().add_column("status", &status_, ColumnUse::summary));
+  auto& c = provide("canopen");
+  c.add_command_read("status", state_table().add_column("status", &status_, ColumnUse::summary));
+  c.add_command_qualified_read<SdoRequest, SdoReply>(
+      "sdo", [this](const SdoRequest& q, SdoReply& r) { r = io_->sdo_queue().transfer(q, 1'000'000'000); });
 }
 
 CanopenIo::~CanopenIo() = default;

@@ -1,5 +1,6 @@
 #include "saw/canopen/io_node.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -115,6 +116,11 @@ struct IoNode::Impl {
   TimeNs since = 0;
 
   void step_reconfiguration(std::size_t& n, TimeNs now) noexcept;
+  // Runtime SDO.
+  SdoQueue queue{16};
+  bool transfer = false;  // a runtime transfer holds the SDO client
+  std::uint32_t tag = 0;
+  void service_sdo(std::size_t& n, TimeNs now) noexcept;
 
   void on_frame(const can::Frame& f, TimeNs now) noexcept;
   void heartbeat_events(TimeNs now) noexcept;
@@ -277,7 +283,51 @@ void IoNode::transmit(TimeNs now) noexcept {
   std::size_t n = 0;
   for (const PdoPacker& p : m.rpdos) m.outbox[n++] = p.frame();
   m.step_reconfiguration(n, now);
+  m.service_sdo(n, now);
   m.send(n);
+}
+
+SdoQueue& IoNode::sdo_queue() noexcept { return impl_->queue; }
+
+void IoNode::Impl::service_sdo(std::size_t& n, TimeNs now) noexcept {
+  if (!transfer) {
+    if (reconfig.state == Reconfiguration::State::busy) return;  // the client is the re-configuration's
+    const SdoRequest* r = queue.front();
+    if (r == nullptr) return;
+    const SdoRequest request = *r;
+    queue.pop();
+    SdoReply reply;
+    reply.tag = request.tag;
+    const ObjectAddress address{request.index, request.subindex};
+    const bool bad = request.node != config.node ||
+                     (request.write && (request.size == 0 || request.size > request.data.size()));
+    const bool begun =
+        !bad && (request.write ? sdo.download(address, std::span(request.data.data(), request.size), now)
+                               : sdo.upload(address, now));
+    if (!begun) {
+      reply.status = bad ? Status::invalid : Status::busy;
+      (void)queue.reply(reply);
+      return;
+    }
+    transfer = true;
+    tag = request.tag;
+  }
+  while (const auto f = sdo.poll(now))
+    if (n < outbox.size()) outbox[n++] = *f;
+  if (sdo.busy()) return;
+  const SdoResult& result = sdo.result();
+  SdoReply reply;
+  reply.tag = tag;
+  reply.abort = static_cast<std::uint32_t>(result.abort);
+  reply.remote = result.remote;
+  if (result.status == SdoStatus::done) {
+    const auto data = sdo.data();
+    reply.total = static_cast<std::uint32_t>(data.size());
+    reply.size = static_cast<std::uint8_t>(std::min(data.size(), reply.data.size()));
+    std::copy_n(data.begin(), reply.size, reply.data.begin());
+  }
+  (void)queue.reply(reply);
+  transfer = false;
 }
 
 void IoNode::reconfigure(TimeNs now) noexcept {
@@ -293,7 +343,7 @@ void IoNode::reconfigure(TimeNs now) noexcept {
 const Reconfiguration& IoNode::reconfiguration() const noexcept { return impl_->reconfig; }
 
 void IoNode::Impl::step_reconfiguration(std::size_t& n, TimeNs now) noexcept {
-  if (reconfig.state != Reconfiguration::State::busy) return;
+  if (reconfig.state != Reconfiguration::State::busy || transfer) return;  // a runtime transfer first
   if (starting) {
     if (health.nmt_state == NmtState::operational)
       reconfig.state = Reconfiguration::State::done;

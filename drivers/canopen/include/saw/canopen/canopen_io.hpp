@@ -69,12 +69,13 @@ struct CanopenIoConfig {
 };
 
 // Provided `<interface_name>` (CRTK, by the device base): measured_js (the channels), servo_jp,
-// state_command, operating_state, fault. Provided "canopen": status (CanopenIoStatus). Start-up: NMT reset,
-// identity, PDOs, 0x1017, 0x1016, the deployment's writes, NMT start (StartupSequence). Each cycle: the TPDOs
-// into measured_js; a FAULT (this component's only) on a lost heartbeat, a heartbeat not operational, a
-// boot-up, an EMCY with an error code (logged in hex with its name), TPDOs older than feedback_timeout, bus
-// off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs are the channels' safe
-// values; at exit also one SYNC and NMT enter pre-operational.
+// state_command, operating_state, fault. Provided "canopen": status (CanopenIoStatus), sdo (a
+// qualified read: SdoRequest → SdoReply for this node, waiting up to 1 s: non-RT callers only). Start-up: NMT
+// reset, identity, PDOs, 0x1017, 0x1016, the deployment's writes, NMT start (StartupSequence). Each cycle:
+// the TPDOs into measured_js; a FAULT (this component's only) on a lost heartbeat, a heartbeat not
+// operational, a boot-up, an EMCY with an error code (logged in hex with its name), TPDOs older than
+// feedback_timeout, bus off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs
+// are the channels' safe values; at exit also one SYNC and NMT enter pre-operational.
 class CanopenIo : public Device {
  public:
   CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config);

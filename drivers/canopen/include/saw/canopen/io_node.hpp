@@ -12,6 +12,7 @@
 #include "saw/canopen/axis.hpp"
 #include "saw/canopen/bus_master.hpp"
 #include "saw/canopen/pdo.hpp"
+#include "saw/canopen/sdo_queue.hpp"
 #include "saw/canopen/startup.hpp"
 #include "saw/clock.hpp"
 
@@ -68,6 +69,9 @@ class IoNode {
   // transmit(); its inputs count as not received until its TPDOs come again.
   void reconfigure(TimeNs now) noexcept;
   const Reconfiguration& reconfiguration() const noexcept;
+  // Runtime SDO: non-RT code submits here (requests for this node only), transmit() runs one
+  // transfer at a time through the node's SDO channel (not while a re-configuration runs).
+  SdoQueue& sdo_queue() noexcept;
   // The last frames of a master that stops: the RPDOs with the outputs as set (the caller set
   // the safe ones), one SYNC so that the node takes them at once, NMT enter pre-operational.
   void shut_down(TimeNs now) noexcept;
