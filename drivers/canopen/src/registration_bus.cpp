@@ -56,6 +56,55 @@ std::optional<PdoEntry> entry(const Params& p, const std::string& key) {
   }
 }
 
+// `channels: [jaw]` and each under `joints: jaw: {output, input, scale, offset, min, max, ...}`.
+IoChannel parse_channel(const Params& joints, const std::string& name) {
+  if (!joints.has(name)) joints.fail_at(name, "channels names '" + name + "': give its parameters here");
+  const Params j = joints.child(name);
+  IoChannel ch;
+  ch.name = name;
+  if (name.size() > JointState::max_name) j.fail("a channel's name has at most 31 characters");
+  ch.output = entry(j, "output");
+  if (!ch.output)
+    j.fail_at("output", "required parameter is missing (the RPDO-mapped object, 0x6411:01:i16)");
+  ch.input = entry(j, "input");
+  ch.scale = j.get_in_range("scale", -1e9, 1e9, 1);
+  if (ch.scale == 0) j.fail_at("scale", "must not be 0");
+  ch.offset = j.get_in_range("offset", -1e9, 1e9, 0);
+  ch.min = j.get<double>("min");
+  ch.max = j.get<double>("max");
+  if (!(ch.min < ch.max)) j.fail_at("max", "must be above min");
+  ch.max_velocity = j.get_in_range("max_velocity", 1e-9, 1e9, 1e9);
+  ch.safe = j.get_in_range("safe", ch.min, ch.max, std::clamp(0.0, ch.min, ch.max));
+  return ch;
+}
+
+// The PDOs when the file gives neither `pdo` nor `eds`: RPDO1 the outputs, TPDO1 the inputs,
+// 2..4 not valid.
+std::vector<PdoMapping> default_io_pdos(const Params& p, std::uint8_t node,
+                                        const std::vector<PdoEntry>& outputs,
+                                        const std::vector<PdoEntry>& inputs) {
+  std::vector<PdoMapping> pdos;
+  for (const PdoKind kind : {PdoKind::rpdo, PdoKind::tpdo})
+    for (std::uint16_t n = 1; n <= 4; ++n) {
+      const auto& entries = kind == PdoKind::rpdo ? outputs : inputs;
+      if (n == 1 && !entries.empty()) {
+        try {
+          pdos.push_back(make_pdo(kind, n, node, entries));
+        } catch (const std::invalid_argument& e) {
+          p.fail_at("channels", e.what());
+        }
+        continue;
+      }
+      PdoMapping off;
+      off.kind = kind;
+      off.number = n;
+      off.enabled = false;
+      off.cob_id = default_pdo_cob_id(kind, n, node);
+      pdos.push_back(off);
+    }
+  return pdos;
+}
+
 IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   IoSpec s;
   CanopenIoConfig& c = s.config;
@@ -65,6 +114,7 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   const int node = p.get<int>("node");
   if (!valid_node_id(static_cast<unsigned>(node))) p.fail_at("node", "a node-ID is 1..127");
   c.node.node = static_cast<std::uint8_t>(node);
+  c.node.name = ctx.name;
   const Params hb = p.child("heartbeat");
   c.node.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
   c.node.heartbeat_timeout =
@@ -79,54 +129,18 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   const auto names = p.get<std::vector<std::string>>("channels");
   if (names.empty() || names.size() > JointState::max_joints) p.fail_at("channels", "1 to 8 channels");
   const Params joints = p.child("joints");
-  std::vector<PdoEntry> outputs, inputs;
   for (const std::string& name : names) {
-    if (!joints.has(name)) joints.fail_at(name, "channels names '" + name + "': give its parameters here");
-    const Params j = joints.child(name);
-    IoChannel ch;
-    ch.name = name;
-    if (name.size() > JointState::max_name) j.fail("a channel's name has at most 31 characters");
-    ch.output = entry(j, "output");
-    if (!ch.output)
-      j.fail_at("output", "required parameter is missing (the RPDO-mapped object, 0x6411:01:i16)");
-    ch.input = entry(j, "input");
-    ch.scale = j.get_in_range("scale", -1e9, 1e9, 1);
-    if (ch.scale == 0) j.fail_at("scale", "must not be 0");
-    ch.offset = j.get_in_range("offset", -1e9, 1e9, 0);
-    ch.min = j.get<double>("min");
-    ch.max = j.get<double>("max");
-    if (!(ch.min < ch.max)) j.fail_at("max", "must be above min");
-    ch.max_velocity = j.get_in_range("max_velocity", 1e-9, 1e9, 1e9);
-    ch.safe = j.get_in_range("safe", ch.min, ch.max, std::clamp(0.0, ch.min, ch.max));
-    outputs.push_back(*ch.output);
-    if (ch.input) inputs.push_back(*ch.input);
-    c.channels.push_back(ch);
+    c.channels.push_back(parse_channel(joints, name));
+    c.node.outputs.push_back(*c.channels.back().output);
+    if (c.channels.back().input) c.node.inputs.push_back(*c.channels.back().input);
   }
-  // The PDOs: as given, else RPDO1 the outputs and TPDO1 the inputs (2..4 not valid).
   if (p.has("pdo") || p.has("eds")) {
     std::optional<DriveIdentity> identity;
     c.node.pdos = params::parse_pdos(p, cia402::csp, c.node.node, ctx.directory, identity);
     c.node.identity = identity;
   } else {
     p.mark_used("pdo");
-    for (const PdoKind kind : {PdoKind::rpdo, PdoKind::tpdo})
-      for (std::uint16_t n = 1; n <= 4; ++n) {
-        const auto& entries = kind == PdoKind::rpdo ? outputs : inputs;
-        if (n == 1 && !entries.empty()) {
-          try {
-            c.node.pdos.push_back(make_pdo(kind, n, c.node.node, entries));
-          } catch (const std::invalid_argument& e) {
-            p.fail_at("channels", e.what());
-          }
-          continue;
-        }
-        PdoMapping off;
-        off.kind = kind;
-        off.number = n;
-        off.enabled = false;
-        off.cob_id = default_pdo_cob_id(kind, n, c.node.node);
-        c.node.pdos.push_back(off);
-      }
+    c.node.pdos = default_io_pdos(p, c.node.node, c.node.outputs, c.node.inputs);
   }
   c.node.writes = params::parse_writes(p);
   const auto period = s.task.period;
@@ -138,9 +152,6 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   c.startup.boot_timeout = duration(st, "boot_timeout", 2s, 10ms, 600s);
   c.startup.sdo_timeout = duration(st, "sdo_timeout", 500ms, 1ms, 60s);
   c.startup.operational_timeout = duration(st, "operational_timeout", 2s, 10ms, 600s);
-  c.node.name = ctx.name;
-  c.node.outputs = outputs;
-  c.node.inputs = inputs;
   try {
     check(c.node);
   } catch (const std::invalid_argument& e) {
