@@ -104,8 +104,11 @@ TEST(CanopenDeployment, ErrorsNameFileLineAndKey) {
              "key 'components[0].params.joints.a.counts_per_revolution': required parameter is missing");
   EXPECT_HAS(error_of("chain: [a, b]", "chain: [a, c]"),
              "key 'components[0].params.joints.c': the chain names joint 'c'");
-  EXPECT_HAS(error_of("bus: virtual:nowhere", "bus: can0"),
-             "cfg.yaml:7:12: key 'components[0].params.bus': 'can0' is not a bus");
+  EXPECT_HAS(error_of("bus: virtual:nowhere", "bus: can:0"),
+             "cfg.yaml:7:12: key 'components[0].params.bus': 'can:0' is not a bus");
+  // A bus named (a canopen_bus component's) is a client's: the master's heartbeat is the bus's.
+  EXPECT_HAS(error_of("bus: virtual:nowhere", "bus: can0\n      master_heartbeat: {period: 50ms}"),
+             "key 'components[0].params.master_heartbeat': the master's heartbeat is the bus's");
   EXPECT_HAS(error_of("timeout: 60ms", "timeout: 10ms"),
              "key 'components[0].params.heartbeat.timeout': must be above the heartbeat period");
   EXPECT_HAS(error_of("min: -1, max: 1}", "min: 1, max: -1}"),
@@ -164,6 +167,62 @@ TEST(CanopenDeployment, TheSimulationDeploymentParses) {
   ASSERT_EQ(spec.components.size(), 3u);
   EXPECT_EQ(spec.components[1].type, "canopen_arm");
   EXPECT_EQ(spec.connections.size(), 2u);
+}
+
+TEST(CanopenDeployment, TheSharedBusDeploymentParses) {
+  const auto spec =
+      saw::deploy::load_deployment_spec(SAW_SOURCE_DIR "/config/canopen-shared-bus.yaml", registry());
+  ASSERT_EQ(spec.components.size(), 5u);
+  EXPECT_EQ(spec.components[1].type, "canopen_bus");
+  EXPECT_EQ(spec.components[2].type, "canopen_arm");
+  EXPECT_EQ(spec.components[3].type, "canopen_io");
+}
+
+const std::string io_file = R"(deployment: {name: io-test}
+components:
+  - name: can0
+    type: canopen_bus
+    task: {period: 1ms}
+    params: {bus: virtual:nowhere}
+  - name: gripper
+    type: canopen_io
+    task: {period: 1ms}
+    params:
+      bus: can0
+      node: 10
+      channels: [jaw]
+      joints:
+        jaw: {output: "0x6411:01:i16", input: "0x6401:01:i16", scale: 1.0e-5, min: 0, max: 0.08, safe: 0.02}
+)";
+
+std::string io_error_of(const std::string& from, const std::string& to) {
+  std::string text = io_file;
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  text.replace(at, from.size(), to);
+  try {
+    (void)parse(text);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no error for: " << to;
+  return "";
+}
+
+TEST(CanopenDeployment, AnIoNodeOnASharedBusParsesAndItsErrorsNameFileLineAndKey) {
+  const auto spec = parse(io_file);
+  ASSERT_EQ(spec.components.size(), 2u);
+  EXPECT_HAS(io_error_of("output: \"0x6411:01:i16\", ", ""),
+             "cfg.yaml:15:14: key 'components[1].params.joints.jaw.output': required parameter is missing");
+  EXPECT_HAS(io_error_of("safe: 0.02", "safe: 0.2"), "key 'components[1].params.joints.jaw.safe'");
+  EXPECT_HAS(io_error_of("channels: [jaw]", "channels: [jaw, thumb]"),
+             "key 'components[1].params.joints.thumb': channels names 'thumb'");
+  EXPECT_HAS(io_error_of("node: 10", "node: 10\n      master_heartbeat: {period: 50ms}"),
+             "key 'components[1].params.master_heartbeat': the master's heartbeat is the bus's");
+  EXPECT_HAS(io_error_of("node: 10", "node: 10\n      pdo: {rpdo1: [\"0x6411:01:i16\"]}"),
+             "no TPDO maps its input 0x6401:01");
+  EXPECT_HAS(io_error_of("{bus: virtual:nowhere}", "{bus: can0}"),
+             "key 'components[0].params.bus': 'can0' is not a bus: virtual:<name> or socketcan:<interface>");
 }
 
 }  // namespace

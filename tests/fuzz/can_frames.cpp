@@ -15,6 +15,8 @@
 //   - the text parsers refuse a line with a reason or yield a well_formed() frame that formats
 //     and parses back to itself; the socketcand framer cuts a stream the same way however TCP
 //     splits it;
+//   - the bus task of a shared bus hands each client only CANopen data frames on identifiers of
+//     its own nodes, and a generic I/O node reads values of its types from them;
 //   - what a consumer does depends on the frame's identifier, length, flags and payload only:
 //     the same run with the bytes past the length and the reserved bytes zeroed gives the same
 //     trace (a peer's leftovers in a slot must not change what a node does).
@@ -43,12 +45,15 @@
 #include "saw/can/candump.hpp"
 #include "saw/can/frame.hpp"
 #include "saw/can/socketcand.hpp"
+#include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/cob.hpp"
 #include "saw/canopen/dictionary.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/heartbeat.hpp"
+#include "saw/canopen/io_node.hpp"
 #include "saw/canopen/nmt.hpp"
 #include "saw/canopen/pdo.hpp"
+#include "saw/canopen/pdo_text.hpp"
 #include "saw/canopen/sdo.hpp"
 #include "saw/canopen/sdo_client.hpp"
 #include "saw/canopen/sdo_server.hpp"
@@ -632,6 +637,97 @@ class PdoUser final : public Consumer {
   std::vector<co::PdoUnpacker> unpackers_;
 };
 
+// A bus several components share: the bus task routes every frame to the client of its node (A:
+// node 5 and TPDOs 0x185, 0x285; B: node 6 and its TPDO1, an I/O node on B's port reading it).
+class BusTaskUser final : public Consumer {
+ public:
+  BusTaskUser() {
+    auto bus = std::make_unique<Inbox>();
+    inbox_ = bus.get();
+    co::BusTaskConfig k;
+    k.heartbeat_period = 100 * ms;
+    task_ = std::make_unique<co::BusTask>(std::move(bus), k);
+    const std::uint8_t a_nodes[] = {5}, b_nodes[] = {6};
+    const std::uint32_t a_tpdos[] = {0x185, 0x285}, b_tpdos[] = {0x186};
+    a_ = &task_->attach("A", a_nodes, a_tpdos);
+    b_ = &task_->attach("B", b_nodes, b_tpdos);
+    a_->set_cycling(true);
+    b_->set_cycling(true);
+    co::IoNodeConfig io;
+    io.name = "io";
+    io.node = 6;
+    io.heartbeat_period = 50 * ms;
+    io.heartbeat_timeout = 150 * ms;
+    const co::PdoEntry in1 = co::PdoEntry::of({0x6401, 1}, DataType::integer16);
+    const co::PdoEntry in2 = co::PdoEntry::of({0x6000, 1}, DataType::unsigned8);
+    const co::PdoEntry out1 = co::PdoEntry::of({0x6411, 1}, DataType::integer16);
+    const co::PdoEntry tpdo[] = {in1, in2};
+    io.pdos.push_back(co::make_pdo(co::PdoKind::tpdo, 1, 6, tpdo));
+    io.pdos.push_back(co::make_pdo(co::PdoKind::rpdo, 1, 6, std::span(&out1, 1)));
+    io.inputs = {in1, in2};
+    io.outputs = {out1};
+    io_ = std::make_unique<co::IoNode>(*b_, io);
+  }
+
+  void on_frame(const Frame& f, TimeNs now, Out& out) override {
+    // A bus never hands over a malformed frame (the backends drop and count it).
+    if (saw::can::well_formed(f)) inbox_->frames.push_back(f);
+    task_->cycle(now);
+    saw::can::Received r[16];
+    for (std::size_t n; (n = a_->receive(r)) > 0;)
+      for (std::size_t i = 0; i < n; ++i) {
+        const Frame& g = r[i].frame;
+        const std::uint32_t id = g.can_id() & CAN_SFF_MASK;
+        check(canopen(g), "bus task", "handed a client a frame that is no CANopen data frame");
+        check(id == 0x85 || id == 0x705 || id == 0x585 || id == 0x185 || id == 0x285, "bus task",
+              "handed client A a frame of another node");
+        out.put(g);
+      }
+    io_->receive(now);
+    const co::AxisHealth& h = io_->health();
+    out.put(h.emcy_count);
+    out.put(h.bad_pdos);
+    out.put(std::uint64_t{h.boot_ups});
+    double v = 0;
+    if (io_->input(0, v)) {
+      check(v >= -32768 && v <= 32767 && v == std::floor(v), "io node",
+            "an INTEGER16 input out of its range");
+      out.put(static_cast<std::uint64_t>(static_cast<std::int64_t>(v)));
+    }
+    if (io_->input(1, v)) check(v >= 0 && v <= 255, "io node", "an UNSIGNED8 input out of its range");
+    for (const Frame& g : inbox_->out) {
+      check(canopen(g), "bus task", "sent a frame that is no CANopen data frame");
+      out.put(g);
+    }
+    inbox_->out.clear();
+    out.put(task_->counters().foreign_frames);
+  }
+  void poll(TimeNs, Out&) override {}
+
+ private:
+  struct Inbox final : saw::can::Bus {
+    std::size_t receive(std::span<saw::can::Received> o) noexcept override {
+      std::size_t n = 0;
+      while (n < o.size() && next < frames.size()) o[n++] = {frames[next++], 0};
+      return n;
+    }
+    std::size_t send(std::span<const Frame> f) noexcept override {
+      out.insert(out.end(), f.begin(), f.end());
+      return f.size();
+    }
+    saw::can::BusState state() const noexcept override { return saw::can::BusState::error_active; }
+    saw::can::BusCounters counters() const noexcept override { return {}; }
+    const std::string& name() const noexcept override { return name_; }
+    std::vector<Frame> frames, out;
+    std::size_t next = 0;
+    std::string name_ = "fuzz";
+  };
+  Inbox* inbox_ = nullptr;
+  std::unique_ptr<co::BusTask> task_;
+  co::BusPort *a_ = nullptr, *b_ = nullptr;
+  std::unique_ptr<co::IoNode> io_;
+};
+
 // ---- the frame consumers' run --------------------------------------------------------------------
 
 struct Record {
@@ -675,6 +771,7 @@ enum class Pick : std::uint8_t {
   all,  // every consumer above on one bus, each hearing what the others send
   candump,
   socketcand,
+  bus_task,  // after the text parsers: the corpus's picks keep their consumers
   count
 };
 
@@ -688,6 +785,7 @@ std::vector<std::unique_ptr<Consumer>> make_consumers(Pick pick, std::uint8_t pa
   if (want(Pick::nmt)) c.push_back(std::make_unique<NmtUser>(param));
   if (want(Pick::pdo)) c.push_back(std::make_unique<PdoUser>());
   if (want(Pick::sync)) c.push_back(std::make_unique<SyncUser>());
+  if (pick == Pick::bus_task) c.push_back(std::make_unique<BusTaskUser>());
   return c;
 }
 

@@ -58,7 +58,11 @@ bool CanopenArm::admit(Setpoint& s) {
 
 Outcome CanopenArm::read() {
   const TimeNs t = now();
-  if (start_time_ < 0) start_time_ = t;
+  if (start_time_ < 0) {
+    start_time_ = t;
+    // From now on the bus task carries this component's frames (its start-up used the bus).
+    if (link_.shared()) link_.port->set_cycling(true);
+  }
   master_->receive(t);
   read_feedback();
   return check_health();

@@ -328,7 +328,7 @@ void BusMaster::transmit(TimeNs now) noexcept {
   m.service_sdo(now);
   for (Axis& a : m.axes) m.step_reconfiguration(a, now);
   // Half a period of slack: a cycle that wakes a little early still sends its SYNC.
-  if (const auto s = m.sync.poll(now + m.config.period / 2)) {
+  if (const auto s = m.config.sync ? m.sync.poll(now + m.config.period / 2) : std::nullopt) {
     m.out(*s);
     ++m.counters.syncs;
   }

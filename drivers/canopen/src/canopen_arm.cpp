@@ -13,14 +13,6 @@
 namespace saw::canopen {
 namespace {
 
-// The buses this process is master of: two masters on one bus would both send SYNC and fight
-// over the drives' controlwords. Set-up only (a lock, an allocation).
-std::mutex claims_mutex;
-std::map<std::string, std::string>& claims() {
-  static std::map<std::string, std::string> c;
-  return c;
-}
-
 std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
   std::vector<AxisConfig> axes;
   for (const JointConfig& j : c.joints) {
@@ -40,12 +32,6 @@ std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
     axes.push_back(std::move(a));
   }
   return axes;
-}
-
-std::unique_ptr<can::Bus> open_uri(const std::string& uri) {
-  can::BusConfig c;
-  c.uri = uri;
-  return can::open_bus(c);
 }
 
 }  // namespace
@@ -86,26 +72,11 @@ CanopenArmConfig checked(CanopenArmConfig c, const TaskConfig& task) {
   return c;
 }
 
-struct CanopenArm::Claim {
-  Claim(std::string b, const std::string& owner) : bus(std::move(b)) {  // b: a URI, or a name and address
-    const std::lock_guard lock(claims_mutex);
-    const auto [it, fresh] = claims().emplace(bus, owner);
-    if (!fresh)
-      throw std::runtime_error("CAN bus " + bus + " has a CANopen master in this process already ('" +
-                               it->second + "'): put every drive of a bus in one component");
-  }
-  ~Claim() {
-    const std::lock_guard lock(claims_mutex);
-    claims().erase(bus);
-  }
-  std::string bus;
-};
-
 CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config)
-    : CanopenArm(std::move(name), task, std::move(config), nullptr, nullptr) {}
+    : CanopenArm(std::move(name), task, std::move(config), nullptr) {}
 
 CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus& bus)
-    : CanopenArm(std::move(name), task, std::move(config), nullptr, &bus) {}
+    : CanopenArm(std::move(name), task, std::move(config), &bus) {}
 
 namespace {
 
@@ -130,28 +101,61 @@ DeviceConfig contract_of(const CanopenArmConfig& c) {
 
 }  // namespace
 
-CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config,
-                       std::unique_ptr<can::Bus> owned, can::Bus* bus)
+namespace {
+
+// A caller's bus (tests) is known by its address: two of them may share a name. A shared bus's
+// master heartbeat is its bus task's: the drives' consumers watch that one.
+BusLink link_of(const std::string& name, const CanopenArmConfig& c, can::Bus* bus) {
+  if (bus != nullptr) {
+    BusLink l;
+    l.claim = std::make_unique<BusClaim>(
+        "'" + bus->name() + "' at " + std::to_string(reinterpret_cast<std::uintptr_t>(bus)), name);
+    l.bus = bus;
+    return l;
+  }
+  std::vector<std::uint8_t> nodes;
+  std::vector<std::uint32_t> tpdos;
+  for (const AxisConfig& a : axes_of(c)) {
+    nodes.push_back(a.node);
+    for (const PdoMapping& m : a.pdos)
+      if (m.enabled && m.kind == PdoKind::tpdo) tpdos.push_back(m.cob_id & CAN_SFF_MASK);
+  }
+  return link_bus(c.bus, name, nodes, tpdos);
+}
+
+CanopenArmConfig with_bus_task(CanopenArmConfig c, const BusLink& l) {
+  if (l.shared()) {
+    c.master_node = l.task->config().node;
+    c.master_heartbeat_period = l.task->config().heartbeat_period;
+    c.master_heartbeat_timeout = l.task->config().heartbeat_timeout;
+  }
+  return c;
+}
+
+}  // namespace
+
+CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus* bus)
     : Device(std::move(name), task, contract_of(checked(config, task))),
       config_(checked(std::move(config), task)),
       n_(config_.joints.size()),
-      owned_bus_(bus != nullptr ? std::move(owned) : open_uri(config_.bus)),
-      bus_(bus != nullptr ? *bus : *owned_bus_) {
-  // A bus of the caller's is known by its address: two of them may share a name.
-  claim_ = std::make_unique<Claim>(
-      bus != nullptr ? "'" + bus_.name() + "' at " + std::to_string(reinterpret_cast<std::uintptr_t>(bus))
-                     : config_.bus,
-      this->name());
+      link_(link_of(this->name(), config_, bus)),
+      bus_(*link_.bus) {
+  config_ = with_bus_task(std::move(config_), link_);
   BusMasterConfig m;
   m.period = task.period.count();
   m.controller.transition_timeout = config_.transition_timeout;
   m.node = config_.master_node;
   m.heartbeat_period = config_.master_heartbeat_period;
+  if (link_.shared()) {  // the bus task sends SYNC and the master's heartbeat
+    m.sync = false;
+    m.heartbeat_period = 0;
+  }
   master_ = std::make_unique<BusMaster>(bus_, m, axes_of(config_));
   if (config_.chain) kinematics_ = std::make_unique<ChainKinematics>(*config_.chain);
   setpoint_js_.size = static_cast<std::uint32_t>(n_);
   for (std::size_t i = 0; i < n_; ++i) (void)setpoint_js_.set_name(i, config_.joints[i].name);
   status_.joints = static_cast<std::uint8_t>(n_);
+  status_.shared_bus = link_.shared() ? 1 : 0;
   status_.command_timeout = config_.command_timeout;
   provide_interfaces();
 }
@@ -213,10 +217,13 @@ void CanopenArm::enter_safe_state(SafeReason why) {
       break;
   }
   // The master stops: nothing will send the drives anything again. Zero torque or velocity,
-  // disable voltage taken at one last SYNC, and the nodes out of operational.
+  // disable voltage taken at one last SYNC, and the nodes out of operational. On a shared bus
+  // every task's thread has ended by now (or none started): the port sends them at once.
+  if (link_.shared()) link_.port->set_cycling(false);
   if (config_.mode != cia402::csp)
     for (std::size_t i = 0; i < n_; ++i) (void)master_->set_setpoint(i, 0.0);
   master_->shut_down(cia402::controlword::disable_voltage_command, now());
+  if (link_.shared()) link_.port->mark_shut_down();
 }
 
 }  // namespace saw::canopen

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "registration_params.hpp"
+#include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/canopen_arm.hpp"
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/emcy.hpp"
@@ -22,6 +24,10 @@ struct CanopenSpec {
   TaskConfig task;
   CanopenArmConfig config;
 };
+
+}  // namespace
+
+namespace params {
 
 TimeNs duration(const Params& p, const std::string& key, std::chrono::nanoseconds fallback,
                 std::chrono::nanoseconds lo, std::chrono::nanoseconds hi) {
@@ -127,6 +133,25 @@ std::vector<SdoWrite> parse_writes(const Params& p) {
   return out;
 }
 
+std::string parse_bus(const Params& p) {
+  const std::string bus = p.get<std::string>("bus");
+  if (is_bus_uri(bus)) return bus;
+  if (bus.empty() || bus.find(':') != std::string::npos)
+    p.fail_at("bus", "'" + bus +
+                         "' is not a bus: virtual:<name>, socketcan:<interface>, or the name of a "
+                         "canopen_bus component");
+  return bus;
+}
+
+}  // namespace params
+
+namespace {
+
+using params::duration;
+using params::parse_mode;
+using params::parse_pdos;
+using params::parse_writes;
+
 // A joint's drive: node, units, limits, and (arm) its place in the chain.
 JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode mode, const Params& shared,
                         const std::string& directory, ChainJoint* kinematics) {
@@ -178,9 +203,7 @@ JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode m
 // What both types share: the bus, the mode, heartbeats, timeouts, the start-up.
 void parse_common(const ComponentContext& ctx, Params& p, const std::string& type, CanopenSpec& s) {
   CanopenArmConfig& c = s.config;
-  c.bus = p.get<std::string>("bus");
-  if (!c.bus.starts_with("virtual:") && !c.bus.starts_with("socketcan:"))
-    p.fail_at("bus", "'" + c.bus + "' is not a bus: virtual:<name> or socketcan:<interface>");
+  c.bus = params::parse_bus(p);
   c.mode = parse_mode(p);
   s.task = deploy::periodic_task(ctx, p, type);
   const auto period = s.task.period;
@@ -188,6 +211,9 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
   c.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
   c.heartbeat_timeout = duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.heartbeat_period), 1ms, 600s);
   if (c.heartbeat_timeout <= c.heartbeat_period) hb.fail_at("timeout", "must be above the heartbeat period");
+  if (!is_bus_uri(c.bus) && p.has("master_heartbeat"))
+    p.fail_at("master_heartbeat",
+              "the master's heartbeat is the bus's: set it on canopen_bus '" + c.bus + "'");
   const Params master = p.child("master_heartbeat");
   c.master_node = static_cast<std::uint8_t>(master.get_in_range("node", 1, 127, 127));
   c.master_heartbeat_period = duration(master, "period", 100ms, 1ms, 65535ms);
@@ -269,13 +295,21 @@ std::string hex(std::uint16_t v) {
 std::string summary_line(const CanopenStatus& s) {
   char b[512];
   std::string out;
-  std::snprintf(
-      b, sizeof b, "%s, bus %s: %llu SYNC, %llu frames received, %llu sent (%llu refused), %llu for others",
-      std::string(to_string(s.state)).c_str(),
-      std::string(can::to_string(static_cast<can::BusState>(s.bus_state))).c_str(),
-      static_cast<unsigned long long>(s.syncs), static_cast<unsigned long long>(s.frames_received),
-      static_cast<unsigned long long>(s.frames_sent), static_cast<unsigned long long>(s.send_refused),
-      static_cast<unsigned long long>(s.foreign_frames));
+  const std::string state(to_string(s.state)), bus(can::to_string(static_cast<can::BusState>(s.bus_state)));
+  if (s.shared_bus != 0)  // SYNC and the master's heartbeat are its bus task's (its own summary line)
+    std::snprintf(
+        b, sizeof b,
+        "%s, bus %s (a client of its bus task): %llu frames received, %llu sent (%llu refused), %llu "
+        "for others",
+        state.c_str(), bus.c_str(), static_cast<unsigned long long>(s.frames_received),
+        static_cast<unsigned long long>(s.frames_sent), static_cast<unsigned long long>(s.send_refused),
+        static_cast<unsigned long long>(s.foreign_frames));
+  else
+    std::snprintf(
+        b, sizeof b, "%s, bus %s: %llu SYNC, %llu frames received, %llu sent (%llu refused), %llu for others",
+        state.c_str(), bus.c_str(), static_cast<unsigned long long>(s.syncs),
+        static_cast<unsigned long long>(s.frames_received), static_cast<unsigned long long>(s.frames_sent),
+        static_cast<unsigned long long>(s.send_refused), static_cast<unsigned long long>(s.foreign_frames));
   out += b;
   if (s.faults != 0) {
     const FaultReason reason = s.fault.code == FaultCode::none ? FaultReason::none : s.reason;
@@ -349,6 +383,7 @@ void register_components(deploy::ComponentRegistry& registry) {
   registry.add("canopen_arm", "CiA 402 drives on one CAN bus as a CRTK arm (KDL chain; csp, csv or cst)",
                parse_arm, make);
   registry.add_summary_format<CanopenStatus>(summary_line);
+  register_bus_components(registry);
 }
 
 }  // namespace saw::canopen

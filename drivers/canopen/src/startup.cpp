@@ -32,20 +32,32 @@ std::string_view to_string(StartupPhase p) noexcept {
   return "unknown";
 }
 
-std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
+std::vector<StartupWrite> node_writes(std::span<const PdoMapping> pdos, TimeNs heartbeat_period,
+                                      std::uint8_t master_node, TimeNs master_timeout) {
   std::vector<StartupWrite> out;
-  for (const PdoMapping& m : axis.pdos) {
-    // Disabling a PDO the drive may not have (the defaults disable 2..4) is allowed to fail.
+  for (const PdoMapping& m : pdos) {
+    // Disabling a PDO the node may not have (the defaults disable 2..4) is allowed to fail.
     const bool optional = !m.enabled;
     for (const SdoWrite& w : configuration_writes(m)) out.push_back({w, optional});
   }
-  const auto heartbeat_ms = static_cast<std::uint32_t>(axis.heartbeat_period / 1'000'000);
+  const auto heartbeat_ms = static_cast<std::uint32_t>(heartbeat_period / 1'000'000);
   out.push_back({{{0x1017, 0}, DataType::unsigned16, heartbeat_ms}, false});
-  if (axis.master_timeout > 0) {
-    const auto consumer_ms = static_cast<std::uint32_t>(axis.master_timeout / 1'000'000);
+  if (master_timeout > 0) {
+    const auto consumer_ms = static_cast<std::uint32_t>(master_timeout / 1'000'000);
     out.push_back(
-        {{{0x1016, 1}, DataType::unsigned32, std::uint32_t{axis.master_node} << 16 | consumer_ms}, false});
+        {{{0x1016, 1}, DataType::unsigned32, std::uint32_t{master_node} << 16 | consumer_ms}, false});
   }
+  return out;
+}
+
+NodeSetup setup_of(const AxisConfig& axis) {
+  check(axis);
+  return {axis.name, axis.node, axis.identity, startup_writes(axis)};
+}
+
+std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
+  std::vector<StartupWrite> out =
+      node_writes(axis.pdos, axis.heartbeat_period, axis.master_node, axis.master_timeout);
   // "none" asks nothing of a drive: one without 0x6007 does nothing anyway.
   out.push_back({{cia402::object::abort_connection_option_code, DataType::integer16,
                   static_cast<std::uint32_t>(static_cast<std::uint16_t>(axis.abort_connection))},
@@ -70,11 +82,11 @@ Number startup_value(const SdoWrite& w) noexcept {
 }
 
 struct StartupSequence::Node {
-  Node(const AxisConfig& a, TimeNs sdo_timeout)
-      : axis(a),
-        sdo(SdoClientConfig{SdoChannel::of_node(a.node), sdo_timeout, 64}),
-        writes(startup_writes(a)) {}
-  AxisConfig axis;
+  Node(NodeSetup a, TimeNs sdo_timeout)
+      : axis(std::move(a)),
+        sdo(SdoClientConfig{SdoChannel::of_node(axis.node), sdo_timeout, 64}),
+        writes(axis.writes) {}
+  NodeSetup axis;
   SdoClient sdo;
   std::vector<StartupWrite> writes;
   std::size_t next = 0;        // the write in flight (or the next one)
@@ -86,12 +98,20 @@ struct StartupSequence::Node {
   std::string who() const { return "node " + std::to_string(axis.node) + " ('" + axis.name + "')"; }
 };
 
+namespace {
+std::vector<NodeSetup> setups_of(std::span<const AxisConfig> axes) {
+  std::vector<NodeSetup> out;
+  for (const AxisConfig& a : axes) out.push_back(setup_of(a));
+  return out;
+}
+}  // namespace
+
 StartupSequence::StartupSequence(can::Bus& bus, std::span<const AxisConfig> axes, StartupConfig config)
+    : StartupSequence(bus, setups_of(axes), config) {}
+
+StartupSequence::StartupSequence(can::Bus& bus, std::vector<NodeSetup> nodes, StartupConfig config)
     : bus_(bus), config_(config) {
-  for (const AxisConfig& a : axes) {
-    check(a);
-    nodes_.push_back(std::make_unique<Node>(a, config.sdo_timeout));
-  }
+  for (NodeSetup& n : nodes) nodes_.push_back(std::make_unique<Node>(std::move(n), config.sdo_timeout));
   written_.resize(nodes_.size());
 }
 

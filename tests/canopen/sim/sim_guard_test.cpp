@@ -1,6 +1,7 @@
 // The simulated drive's cycle allocates, locks and prints nothing once configured: SimDrive::step
 // with SDO (expedited and segmented), SYNC, RPDOs and TPDOs, heartbeat, the CiA 402 walk, CSP
-// motion, an injected fault with its EMCY and the fault reset, checked by the RT guard.
+// motion, an injected fault with its EMCY and the fault reset, checked by the RT guard; and the
+// simulated I/O node's (SimIoNode::step): SDO, SYNC, its output and input, EMCYs, its consumer.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -11,6 +12,7 @@
 #include "saw/canopen/pdo.hpp"
 #include "saw/canopen/sdo_client.hpp"
 #include "saw/canopen/sim/sim_drive.hpp"
+#include "saw/canopen/sim/sim_io_node.hpp"
 #include "saw/canopen/sync.hpp"
 #include "saw/rt_context.hpp"
 
@@ -118,6 +120,71 @@ TEST(RtGuard, SimulatedDriveCycleIsRtClean) {
   EXPECT_GT(drive.counters().heartbeats, 250u);
   EXPECT_EQ(drive.counters().emcys, 2u) << "0x2310 and its reset";
   EXPECT_NE(position, 0) << "CSP moved the motor";
+  EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
+  EXPECT_RT_CLEAN(counts);
+}
+
+TEST(RtGuard, SimulatedIoNodeCycleIsRtClean) {
+  saw::testing::GuardWindow window;
+  constexpr std::uint8_t io = 10;
+  RingBus master_bus, node_bus;
+  master_bus.connect(node_bus);
+  node_bus.connect(master_bus);
+  SimIoNodeConfig config;
+  config.node = io;
+  config.heartbeat_ms = 10;
+  SimIoNode gripper(config, node_bus);
+  SdoClient sdo(SdoClientConfig{SdoChannel::of_node(io)});
+  PdoMapping out_map, in_map;
+  out_map.kind = PdoKind::rpdo;
+  out_map.cob_id = default_pdo_cob_id(PdoKind::rpdo, 1, io);
+  out_map.map({0x6411, 1}, DataType::integer16);
+  in_map.kind = PdoKind::tpdo;
+  in_map.cob_id = default_pdo_cob_id(PdoKind::tpdo, 1, io);
+  in_map.map({0x6401, 1}, DataType::integer16);
+  PdoPacker rpdo(out_map);
+  PdoUnpacker tpdo(in_map);
+  std::int16_t input = 0, most = 0;
+  int emcy_2310 = 0, emcy_8130 = 0, written = 0;
+  const std::uint8_t consumer[4] = {100, 0, 127, 0};  // node 127, 100 ms
+
+  constexpr int cycles = 3000;  // 1 ms steps
+  {
+    saw::RtContextScope rt;
+    for (int i = 0; i < cycles; ++i) {
+      saw::RtCycleScope cycle("sim-io-node");
+      const TimeNs now = i * ms;
+      if (i == 5) (void)sdo.download({0x1016, 1}, consumer, now);
+      if (i == 50) (void)master_bus.send(std::array{nmt_frame(NmtCommand::start, io)});
+      can::Received rx[64];
+      for (std::size_t n; (n = master_bus.receive(rx)) > 0;)
+        for (std::size_t k = 0; k < n; ++k) {
+          const can::Frame& f = rx[k].frame;
+          sdo.on_frame(f, now);
+          if (tpdo.receive(f) == PdoReceive::ok && tpdo.get(0, input) == Codec::ok)
+            most = std::max(most, input);
+          if (f.can_id() == 0x80u + io && f.len == 8) {
+            emcy_2310 += f.data[0] == 0x10 && f.data[1] == 0x23;
+            emcy_8130 += f.data[0] == 0x30 && f.data[1] == 0x81;
+          }
+        }
+      written += i == 40 && sdo.result().status == SdoStatus::done;
+      if (auto f = sdo.poll(now)) (void)master_bus.send(std::span(&*f, 1));
+      (void)rpdo.set(0, std::int16_t{2000});
+      if (i < 2000) (void)master_bus.send(std::array{rpdo.frame(), sync_frame()});
+      if (i < 2000 && i % 10 == 0)
+        (void)master_bus.send(std::array{heartbeat_frame(127, NmtState::operational)});
+      if (i == 1000) gripper.inject({FaultKind::over_current});
+      gripper.step(now);
+    }
+  }
+  const auto counts = window.counts();
+  EXPECT_EQ(written, 1) << "0x1016:01 by SDO";
+  EXPECT_EQ(most, 2000) << "the input followed the output";
+  EXPECT_EQ(emcy_2310, 1);
+  EXPECT_EQ(emcy_8130, 1) << "the master's heartbeat stopped at 2 s: its consumer fired";
+  EXPECT_EQ(gripper.output(), 0) << "CiA 401's error value";
+  EXPECT_EQ(gripper.heartbeat_events(), 1u);
   EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
   EXPECT_RT_CLEAN(counts);
 }

@@ -53,8 +53,8 @@ def _consumer_od(od):
 
 class PythonDrive:
     def __init__(self, network, node_id, eds, *, boot_fault=None, reset_clears=True, mode_follows=True,
-                 vendor=None, stuck_in=None):
-        od = canopen.import_od(eds, node_id)
+                 vendor=None, stuck_in=None, od=None):
+        od = od if od is not None else canopen.import_od(eds, node_id)
         _consumer_od(od)
         if vendor is not None:
             od[0x1018][1].default = vendor
@@ -106,7 +106,8 @@ class PythonDrive:
         if state != self.state:
             self._note(f"state {state}")
         self.state = state
-        self._set(0x6041, 0, STATUSWORD[state])
+        if 0x6041 in self.node.object_dictionary:
+            self._set(0x6041, 0, STATUSWORD[state])
 
     # ---- NMT -----------------------------------------------------------------------------------
     def boot(self):
@@ -193,6 +194,8 @@ class PythonDrive:
 
     # ---- PDOs --------------------------------------------------------------------------------
     def _mapping(self, parameter, mapping):
+        if parameter not in self.node.object_dictionary:
+            return None  # a node with fewer than 4 PDOs
         cob = self._get(parameter, 1)
         if cob & 0x80000000:
             return None

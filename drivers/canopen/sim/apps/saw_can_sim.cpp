@@ -15,6 +15,7 @@
 #include "saw/canopen/sim/drive_dictionary.hpp"
 #include "saw/canopen/sim/sim_config.hpp"
 #include "saw/canopen/sim/sim_drive.hpp"
+#include "saw/canopen/sim/sim_io_node.hpp"
 #include "saw/detail/pacer.hpp"
 #include "saw/rt_thread.hpp"
 
@@ -29,6 +30,11 @@ void on_signal(int) { stop_requested.store(true, std::memory_order_relaxed); }
 struct Simulated {
   std::unique_ptr<saw::can::Bus> bus;  // one attachment per drive: each sees the others' frames
   std::unique_ptr<SimDrive> drive;
+};
+
+struct SimulatedIo {
+  std::unique_ptr<saw::can::Bus> bus;
+  std::unique_ptr<SimIoNode> node;
 };
 
 void print_summary(const std::vector<Simulated>& drives, TimeNs elapsed, std::uint64_t cycles,
@@ -69,6 +75,11 @@ int main(int argc, char** argv) {
   bool print_eds = false;
   app.add_option("--bus", bus, "virtual:<name> or socketcan:<ifname> (overrides the config file's)");
   app.add_option("--node", nodes, "a drive: <node-ID 1..127>[:<EDS or DCF>]; repeatable");
+  std::vector<int> io_nodes;
+  app.add_option("--io", io_nodes,
+                 "a generic I/O node (CiA 401: 0x6411:01 output, 0x6401:01 input following it, a "
+                 "gripper's controller): its node-ID; repeatable")
+      ->check(CLI::Range(1, 127));
   app.add_option("--config", config_file,
                  "YAML: bus, period, drives (node, eds, heartbeat_ms, motor), faults");
   app.add_option("--eds", eds,
@@ -102,6 +113,7 @@ int main(int argc, char** argv) {
 
   SimConfig config;
   std::vector<Simulated> drives;
+  std::vector<SimulatedIo> ios;
   try {
     if (!config_file.empty()) config = load_sim_config(config_file);
     if (!bus.empty()) config.bus = bus;
@@ -124,7 +136,27 @@ int main(int argc, char** argv) {
       config.drives.push_back(d);
     }
     for (const auto& text : injections) config.faults.push_back(parse_scheduled_fault(text));
-    check(config);
+    // The drives' checks, with the I/O nodes' faults set aside (over-current and heartbeat-loss
+    // are theirs too).
+    SimConfig drives_only = config;
+    std::erase_if(drives_only.faults, [&](const ScheduledFault& f) {
+      return std::find(io_nodes.begin(), io_nodes.end(), f.node) != io_nodes.end();
+    });
+    if (!drives_only.drives.empty() || io_nodes.empty()) check(drives_only);
+    for (const int n : io_nodes)
+      for (const auto& d : config.drives)
+        if (d.node == n) throw std::invalid_argument("node " + std::to_string(n) + " is simulated twice");
+    for (const int n : io_nodes) {
+      SimulatedIo s;
+      saw::can::BusConfig bus_config;
+      bus_config.uri = config.bus;
+      s.bus = saw::can::open_bus(bus_config);
+      SimIoNodeConfig c;
+      c.node = static_cast<std::uint8_t>(n);
+      if (heartbeat_ms) c.heartbeat_ms = static_cast<std::uint16_t>(*heartbeat_ms);
+      s.node = std::make_unique<SimIoNode>(c, *s.bus);
+      ios.push_back(std::move(s));
+    }
     for (const auto& d : config.drives) {
       Simulated s;
       saw::can::BusConfig bus_config;
@@ -151,6 +183,7 @@ int main(int argc, char** argv) {
 
   std::string list;
   for (const auto& s : drives) list += (list.empty() ? "" : ", ") + std::to_string(s.drive->node());
+  for (const auto& s : ios) list += (list.empty() ? "" : ", ") + std::to_string(s.node->node()) + " (I/O)";
   // One line on stdout once the drives are on the bus, for scripts that wait for it.
   std::printf("saw-can-sim: %zu drive%s on %s (node%s %s), %.0f us cycle\n", drives.size(),
               drives.size() == 1 ? "" : "s", config.bus.c_str(), drives.size() == 1 ? "" : "s", list.c_str(),
@@ -175,13 +208,25 @@ int main(int argc, char** argv) {
       const ScheduledFault& f = config.faults[next_fault];
       for (auto& s : drives)
         if (s.drive->node() == f.node) s.drive->inject(f.fault);
+      for (auto& s : ios)
+        if (s.node->node() == f.node) s.node->inject(f.fault);
       std::fprintf(stderr, "saw-can-sim: %.3f s: injected %s\n", static_cast<double>(now - start) * 1e-9,
                    describe(f).c_str());
     }
     for (auto& s : drives) s.drive->step(now);
+    for (auto& s : ios) s.node->step(now);
     ++cycles;
     pacer.finish_cycle(saw::monotonic_now());
   }
   print_summary(drives, saw::monotonic_now() - start, cycles, pacer, worst_late);
+  for (const auto& s : ios)
+    std::printf(
+        "I/O node %u: %s, output %d, input %d, %llu SYNC, %llu SDO requests, %llu EMCY, %llu heartbeat "
+        "events\n",
+        unsigned{s.node->node()}, std::string(to_string(s.node->nmt_state())).c_str(), int{s.node->output()},
+        int{s.node->input()}, static_cast<unsigned long long>(s.node->syncs()),
+        static_cast<unsigned long long>(s.node->sdo_requests()),
+        static_cast<unsigned long long>(s.node->emcys()),
+        static_cast<unsigned long long>(s.node->heartbeat_events()));
   return 0;
 }

@@ -41,12 +41,13 @@ using saw::RefusedCommands;
 // A CANopen component's state and counters: a summary column (printed when a run ends).
 struct CanopenStatus {
   static constexpr std::string_view type_name = "saw::canopen::CanopenStatus";
-  // 2: refused is the device base's; 3: fault_node, warnings
-  static constexpr std::uint32_t layout_version = 3;
+  // 2: refused is the device base's; 3: fault_node, warnings; 4: shared_bus
+  static constexpr std::uint32_t layout_version = 4;
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultReason reason = FaultReason::none;
   std::uint8_t bus_state = 0;  // can::BusState
   std::uint8_t joints = 0;
+  std::uint8_t shared_bus = 0;  // 1: a client of a bus task (its SYNC and heartbeat are the task's)
   std::uint32_t faults = 0;     // times it went to FAULT
   FaultInfo fault;              // the last fault (kept after recovery)
   std::uint8_t fault_node = 0;  // its drive's node-ID (0: the bus, or none)
@@ -65,6 +66,7 @@ struct CanopenStatus {
                                             &CanopenStatus::reason,
                                             &CanopenStatus::bus_state,
                                             &CanopenStatus::joints,
+                                            &CanopenStatus::shared_bus,
                                             &CanopenStatus::faults,
                                             &CanopenStatus::fault,
                                             &CanopenStatus::fault_node,

@@ -20,6 +20,7 @@ struct BusMasterConfig {
   TimeNs sdo_timeout = 500'000'000;  // each response of a runtime SDO transfer
   std::size_t sdo_queue = 16;        // runtime SDO requests (and replies) in flight
   std::size_t max_frames = 256;      // frames read per cycle at most; the rest wait a cycle
+  bool sync = true;                  // false: another (a shared bus task) sends SYNC
   // The master's own heartbeat (CiA 301), which the drives' consumers (0x1016) watch: its
   // node-ID (no drive may have it) and period; 0: none.
   std::uint8_t node = 127;

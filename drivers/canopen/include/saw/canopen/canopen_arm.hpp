@@ -11,6 +11,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/arm_status.hpp"
 #include "saw/canopen/bus_master.hpp"
+#include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/chain_kinematics.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/canopen/startup.hpp"
@@ -44,7 +45,10 @@ struct JointConfig {
 enum class CommandTimeoutAction : std::uint8_t { hold, fault };
 
 struct CanopenArmConfig {
-  std::string bus;                     // "virtual:<name>" or "socketcan:<if>"
+  // "virtual:<name>" or "socketcan:<if>": this component is the master of that bus; or the name
+  // of a canopen_bus component: a client of its bus task (which sends SYNC and the master's
+  // heartbeat; master_node and master_heartbeat_* are then its).
+  std::string bus;
   std::string interface_name = "arm";  // the provided CRTK interface
   cia402::Mode mode = cia402::csp;
   std::vector<JointConfig> joints;         // 1..8
@@ -104,6 +108,8 @@ class CanopenArm : public Device {
   const CanopenArmConfig& arm_config() const noexcept { return config_; }
   std::size_t joints() const noexcept { return n_; }
   BusMaster& master() noexcept { return *master_; }
+  // On a shared bus: this component's port of the bus task; else nullptr.
+  BusPort* port() noexcept { return link_.port; }
   FaultReason fault_reason() const noexcept { return reason_; }
   const CanopenStatus& status() const noexcept { return status_; }
   const JointState& measured_js() const noexcept { return measured().js; }
@@ -121,9 +127,7 @@ class CanopenArm : public Device {
   bool accepts(ServoMode m) const noexcept override;
 
  private:
-  struct Claim;
-  CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, std::unique_ptr<can::Bus> owned,
-             can::Bus* bus);
+  CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus* bus);
   void provide_interfaces();
   // The cycle.
   void read_feedback() noexcept;
@@ -142,9 +146,8 @@ class CanopenArm : public Device {
 
   CanopenArmConfig config_;
   std::size_t n_ = 0;
-  std::unique_ptr<can::Bus> owned_bus_;
+  BusLink link_;
   can::Bus& bus_;
-  std::unique_ptr<Claim> claim_;
   std::unique_ptr<BusMaster> master_;
   std::unique_ptr<ChainKinematics> kinematics_;
 

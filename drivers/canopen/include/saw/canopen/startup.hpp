@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -28,6 +29,20 @@ struct StartupWrite {
 // node-ID and time, ms; when master_timeout is not 0), the abort connection option code 0x6007,
 // the deployment's writes (AxisConfig::writes), the mode of operation 0x6060.
 std::vector<StartupWrite> startup_writes(const AxisConfig& axis);
+// What any node gets (a CiA 402 drive's start with it): its PDOs, 0x1017 and, when
+// master_timeout is not 0, 0x1016:01.
+std::vector<StartupWrite> node_writes(std::span<const PdoMapping> pdos, TimeNs heartbeat_period,
+                                      std::uint8_t master_node, TimeNs master_timeout);
+
+// One node as the start-up sees it, whatever its profile: who it is and what it is written.
+struct NodeSetup {
+  std::string name;  // what errors call it
+  std::uint8_t node = 1;
+  std::optional<DriveIdentity> identity;  // checked before anything is written; nullopt: not
+  std::vector<StartupWrite> writes;
+};
+// A CiA 402 drive's: check(axis) (throws as it does), and startup_writes(axis).
+NodeSetup setup_of(const AxisConfig& axis);
 // A write's value as its type encodes it (values are kept as 32 bits; a signed object's is its
 // two's complement).
 Number startup_value(const SdoWrite& w) noexcept;
@@ -48,6 +63,7 @@ std::string_view to_string(StartupPhase p) noexcept;
 class StartupSequence {
  public:
   StartupSequence(can::Bus& bus, std::span<const AxisConfig> axes, StartupConfig config = {});
+  StartupSequence(can::Bus& bus, std::vector<NodeSetup> nodes, StartupConfig config = {});
   ~StartupSequence();
   StartupSequence(const StartupSequence&) = delete;
   StartupSequence& operator=(const StartupSequence&) = delete;

@@ -1,0 +1,173 @@
+// The task of one CAN bus that several components share: the bus's only reader and writer, SYNC, the master's
+// heartbeat.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "saw/can/bus.hpp"
+#include "saw/canopen/heartbeat.hpp"
+#include "saw/canopen/sync.hpp"
+#include "saw/clock.hpp"
+
+namespace saw::canopen {
+
+struct BusTaskConfig {
+  TimeNs period = 1'000'000;  // one SYNC per cycle
+  // The master's own heartbeat (CiA 301): its node-ID (no node of any client may have it), its
+  // period (0: none), and the consumer time every client writes to its nodes' 0x1016:01.
+  std::uint8_t node = 127;
+  TimeNs heartbeat_period = 100'000'000;
+  TimeNs heartbeat_timeout = 300'000'000;
+  std::size_t max_frames = 256;  // frames read per cycle at most; the rest wait a cycle
+  std::size_t ring = 512;        // frames in flight per client and direction
+};
+
+// Figures since construction; each only grows.
+struct BusTaskCounters {
+  std::uint64_t cycles = 0;
+  std::uint64_t frames_received = 0;
+  std::uint64_t frames_sent = 0;
+  std::uint64_t send_refused = 0;  // frames the bus did not take (full, down)
+  std::uint64_t syncs = 0;
+  std::uint64_t heartbeats = 0;      // the master's own
+  std::uint64_t foreign_frames = 0;  // frames for no client (another master's, unknown nodes)
+  std::uint64_t dropped = 0;         // frames for a client whose ring was full
+  std::uint64_t receive_limited = 0;
+};
+
+class BusTask;
+
+// A client's bus: a can::Bus whose frames are its own nodes' (their EMCY, heartbeat, SDO
+// responses, TPDOs). While the client cycles (set_cycling(true), from its first RT cycle on) it
+// reads what the bus task routed to it and queues what it sends for the bus task's next cycle
+// (lock-free rings, one writer each). Before (the client's start-up) and after (its last frames
+// at exit, once every task's thread has ended) it reads and writes the bus itself: then no
+// thread cycles, so nobody else touches the bus.
+class BusPort final : public can::Bus {
+ public:
+  std::size_t receive(std::span<can::Received> out) noexcept override;
+  std::size_t send(std::span<const can::Frame> frames) noexcept override;
+  can::BusState state() const noexcept override;
+  can::BusCounters counters() const noexcept override;
+  const std::string& name() const noexcept override;
+
+  void set_cycling(bool on) noexcept { cycling_.store(on, std::memory_order_release); }
+  bool cycling() const noexcept { return cycling_.load(std::memory_order_acquire); }
+  // The client walked its nodes to their safe state and NMT pre-operational.
+  void mark_shut_down() noexcept { shut_down_ = true; }
+  const std::string& client() const noexcept { return client_; }
+  std::span<const std::uint8_t> nodes() const noexcept { return nodes_; }
+  std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
+
+  ~BusPort() override;
+  BusPort(const BusPort&) = delete;
+  BusPort& operator=(const BusPort&) = delete;
+
+ private:
+  friend class BusTask;
+  template <class T>
+  struct Ring;  // single producer, single consumer, fixed capacity
+  BusPort(BusTask& task, std::string client, std::vector<std::uint8_t> nodes, std::size_t ring);
+
+  BusTask& task_;
+  std::string client_;
+  std::vector<std::uint8_t> nodes_;
+  std::unique_ptr<Ring<can::Received>> in_;  // bus task → client
+  std::unique_ptr<Ring<can::Frame>> out_;    // client → bus task
+  std::atomic<bool> cycling_{false};
+  std::atomic<std::uint64_t> dropped_{0};
+  bool shut_down_ = false;
+};
+
+// One bus and the clients on it. cycle() is its RT cycle (one thread: the canopen_bus
+// component's): every received frame checked and routed to the client whose node sent it, every
+// client's queued frames sent in the order queued, then SYNC — after the clients' RPDOs, so that
+// each SYNC applies what they queued before it — and the master's heartbeat when due. It neither
+// allocates, locks, blocks, prints nor throws. attach() is set-up.
+class BusTask {
+ public:
+  BusTask(std::unique_ptr<can::Bus> bus, BusTaskConfig config);
+  // Sends NMT enter pre-operational to every node whose client never shut it down (a client
+  // that failed before its start-up, or never ran): no node of the bus is left operational.
+  ~BusTask();
+  BusTask(const BusTask&) = delete;
+  BusTask& operator=(const BusTask&) = delete;
+
+  // A client with its nodes and the TPDO identifiers it receives (besides its nodes' EMCY,
+  // heartbeat and SDO responses). Throws std::invalid_argument naming both clients when a node
+  // or an identifier is another client's, or a node is the master's own node-ID.
+  BusPort& attach(const std::string& client, std::span<const std::uint8_t> nodes,
+                  std::span<const std::uint32_t> tpdos);
+
+  void cycle(TimeNs now) noexcept;
+
+  can::Bus& bus() noexcept { return *bus_; }
+  const BusTaskConfig& config() const noexcept { return config_; }
+  const BusTaskCounters& counters() const noexcept { return counters_; }
+  std::size_t clients() const noexcept { return ports_.size(); }
+  const BusPort& port(std::size_t i) const noexcept { return *ports_[i]; }
+  // The bus's state as the last cycle saw it (read by the clients' threads).
+  can::BusState state() const noexcept { return state_.load(std::memory_order_acquire); }
+
+ private:
+  friend class BusPort;
+  void flush(std::span<const can::Frame> frames) noexcept;
+
+  std::unique_ptr<can::Bus> bus_;
+  BusTaskConfig config_;
+  std::vector<std::unique_ptr<BusPort>> ports_;
+  std::array<std::uint8_t, 2048> routes_{};  // 11-bit identifier → port index + 1; 0: none
+  SyncProducer sync_;
+  HeartbeatProducer heartbeat_;
+  BusTaskCounters counters_;
+  std::vector<can::Received> inbox_;
+  std::array<can::Frame, 64> outbox_{};
+  std::size_t out_count_ = 0;
+  bool started_ = false;
+  std::atomic<can::BusState> state_{can::BusState::error_active};
+};
+
+// The buses of this process by deployment name (a canopen_bus component's), for the components
+// that name one as their `bus`. Set-up only (a lock). find() throws std::runtime_error saying
+// what is missing.
+void publish_bus_task(const std::string& name, std::shared_ptr<BusTask> task);
+void withdraw_bus_task(const std::string& name) noexcept;
+std::shared_ptr<BusTask> find_bus_task(const std::string& name);
+
+// One master per bus and process: two would both send SYNC and fight over the nodes. Held by
+// whoever opens a bus (a canopen_bus, or a component that is master of its own bus); a second
+// claim of the same bus throws std::runtime_error naming the holder.
+class BusClaim {
+ public:
+  BusClaim(std::string bus, const std::string& owner);
+  ~BusClaim();
+  BusClaim(const BusClaim&) = delete;
+  BusClaim& operator=(const BusClaim&) = delete;
+
+ private:
+  std::string bus_;
+};
+
+// The bus a component reaches its nodes through.
+struct BusLink {
+  std::unique_ptr<can::Bus> owned;  // its own bus (a URI) ...
+  std::unique_ptr<BusClaim> claim;  // ... of which it is the master
+  std::shared_ptr<BusTask> task;    // or a shared bus task ...
+  BusPort* port = nullptr;          // ... and its port there
+  can::Bus* bus = nullptr;          // what its drivers use: the bus, or the port
+  bool shared() const noexcept { return port != nullptr; }
+};
+// A bus URI (`virtual:<name>`, `socketcan:<if>`), or else the name of a canopen_bus component.
+bool is_bus_uri(const std::string& bus) noexcept;
+// A URI: opened and claimed for `client` (throws std::runtime_error: cannot open, or claimed);
+// a name: the bus task found and joined with `nodes` and `tpdos` (attach()'s errors).
+BusLink link_bus(const std::string& bus, const std::string& client, std::span<const std::uint8_t> nodes,
+                 std::span<const std::uint32_t> tpdos);
+
+}  // namespace saw::canopen

@@ -1,0 +1,55 @@
+// CanopenBus: the bus task of one CAN bus as a periodic RT component that other CANopen components name as
+// their `bus`.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "saw/canopen/bus_task.hpp"
+#include "saw/task.hpp"
+
+namespace saw::canopen {
+
+// The bus task's figures: a summary column (printed when a run ends).
+struct CanopenBusStatus {
+  static constexpr std::string_view type_name = "saw::canopen::CanopenBusStatus";
+  static constexpr std::uint32_t layout_version = 1;
+  std::uint8_t bus_state = 0;  // can::BusState
+  std::uint8_t clients = 0;
+  std::uint8_t node = 0;  // the master's heartbeat node-ID
+  std::uint64_t syncs = 0, heartbeats = 0;
+  std::uint64_t frames_received = 0, frames_sent = 0, send_refused = 0, foreign_frames = 0, dropped = 0;
+  static constexpr auto fields = std::tuple{
+      &CanopenBusStatus::bus_state,   &CanopenBusStatus::clients,      &CanopenBusStatus::node,
+      &CanopenBusStatus::syncs,       &CanopenBusStatus::heartbeats,   &CanopenBusStatus::frames_received,
+      &CanopenBusStatus::frames_sent, &CanopenBusStatus::send_refused, &CanopenBusStatus::foreign_frames,
+      &CanopenBusStatus::dropped};
+};
+
+struct CanopenBusConfig {
+  std::string uri;  // "virtual:<name>" or "socketcan:<if>"
+  std::uint8_t node = 127;
+  TimeNs heartbeat_period = 100'000'000;
+  TimeNs heartbeat_timeout = 300'000'000;
+};
+
+// Opens the bus (claimed: no other master of it in this process) and publishes its BusTask
+// under the component's name; the components whose `bus` is that name attach to it when they are
+// built. Each cycle is BusTask::cycle(). Provided "canopen_bus": status (CanopenBusStatus).
+class CanopenBus : public Task {
+ public:
+  CanopenBus(std::string name, TaskConfig task, CanopenBusConfig config);
+  ~CanopenBus() override;
+  BusTask& bus_task() noexcept { return *task_; }
+  const CanopenBusStatus& status() const noexcept { return status_; }
+
+  void run() override;  // the cycle: BusTask::cycle()
+
+ private:
+  BusClaim claim_;
+  std::shared_ptr<BusTask> task_;
+  CanopenBusStatus status_{};
+};
+
+}  // namespace saw::canopen

@@ -1,0 +1,255 @@
+#include "saw/canopen/bus_task.hpp"
+
+#include <algorithm>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+#include "saw/canopen/cob.hpp"
+#include "saw/canopen/nmt.hpp"
+
+namespace saw::canopen {
+
+// Lamport's ring: the producer owns head, the consumer tail; a slot belongs to the producer
+// until head is released past it, to the consumer after it acquired head.
+template <class T>
+struct BusPort::Ring {
+  explicit Ring(std::size_t capacity) : slots(capacity + 1) {}
+  bool push(const T& v) noexcept {
+    const std::size_t h = head.load(std::memory_order_relaxed);
+    const std::size_t next = h + 1 == slots.size() ? 0 : h + 1;
+    if (next == tail.load(std::memory_order_acquire)) return false;
+    slots[h] = v;
+    head.store(next, std::memory_order_release);
+    return true;
+  }
+  bool pop(T& v) noexcept {
+    const std::size_t t = tail.load(std::memory_order_relaxed);
+    if (t == head.load(std::memory_order_acquire)) return false;
+    v = slots[t];
+    tail.store(t + 1 == slots.size() ? 0 : t + 1, std::memory_order_release);
+    return true;
+  }
+  std::vector<T> slots;
+  std::atomic<std::size_t> head{0}, tail{0};
+};
+
+BusPort::BusPort(BusTask& task, std::string client, std::vector<std::uint8_t> nodes, std::size_t ring)
+    : task_(task),
+      client_(std::move(client)),
+      nodes_(std::move(nodes)),
+      in_(std::make_unique<Ring<can::Received>>(ring)),
+      out_(std::make_unique<Ring<can::Frame>>(ring)) {}
+
+BusPort::~BusPort() = default;
+
+std::size_t BusPort::receive(std::span<can::Received> out) noexcept {
+  if (!cycling()) {
+    // Start-up or exit: no thread cycles; the frames of other clients' nodes are theirs to
+    // miss (their consumers start with the first cycle).
+    return task_.bus().receive(out);
+  }
+  std::size_t n = 0;
+  while (n < out.size() && in_->pop(out[n])) ++n;
+  return n;
+}
+
+std::size_t BusPort::send(std::span<const can::Frame> frames) noexcept {
+  if (!cycling()) return task_.bus().send(frames);
+  std::size_t n = 0;
+  while (n < frames.size() && out_->push(frames[n])) ++n;
+  return n;
+}
+
+can::BusState BusPort::state() const noexcept { return cycling() ? task_.state() : task_.bus().state(); }
+can::BusCounters BusPort::counters() const noexcept { return task_.bus().counters(); }
+const std::string& BusPort::name() const noexcept { return task_.bus().name(); }
+
+BusTask::BusTask(std::unique_ptr<can::Bus> bus, BusTaskConfig config)
+    : bus_(std::move(bus)),
+      config_(config),
+      sync_(config.period),
+      heartbeat_(config.node, config.heartbeat_period) {
+  if (config.heartbeat_period > 0 && !valid_node_id(config.node))
+    throw std::invalid_argument("the master's node-ID " + std::to_string(config.node) + " is not 1..127");
+  if (config.period <= 0) throw std::invalid_argument("a CANopen bus task must be periodic");
+  inbox_.resize(64);
+  state_.store(bus_->state(), std::memory_order_release);
+}
+
+BusTask::~BusTask() {
+  for (const auto& p : ports_) {
+    if (p->shut_down_) continue;
+    for (const std::uint8_t node : p->nodes_) {
+      const can::Frame f = nmt_frame(NmtCommand::enter_pre_operational, node);
+      (void)bus_->send(std::span(&f, 1));
+    }
+  }
+}
+
+BusPort& BusTask::attach(const std::string& client, std::span<const std::uint8_t> nodes,
+                         std::span<const std::uint32_t> tpdos) {
+  if (ports_.size() >= 254) throw std::invalid_argument("at most 254 components on one bus");
+  const auto index = static_cast<std::uint8_t>(ports_.size() + 1);
+  std::array<std::uint8_t, 2048> routes = routes_;
+  const auto take = [&](std::uint32_t id, const std::string& what) {
+    if (id >= routes.size())
+      throw std::invalid_argument(client + ": " + what + " is not an 11-bit identifier");
+    if (routes[id] != 0)
+      throw std::invalid_argument(client + ": " + what + " (identifier " + std::to_string(id) + ") is '" +
+                                  ports_[routes[id] - 1u]->client_ + "''s already on bus " + bus_->name());
+    routes[id] = index;
+  };
+  for (const std::uint8_t node : nodes) {
+    const std::string n = "node " + std::to_string(node);
+    if (config_.heartbeat_period > 0 && node == config_.node)
+      throw std::invalid_argument(client + ": " + n + " is the master's own node-ID (its heartbeat)");
+    take(cob::heartbeat + node, n);
+    take(cob::emcy + node, n + "'s EMCY");
+    take(cob::sdo_tx + node, n + "'s SDO channel");
+  }
+  for (const std::uint32_t id : tpdos) take(id, "a TPDO");
+  ports_.push_back(std::unique_ptr<BusPort>(
+      new BusPort(*this, client, std::vector<std::uint8_t>(nodes.begin(), nodes.end()), config_.ring)));
+  routes_ = routes;
+  return *ports_.back();
+}
+
+void BusTask::flush(std::span<const can::Frame> frames) noexcept {
+  if (frames.empty()) return;
+  const std::size_t sent = bus_->send(frames);
+  counters_.frames_sent += sent;
+  counters_.send_refused += frames.size() - sent;
+}
+
+void BusTask::cycle(TimeNs now) noexcept {
+  if (!started_) {
+    started_ = true;
+    sync_.start(now);
+    heartbeat_.start(now - config_.heartbeat_period);  // the first one at once
+  }
+  ++counters_.cycles;
+  // Frames in: each to the client whose node sent it.
+  std::size_t total = 0;
+  while (total < config_.max_frames) {
+    const std::size_t want = std::min(inbox_.size(), config_.max_frames - total);
+    const std::size_t n = bus_->receive(std::span(inbox_.data(), want));
+    for (std::size_t i = 0; i < n; ++i) {
+      const can::Received& r = inbox_[i];
+      const std::uint8_t route = canopen_data_frame(r.frame) ? routes_[r.frame.can_id() & CAN_SFF_MASK] : 0;
+      if (route == 0) {
+        ++counters_.foreign_frames;
+        continue;
+      }
+      BusPort& p = *ports_[route - 1u];
+      if (!p.in_->push(r)) {
+        ++counters_.dropped;
+        p.dropped_.fetch_add(1, std::memory_order_relaxed);
+      }
+    }
+    total += n;
+    if (n < want) break;
+  }
+  if (total >= config_.max_frames) ++counters_.receive_limited;
+  counters_.frames_received += total;
+  // Frames out: every client's, in the order it queued them, then SYNC and the heartbeat.
+  out_count_ = 0;
+  for (const auto& p : ports_) {
+    can::Frame f;
+    while (p->out_->pop(f)) {
+      outbox_[out_count_++] = f;
+      if (out_count_ == outbox_.size() - 2) {
+        flush(std::span<const can::Frame>(outbox_.data(), out_count_));
+        out_count_ = 0;
+      }
+    }
+  }
+  // Half a period of slack: a cycle that wakes a little early still sends its SYNC.
+  if (const auto s = sync_.poll(now + config_.period / 2)) {
+    outbox_[out_count_++] = *s;
+    ++counters_.syncs;
+  }
+  if (const auto h = heartbeat_.poll(now, NmtState::operational)) {
+    outbox_[out_count_++] = *h;
+    ++counters_.heartbeats;
+  }
+  flush(std::span<const can::Frame>(outbox_.data(), out_count_));
+  state_.store(bus_->state(), std::memory_order_release);
+}
+
+namespace {
+
+std::mutex registry_mutex;
+std::map<std::string, std::weak_ptr<BusTask>>& bus_tasks() {
+  static std::map<std::string, std::weak_ptr<BusTask>> m;
+  return m;
+}
+std::map<std::string, std::string>& claims() {
+  static std::map<std::string, std::string> c;
+  return c;
+}
+
+}  // namespace
+
+void publish_bus_task(const std::string& name, std::shared_ptr<BusTask> task) {
+  const std::lock_guard lock(registry_mutex);
+  if (auto old = bus_tasks()[name].lock(); old != nullptr)
+    throw std::runtime_error("a CANopen bus named '" + name + "' exists in this process already");
+  bus_tasks()[name] = task;
+}
+
+void withdraw_bus_task(const std::string& name) noexcept {
+  const std::lock_guard lock(registry_mutex);
+  bus_tasks().erase(name);
+}
+
+std::shared_ptr<BusTask> find_bus_task(const std::string& name) {
+  const std::lock_guard lock(registry_mutex);
+  const auto it = bus_tasks().find(name);
+  std::shared_ptr<BusTask> t = it == bus_tasks().end() ? nullptr : it->second.lock();
+  if (t == nullptr)
+    throw std::runtime_error("bus '" + name +
+                             "' is no canopen_bus component of this deployment (a canopen_bus named '" +
+                             name + "' must come before the components on it)");
+  return t;
+}
+
+BusClaim::BusClaim(std::string bus, const std::string& owner) : bus_(std::move(bus)) {
+  const std::lock_guard lock(registry_mutex);
+  const auto [it, fresh] = claims().emplace(bus_, owner);
+  if (!fresh)
+    throw std::runtime_error("CAN bus " + bus_ + " has a CANopen master in this process already ('" +
+                             it->second + "'): put its components on one canopen_bus");
+}
+
+BusClaim::~BusClaim() {
+  const std::lock_guard lock(registry_mutex);
+  claims().erase(bus_);
+}
+
+bool is_bus_uri(const std::string& bus) noexcept {
+  return bus.starts_with("virtual:") || bus.starts_with("socketcan:");
+}
+
+BusLink link_bus(const std::string& bus, const std::string& client, std::span<const std::uint8_t> nodes,
+                 std::span<const std::uint32_t> tpdos) {
+  BusLink l;
+  if (is_bus_uri(bus)) {
+    can::BusConfig c;
+    c.uri = bus;
+    l.owned = can::open_bus(c);
+    l.claim = std::make_unique<BusClaim>(bus, client);
+    l.bus = l.owned.get();
+    return l;
+  }
+  l.task = find_bus_task(bus);
+  try {
+    l.port = &l.task->attach(client, nodes, tpdos);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  l.bus = l.port;
+  return l;
+}
+
+}  // namespace saw::canopen

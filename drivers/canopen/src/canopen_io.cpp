@@ -1,0 +1,224 @@
+// CanopenIo: the start-up, the cycle and the safe state of a generic I/O node (RT code in the cycle).
+#include "saw/canopen/canopen_io.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "saw/canopen/emcy.hpp"
+#include "saw/log.hpp"
+
+namespace saw::canopen {
+namespace {
+
+CanopenIoConfig checked(CanopenIoConfig c, const TaskConfig& task) {
+  const TimeNs period = task.period.count();
+  if (period <= 0) throw std::invalid_argument("a CANopen component's task must be periodic");
+  if (c.channels.empty() || c.channels.size() > JointState::max_joints)
+    throw std::invalid_argument("a CANopen I/O component has 1 to 8 channels");
+  if (c.command_timeout == 0) c.command_timeout = 3 * period;
+  if (c.feedback_timeout == 0) c.feedback_timeout = std::max<TimeNs>(10 * period, 10'000'000);
+  c.node.outputs.clear();
+  c.node.inputs.clear();
+  for (const IoChannel& ch : c.channels) {
+    if (!ch.output) throw std::invalid_argument("channel '" + ch.name + "': no output object");
+    if (!(ch.scale != 0) || !std::isfinite(ch.scale) || !(ch.min < ch.max) || ch.safe < ch.min ||
+        ch.safe > ch.max)
+      throw std::invalid_argument("channel '" + ch.name +
+                                  "': scale must not be 0, min below max, safe within");
+    c.node.outputs.push_back(*ch.output);
+    if (ch.input) c.node.inputs.push_back(*ch.input);
+  }
+  return c;
+}
+
+DeviceConfig contract_of(const CanopenIoConfig& c) {
+  DeviceConfig d;
+  d.interface_name = c.interface_name;
+  d.safe_state = SafeState::hold;
+  d.cartesian = d.servo_cf = false;
+  d.servo_jp = true;
+  d.command_timeout = c.command_timeout;
+  d.start_enabled = c.start_enabled;
+  for (const IoChannel& ch : c.channels) d.joints.push_back({ch.name, ch.min, ch.max, ch.max_velocity});
+  return d;
+}
+
+std::vector<std::uint32_t> tpdo_ids(const IoNodeConfig& n) {
+  std::vector<std::uint32_t> ids;
+  for (const PdoMapping& m : n.pdos)
+    if (m.enabled && m.kind == PdoKind::tpdo) ids.push_back(m.cob_id & CAN_SFF_MASK);
+  return ids;
+}
+
+}  // namespace
+
+CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
+    : Device(std::move(name), task, contract_of(checked(config, task))),
+      config_(checked(std::move(config), task)) {
+  check(config_.node);
+  const std::uint8_t nodes[] = {config_.node.node};
+  const auto tpdos = tpdo_ids(config_.node);
+  link_ = link_bus(config_.bus, this->name(), nodes, tpdos);
+  if (!link_.shared()) {  // its own bus: it runs the bus task in its own cycle
+    BusTaskConfig k;
+    k.period = task.period.count();
+    k.node = config_.master_node;
+    k.heartbeat_period = config_.master_heartbeat_period;
+    k.heartbeat_timeout = config_.master_heartbeat_timeout;
+    own_task_ = std::make_shared<BusTask>(std::move(link_.owned), k);
+    link_.port = &own_task_->attach(this->name(), nodes, tpdos);
+    link_.bus = link_.port;
+  }
+  const BusTaskConfig& k = own_task_ ? own_task_->config() : link_.task->config();
+  config_.node.master_node = k.node;
+  config_.node.master_timeout = k.heartbeat_timeout;
+  config_.node.name = this->name();
+  io_ = std::make_unique<IoNode>(*link_.bus, config_.node);
+  set_safe_outputs();
+  status_.node = config_.node.node;
+  auto& c = provide("canopen");
+  c.add_command_read("status", state_table().add_column("status", &status_, ColumnUse::summary));
+  c.add_command_qualified_read<SdoRequest, SdoReply>(
+      "sdo", [this](const SdoRequest& q, SdoReply& r) { r = io_->sdo_queue().transfer(q, 1'000'000'000); });
+}
+
+CanopenIo::~CanopenIo() = default;
+
+void CanopenIo::open() {
+  StartupSequence sequence(*link_.bus, std::vector<NodeSetup>{setup_of(io_->config())}, config_.startup);
+  run_startup(sequence, config_.startup_pause);
+}
+
+void CanopenIo::set_safe_outputs() noexcept {
+  for (std::size_t i = 0; i < config_.channels.size(); ++i) {
+    const IoChannel& ch = config_.channels[i];
+    if (io_->set_output(i, (ch.safe - ch.offset) / ch.scale) == Codec::ok) target_[i] = ch.safe;
+  }
+}
+
+Outcome CanopenIo::failure(const char* why, FaultCode code, std::uint32_t detail, TimeNs age) noexcept {
+  return Outcome::failed(code, why, name(), detail, age);
+}
+
+Outcome CanopenIo::read() {
+  const TimeNs t = now();
+  if (start_time_ < 0) {
+    start_time_ = t;
+    link_.port->set_cycling(true);  // from now on the bus task carries its frames
+  }
+  if (own_task_) own_task_->cycle(t);  // frames routed, last cycle's RPDOs sent before SYNC
+  io_->receive(t);
+  JointState& js = measured().js;
+  std::size_t in = 0;
+  for (std::size_t i = 0; i < config_.channels.size(); ++i) {
+    const IoChannel& ch = config_.channels[i];
+    double v = 0;
+    if (!ch.input)
+      js.position[i] = target_[i];
+    else if (io_->input(in++, v))
+      js.position[i] = v * ch.scale + ch.offset;
+  }
+  return check_node();
+}
+
+Outcome CanopenIo::check_node() noexcept {
+  const AxisHealth& h = io_->health();
+  const bool says = operating_state().state != OperatingStateValue::fault;
+  const unsigned node = config_.node.node;
+  const can::BusState bus = link_.port->state();
+  if (bus == can::BusState::bus_off || bus == can::BusState::down)
+    return failure("bus off", FaultCode::device_lost, static_cast<std::uint32_t>(bus));
+  if (h.boot_ups != boot_ups_seen_) {
+    boot_ups_seen_ = h.boot_ups;
+    rebooted_ = true;
+  }
+  if (rebooted_) {
+    if (enabling()) return Outcome::done();  // the enable configures it again
+    if (says)
+      saw::log(LogLevel::error, name().c_str(), "node {} rebooted (boot-up seen): its configuration is gone",
+               node);
+    return failure("node rebooted", FaultCode::device_lost);
+  }
+  if (h.emcy_count != emcy_seen_) {
+    emcy_seen_ = h.emcy_count;
+    saw::log(LogLevel::error, name().c_str(), "node {}: EMCY {:x} ({}), error register {:x}", node,
+             unsigned{h.last_emcy}, emcy_name(h.last_emcy).data(), unsigned{h.error_register});
+    return failure("emergency message", FaultCode::device_error, h.last_emcy);
+  }
+  if (h.heartbeat_lost) return failure("heartbeat lost", FaultCode::device_lost, 0, h.silent_for);
+  if (h.heartbeat_seen && h.nmt_state != NmtState::operational && h.nmt_state != NmtState::initialising) {
+    if (says)
+      saw::log(LogLevel::error, name().c_str(), "node {} left operational: its heartbeat says {}", node,
+               to_string(h.nmt_state).data());
+    return failure("left NMT operational", FaultCode::device_lost, static_cast<std::uint32_t>(h.nmt_state));
+  }
+  const TimeNs age = now() - (io_->valid() ? io_->last_received() : std::max(start_time_, watch_from_));
+  if (age > config_.feedback_timeout) return failure("feedback stale", FaultCode::input_stale, 0, age);
+  return Outcome::done();
+}
+
+// A node that rebooted lost its PDO maps and heartbeats: the enable runs its configuration again
+// (the start-up's writes, NMT start) before waiting for its TPDOs.
+Outcome CanopenIo::enable() {
+  if (rebooted_) {
+    if (!reconfiguring_) {
+      io_->reconfigure(now());
+      reconfiguring_ = true;
+    }
+    const Reconfiguration& r = io_->reconfiguration();
+    switch (r.state) {
+      case Reconfiguration::State::idle:
+      case Reconfiguration::State::busy:
+        return Outcome::pending();
+      case Reconfiguration::State::done:
+        rebooted_ = reconfiguring_ = false;
+        ++status_.reconfigurations;
+        watch_from_ = now();  // its TPDOs come from the next SYNC on
+        saw::log(LogLevel::info, name().c_str(), "node {} configured again after its reboot",
+                 unsigned{config_.node.node});
+        break;
+      case Reconfiguration::State::failed:
+        reconfiguring_ = false;  // the next enable tries again
+        saw::log(LogLevel::error, name().c_str(), "node {}: configuring it again failed at {:x}:{}: {}",
+                 unsigned{config_.node.node}, unsigned{r.object.index}, unsigned{r.object.subindex},
+                 r.object.index == 0 ? "no operational heartbeat" : to_string(r.abort).data());
+        return failure("node rebooted", FaultCode::device_lost, static_cast<std::uint32_t>(r.abort));
+    }
+  }
+  return io_->valid() ? Outcome::done() : Outcome::pending();
+}
+
+Outcome CanopenIo::write(const Setpoint& s) {
+  if (!following()) {
+    set_safe_outputs();
+  } else if (s.mode == ServoMode::jp) {
+    for (std::size_t i = 0; i < config_.channels.size(); ++i) {
+      const IoChannel& ch = config_.channels[i];
+      if (io_->set_output(i, (s.joints[i] - ch.offset) / ch.scale) == Codec::ok) target_[i] = s.joints[i];
+    }
+  }  // following without a fresh command: the last outputs stay
+  io_->transmit(now());
+  const AxisHealth& h = io_->health();
+  status_.state = operating_state().state;
+  status_.nmt_state = static_cast<std::uint8_t>(h.nmt_state);
+  status_.bus_state = static_cast<std::uint8_t>(link_.port->state());
+  status_.emcy = h.emcy_count;
+  status_.last_emcy = h.last_emcy;
+  status_.error_register = h.error_register;
+  status_.heartbeat_losses = h.heartbeat_losses;
+  status_.boot_ups = h.boot_ups;
+  status_.bad_pdos = h.bad_pdos;
+  return Outcome::done();
+}
+
+void CanopenIo::enter_safe_state(SafeReason why) {
+  set_safe_outputs();
+  if (why == SafeReason::fault || why == SafeReason::disable) return;  // sent by the next write()
+  // Stop, or a failed start: every thread has ended; the frames go out at once.
+  link_.port->set_cycling(false);
+  io_->shut_down(now());
+  link_.port->mark_shut_down();
+}
+
+}  // namespace saw::canopen
