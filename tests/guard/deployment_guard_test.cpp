@@ -8,6 +8,8 @@
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/manager.hpp"
 #include "saw/teleop/delay_task.hpp"
+#include "saw/teleop/laws/passive_bilateral.hpp"
+#include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/teleop_rig.hpp"
 
@@ -54,7 +56,45 @@ struct Deployment {
   saw::Manager m;
 };
 
-double slave_travel(const Deployment& d) {
+// The bilateral law under delay: the master's passivity port between the master and the link,
+// the slave against a wall, both ports' controllers acting.
+struct BilateralDeployment {
+  BilateralDeployment()
+      : master("master", saw::TaskConfig::periodic(1ms, 0), Deployment::master_config()),
+        slave("slave", saw::TaskConfig::periodic(1ms, 0), slave_config()),
+        port("port", saw::TaskConfig::periodic(1ms, 0), saw::teleop::PortConfig{}),
+        delay("master_delay", saw::TaskConfig::periodic(1ms, 0), Deployment::link_config()),
+        teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config(),
+               saw::teleop::law_spec<saw::teleop::PassiveBilateralLaw>()) {
+    for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &port, &delay, &teleop})
+      m.add(*c);
+    m.connect("port", "device", "master", "arm");
+    m.connect("master_delay", "source", "port", "arm");
+    m.connect("teleop", "master", "master_delay", "arm");
+    m.connect("teleop", "slave", "slave", "arm");
+  }
+  static saw::drivers::SimDeviceConfig slave_config() {
+    saw::drivers::SimDeviceConfig c;
+    c.wall.enabled = true;
+    c.wall.point = Eigen::Vector3d(0.01, 0, 0);
+    c.wall.normal = Eigen::Vector3d(-1, 0, 0);
+    c.wall.stiffness = 100;
+    return c;
+  }
+  static saw::teleop::TeleopConfig teleop_config() {
+    saw::teleop::TeleopConfig c;
+    c.stale_timeout = 0.5;
+    return c;
+  }
+  saw::drivers::SimHapticDevice master, slave;
+  saw::teleop::PassivityPort port;
+  saw::teleop::DelayTask delay;
+  saw::teleop::Teleoperation teleop;
+  saw::Manager m;
+};
+
+template <class D>
+double slave_travel(const D& d) {
   std::array<saw::Pose, 200> h;
   const auto n = d.slave.state_table().read_history(d.slave.columns().measured_cp, std::span<saw::Pose>(h));
   double lo = 1, hi = -1;
@@ -87,6 +127,33 @@ TEST(RtGuard, SimulatedTeleoperationOnThreadsIsRtClean) {
                    d.teleop.statistics().cycles;
   EXPECT_GE(counts.cycles, ran) << "the guard did not sample every cycle";
   EXPECT_LE(counts.cycles, ran + 4);
+  EXPECT_RT_CLEAN(counts);
+}
+
+TEST(RtGuard, PassiveBilateralTeleoperationSteppedIsRtClean) {
+  saw::testing::GuardWindow window;
+  BilateralDeployment d;
+  d.m.start_stepped();
+  d.m.step_until(3'000'000'000);
+  const auto counts = window.counts();
+  EXPECT_EQ(d.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_GT(slave_travel(d), 0.001) << "the slave should be following the master";
+  EXPECT_GT(d.port.controller().energy().in + d.port.controller().energy().out, 0) << "the port observed";
+  d.m.stop();
+  EXPECT_EQ(counts.cycles, 5 * 3001u);
+  EXPECT_RT_CLEAN(counts);
+}
+
+TEST(RtGuard, PassiveBilateralTeleoperationOnThreadsIsRtClean) {
+  saw::testing::GuardWindow window;
+  BilateralDeployment d;
+  saw::testing::run_threads_until(d.m, [&] { return d.teleop.statistics().cycles >= 500; });
+  const auto counts = window.counts();
+  ASSERT_GE(d.teleop.statistics().cycles, 500u);
+  const auto ran = d.master.statistics().cycles + d.slave.statistics().cycles + d.port.statistics().cycles +
+                   d.delay.statistics().cycles + d.teleop.statistics().cycles;
+  EXPECT_GE(counts.cycles, ran) << "the guard did not sample every cycle";
+  EXPECT_LE(counts.cycles, ran + 5);
   EXPECT_RT_CLEAN(counts);
 }
 

@@ -1,6 +1,7 @@
 // The built-in control laws: one line each.
 #include "saw/teleop/law_registry.hpp"
 #include "saw/teleop/laws/collaborative.hpp"
+#include "saw/teleop/laws/passive_bilateral.hpp"
 #include "saw/teleop/laws/position_position.hpp"
 
 namespace saw::teleop {
@@ -10,6 +11,7 @@ LawRegistry& law_registry() {
     LawRegistry r;
     r.add<CollaborativeLaw>();
     r.add<PositionPositionLaw>();
+    r.add<PassiveBilateralLaw>();
     return r;
   }();
   return registry;

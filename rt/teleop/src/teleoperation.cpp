@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "saw/crtk_arm.hpp"
 #include "saw/eigen.hpp"
@@ -69,6 +70,12 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
 }
 
 void Teleoperation::startup() {
+  // A passive law without the master's port would have no energy to spend: refuse to start.
+  if (law_->uses_ports() && (!master_.port_energy.is_bound() || !master_.remote_energy.is_bound()))
+    throw std::runtime_error("law '" + std::string(law_->name()) +
+                             "' needs a passivity port at the master (" + std::string(port::energy.name) +
+                             ", " + std::string(port::remote_energy.name) +
+                             "): put a passivity_port component between the master device and the link");
   // Connected by now: say which components play each role (a client need not guess by name).
   ComponentDescription::set(description_.servers[0], required("master")->connected_to());
   ComponentDescription::set(description_.servers[1], required("slave")->connected_to());
@@ -84,6 +91,8 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   crtk::require(r, delayed_arm::source_time, s.source_time, Need::optional);
   crtk::require(r, delayed_arm::delay, s.delay, Need::optional);
   crtk::require(r, crtk::operating_state, s.state, Need::optional);
+  crtk::require(r, port::energy, s.port_energy, Need::optional);
+  crtk::require(r, port::remote_energy, s.remote_energy, Need::optional);
 }
 
 void Teleoperation::set_operating_state(OperatingStateValue s) noexcept {
@@ -156,6 +165,12 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   Status st = s.cp(pose, stamp);
   if (st == Status::ok) st = s.cv(twist);
   if (st == Status::ok) st = read_time(s, stamp.time, time);
+  // A passive law spends the port's energy: a port that reports none valid fails the read.
+  double energy = 0;
+  if (st == Status::ok && law_->uses_ports() && s.port_energy.is_bound()) {
+    st = s.port_energy(energy);
+    if (st == Status::ok && !(energy >= 0 && std::isfinite(energy))) st = Status::invalid;
+  }
   // A row from the future (more than a period ahead) would never go stale: refused.
   if (st == Status::ok && time > now() + config().period.count()) st = Status::invalid;
   if (st == Status::ok) {
@@ -167,6 +182,7 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
     } else {
       s.last.position = position;
       s.last.velocity = velocity;
+      s.energy = std::max(s.energy, energy);  // only grows: a late row tells nothing new
       s.time = time;
       s.valid = true;
     }
@@ -303,7 +319,7 @@ void Teleoperation::cycle_body() noexcept {
   FaultInfo why{};
   if (!read_side(master_, why) || !read_side(slave_, why)) return on_input_failure(why);
   inputs_seen_ = true;
-  const LawInputs in{master_.last, slave_.last, seconds(config())};
+  const LawInputs in{master_.last, slave_.last, seconds(config()), master_.energy};
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const bool busy = waiting_for_devices();
   if (state_.state != OperatingStateValue::enabled || clutched_ || busy) {
@@ -330,6 +346,9 @@ void Teleoperation::cycle_body() noexcept {
   }
   ratcheting_ = law.limiting;
   account(law);
+  // The energy before the force: the port never applies a force before the energy allowing it.
+  if (law.slave_port_energy >= 0 && master_.remote_energy.is_bound())
+    (void)master_.remote_energy(law.slave_port_energy);
   send_forces(law.master_force, law.slave_force);
 }
 

@@ -4,17 +4,26 @@
 #include "saw/crtk_arm.hpp"
 #include "saw/task.hpp"
 #include "saw/teleop/delay_channel.hpp"
+#include "saw/teleop/passivity_port.hpp"
 
 namespace saw::teleop {
 
-// What a DelayTask adds to the arm interface it re-publishes; Teleoperation reads
-// them, when present, to judge staleness on the source.
 // One reading of the source as it travels.
 struct DelayedSample {
   Pose cp{};
   Twist cv{};
   TimeNs source_time = 0;
+  double port_energy = -1;  // J, the source port's input energy; -1: the source has no port
 };
+
+// One force command as it travels, with the energy bookkeeping of a passive network beside it.
+struct DelayedCommand {
+  Wrench wrench{};
+  double remote_energy = -1;  // J, for the device's port; -1: none sent
+};
+
+// What a DelayTask adds to the arm interface it re-publishes; Teleoperation reads
+// them, when present, to judge staleness on the source.
 
 namespace delayed_arm {
 inline constexpr crtk::Read<TimeNs> source_time{"source_time"};  // of the source row shown
@@ -34,9 +43,11 @@ struct DelayConfig {
 // Required "source" (a device's arm interface), provided "arm" with the same CRTK names.
 // Positions and velocities come out through the `measured` link (late, jittered, some lost: the
 // newest arrived is shown and held); force commands through the `commands` link; button events
-// pass through. The rows are this task's, stamped with its cycle: "source_time" says when the
-// source wrote the value shown (it stops advancing when the source dies) and "delay" how late it
-// is meant to be, so that a consumer can judge staleness on the source (the teleoperation does).
+// pass through. A source that is a passivity port has its port_energy carried with its positions,
+// and port_remote_energy travels with the force commands (the same packets). The rows are this task's,
+// stamped with its cycle: "source_time" says when the source wrote the value shown (it stops advancing when
+// the source dies) and "delay" how late it is meant to be, so that a consumer can judge staleness on the
+// source (the teleoperation does).
 class DelayTask : public Task {
  public:
   DelayTask(std::string name, TaskConfig task, double delay_seconds);
@@ -45,10 +56,11 @@ class DelayTask : public Task {
   void run() override;
   double delay() const noexcept { return static_cast<double>(delay_) * 1e-9; }
   const DelayChannel<DelayedSample>& measured_link() const noexcept { return measured_; }
-  const DelayChannel<Wrench>& commands_link() const noexcept { return commands_; }
+  const DelayChannel<DelayedCommand>& commands_link() const noexcept { return commands_; }
 
  private:
   void pass_command(const Wrench& w) noexcept;
+  void pass_energy(double e) noexcept;
 
   TimeNs delay_;
   bool commands_direct_;
@@ -57,13 +69,17 @@ class DelayTask : public Task {
   Twist measured_cv_{};
   TimeNs source_time_ = 0;  // of the row shown
   DelayChannel<DelayedSample> measured_;
-  DelayChannel<Wrench> commands_;
+  double port_energy_ = -1;    // shown, with the row shown
+  double remote_energy_ = -1;  // the newest written, sent with the next command
+  DelayChannel<DelayedCommand> commands_;
   bool have_output_ = false;
-  Wrench held_{};
+  DelayedCommand held_{};
   TimeNs held_since_ = -1;  // when the held command arrived; -1: none
   FunctionRead<Pose> read_cp_;
   FunctionRead<Twist> read_cv_;
   FunctionWrite<Wrench> write_cf_;
+  FunctionRead<double> read_energy_;
+  FunctionWrite<double> write_remote_energy_;
   EventWrite<ButtonEvent>* clutch_ = nullptr;
   EventWrite<ButtonEvent>* operator_present_ = nullptr;
 };

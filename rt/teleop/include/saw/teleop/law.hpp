@@ -23,6 +23,10 @@ struct SideSample {
 struct LawInputs {
   SideSample master, slave;
   double period = 0.001;  // s, the task's
+  // For a law that `uses_ports`: the energy that has entered the network at the master's
+  // passivity port (J), as it arrived here — late by the link's delay. The task fails the master's
+  // read when its port reports nothing valid, so this is a checked, finite value ≥ 0.
+  double master_port_energy = 0;
 };
 
 // What a law answers: the forces to send, and what it shows of itself. The task checks the
@@ -34,6 +38,9 @@ struct LawCommand {
   Eigen::Vector3d master_error = Eigen::Vector3d::Zero(), slave_error = Eigen::Vector3d::Zero();
   Eigen::Vector3d slave_offset = Eigen::Vector3d::Zero();  // m, where the slave's goal sits
   bool limiting = false;                                   // a force is held at its limit (the ratchet slips)
+  // For a law that `uses_ports`: the energy that has entered the network at the slave's port
+  // (J), sent to the master's port with the force.
+  double slave_port_energy = -1;
   // False when the law's arithmetic overflowed (a huge input): the task then faults with zero
   // force, naming `bad_side`.
   bool finite = true;
@@ -62,6 +69,8 @@ struct LawContext {
 //     std::uint64_t refusals() const noexcept; int last_refusal() const noexcept;  // e.g. a planner's
 //     static constexpr auto declared_readouts = std::tuple{Readout<MyLaw, double>{...}, ...};
 //                                              // values it computes, shown as the task's state
+//     static constexpr bool uses_ports = true;  // a passive law: the master has a passivity port
+//                                              // (its input energy in, the slave's sent to it)
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {
