@@ -15,6 +15,19 @@ SETTLE = 1.0  # s ignored at the start of each run
 SATURATION_RUN = 0.1  # s: a force held at its limit longer than this is a saturated run
 FORCE_LIMIT = 3.0  # N, both sides
 ENERGY_GROWTH = 0.05  # J given out by the channel over the run's second half: an active channel
+# The same on real threads over two hosts, from each host's recording: a force and a velocity there
+# may be a cycle apart, which makes a passive channel seem to give out ~0.01 J/s; a growing one
+# gives out joules.
+SPLIT_ENERGY_GROWTH = 0.5
+
+
+# Minimum-jerk reaches between targets with dwell, physiological tremor on top, through a grip.
+HAND = ("{type: reach, targets: [[0, 0, -0.02], [0.02, 0, -0.02], [0.02, 0, 0]], reach_time: 0.8, dwell: 0.7, "
+        "stiffness: 200, damping: 1, tremor: {amplitude: 0.0003, frequency: 10}}")
+
+
+def wall_yaml(stiffness: float) -> str:
+    return f"{{point: [0, 0, {-WALL_DEPTH}], normal: [0, 0, 1], stiffness: {stiffness}, damping: 0}}"
 
 
 @dataclasses.dataclass
@@ -25,13 +38,14 @@ class Law:
     passivity: bool  # the master port's controller acts (else it only observes)
 
 
-# One coupling stiffness for all (600 N/m, 1.5 N·s/m where the law has a damper): what differs is
-# the feedback and the passivity.
+# One coupling stiffness (600 N/m, 1.5 N·s/m where the law has a damper): what differs is the
+# feedback and the passivity. The paper's law, undamped, is stable here without delay only up to
+# about 200 N/m: it runs at that.
 LAWS = [
     Law("unilateral", "unilateral (position_position: no force feedback)",
         "law: position_position, stiffness: 600, damping: 1.5, force_limit: 3", False),
-    Law("paper", "the paper's bilateral law (collaborative, k_m = k_s)",
-        "law: collaborative, gains: {master: 600, slave: 600}, force_limits: {master: 3, slave: 3}", False),
+    Law("paper", "the paper's bilateral law (collaborative, k_m = k_s = 200 N/m)",
+        "law: collaborative, gains: {master: 200, slave: 200}, force_limits: {master: 3, slave: 3}", False),
     Law("coupling", "the same coupling with damping, no passivity (passive_bilateral, passivity off)",
         "law: passive_bilateral, gains: {master: 600, slave: 600}, damping: 1.5, passivity: false, "
         "force_limits: {master: 3, slave: 3}", False),
@@ -66,8 +80,8 @@ def deployment(law: Law, delay_ms: float, loss: float, jitter_ms: float = 0.0, s
     master_server = "port" if direct else "link"
     return f"""deployment: {{name: bilateral, clock: stepped}}
 components:
-  - {{name: master, type: sim_haptic_device, task: {{period: 1ms}}, params: {{model: omni, hand: {{type: reach, targets: [[0, 0, -0.02], [0.02, 0, -0.02], [0.02, 0, 0]], reach_time: 0.8, dwell: 0.7, stiffness: 200, damping: 1, tremor: {{amplitude: 0.0003, frequency: 10}}}}}}}}
-  - {{name: slave, type: sim_haptic_device, task: {{period: 1ms}}, params: {{model: omni, wall: {{point: [0, 0, {-WALL_DEPTH}], normal: [0, 0, 1], stiffness: {wall}, damping: 0}}}}}}
+  - {{name: master, type: sim_haptic_device, task: {{period: 1ms}}, params: {{model: omni, hand: {HAND}}}}}
+  - {{name: slave, type: sim_haptic_device, task: {{period: 1ms}}, params: {{model: omni, wall: {wall_yaml(wall)}}}}}
   - {{name: port, type: passivity_port, task: {{period: 1ms}}, params: {{passivity: {str(law.passivity).lower()}}}}}{link_component}
   - name: teleop
     type: teleop
@@ -80,6 +94,77 @@ connections:
 record:
   columns: [master.measured_cp, master.measured_cv, slave.measured_cp, slave.measured_cv, teleop.slave_force, slave.wall_force, port.port_applied]
 """
+
+
+def hosts_deployment(law: Law, delay_ms: float, loss: float, jitter_ms: float = 0.0, addresses=None,
+                     domain: int = 0, port: str = "port") -> str:
+    """The same run placed on two hosts: "operator" (the master and its port) and "patient" (the
+    slave, the network's delay task and the law). Without addresses both are this machine and the
+    shared-memory bridge joins them; with addresses each host's gateway carries the link over DDS.
+    `port` names the master's port (the component the operator exports: unique on a shared host)."""
+    a = addresses or {}
+    hosts = "\n".join(f"  {h}: {{{('address: ' + a[h]) if h in a else ''}}}" for h in ("operator", "patient"))
+    gateway = f"gateway: {{domain: {domain}, security: none}}\n" if a else ""
+    link = f"delay: {delay_ms}ms, jitter: {jitter_ms}ms, loss: {loss}"
+    return f"""deployment: {{name: bilateral-hosts}}
+hosts:
+{hosts}
+{gateway}components:
+  - {{name: master, host: operator, type: sim_haptic_device, task: {{period: 1ms, priority: 80}}, params: {{model: omni, hand: {HAND}}}}}
+  - {{name: {port}, host: operator, type: passivity_port, task: {{period: 1ms, priority: 79}}, params: {{passivity: {str(law.passivity).lower()}}}}}
+  - {{name: slave, host: patient, type: sim_haptic_device, task: {{period: 1ms, priority: 80}}, params: {{model: omni, wall: {wall_yaml(WALL_STIFFNESS)}}}}}
+  - {{name: link, host: patient, type: delay, task: {{period: 1ms, priority: 79}}, params: {{{link}, seed: 1, commands: {{{link}}}}}}}
+  - name: teleop
+    host: patient
+    type: teleop
+    task: {{period: 1ms, priority: 79}}
+    params: {{{law.params}, stale_timeout: 500ms, startup_timeout: 10s}}
+connections:
+  - {{client: {port}, required: device, server: master, provided: arm}}
+  - {{client: link, required: source, server: {port}, provided: arm}}
+  - {{client: teleop, required: master, server: link, provided: arm}}
+  - {{client: teleop, required: slave, server: slave, provided: arm}}
+record:  # each host records its own components' columns
+  columns: [master.measured_cp, master.measured_cv, {port}.port_applied, slave.measured_cp, slave.measured_cv,
+            teleop.slave_force, slave.wall_force, teleop.tracking_error]
+"""
+
+
+def side_verdict(forces, power, dt):
+    """(longest run at the force limit in s, energy given out over the second half in J) of one port."""
+    at_limit = np.linalg.norm(forces, axis=1) >= FORCE_LIMIT - 1e-3
+    longest, run_ = 0, 0
+    for x in at_limit:
+        run_ = run_ + 1 if x else 0
+        longest = max(longest, run_)
+    energy = np.cumsum(power) * dt
+    half = len(energy) // 2
+    return longest * dt, float(energy[-1] - energy[half]) if len(energy) else 0.0
+
+
+def split_figures(operator, patient, port: str = "port"):
+    """The verdict of a run recorded on two hosts (each its own clock: no sample is paired across
+    them): saturation at either port, energy given out at both ports over their second halves,
+    tracking as the law saw it."""
+    def vec(d, name):  # a row not recorded yet (the other host's data) reads as nothing
+        return np.nan_to_num(np.stack([d[name.replace(".", "") + a] for a in "xyz"], 1))
+
+    dt = 1e-3
+    sat_m, grow_m = side_verdict(vec(operator, f"{port}.port_applied."),
+                                 np.einsum("ij,ij->i", vec(operator, f"{port}.port_applied."),
+                                           vec(operator, "master.measured_cv.v")), dt)
+    sat_s, grow_s = side_verdict(vec(patient, "teleop.slave_force."),
+                                 np.einsum("ij,ij->i", vec(patient, "teleop.slave_force."),
+                                           vec(patient, "slave.measured_cv.v")), dt)
+    why = []
+    if max(sat_m, sat_s) > SATURATION_RUN:
+        why.append(f"forces at their limit for {max(sat_m, sat_s) * 1e3:.0f} ms")
+    if grow_m + grow_s > SPLIT_ENERGY_GROWTH:
+        why.append("the channel's energy grows")
+    t = patient["time"]
+    e = patient["teleoptracking_error"][t >= t[0] + SETTLE]
+    tracking = float(np.sqrt(np.mean(e ** 2))) if len(e) else float("nan")
+    return not why, "; ".join(why) or "stable", tracking, grow_m + grow_s
 
 
 def run(saw_rt: pathlib.Path, work: pathlib.Path, law: Law, delay_ms: float, loss: float, seconds: float = 8.0,
