@@ -9,6 +9,7 @@
 #include "saw/manager.hpp"
 #include "saw/teleop/delay_task.hpp"
 #include "saw/teleop/laws/passive_bilateral.hpp"
+#include "saw/teleop/laws/wave_variables.hpp"
 #include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/teleop_rig.hpp"
@@ -56,16 +57,17 @@ struct Deployment {
   saw::Manager m;
 };
 
-// The bilateral law under delay: the master's passivity port between the master and the link,
-// the slave against a wall, both ports' controllers acting.
+// The bilateral laws under delay: the master's port between the master and the link, the slave
+// against a wall; time-domain passivity at both ports, or wave variables.
 struct BilateralDeployment {
-  BilateralDeployment()
+  explicit BilateralDeployment(bool waves = false)
       : master("master", saw::TaskConfig::periodic(1ms, 0), Deployment::master_config()),
         slave("slave", saw::TaskConfig::periodic(1ms, 0), slave_config()),
-        port("port", saw::TaskConfig::periodic(1ms, 0), saw::teleop::PortConfig{}),
+        port("port", saw::TaskConfig::periodic(1ms, 0), port_config(waves)),
         delay("master_delay", saw::TaskConfig::periodic(1ms, 0), Deployment::link_config()),
         teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config(),
-               saw::teleop::law_spec<saw::teleop::PassiveBilateralLaw>()) {
+               waves ? saw::teleop::law_spec<saw::teleop::WaveVariableLaw>()
+                     : saw::teleop::law_spec<saw::teleop::PassiveBilateralLaw>()) {
     for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &port, &delay, &teleop})
       m.add(*c);
     m.connect("port", "device", "master", "arm");
@@ -84,6 +86,11 @@ struct BilateralDeployment {
   static saw::teleop::TeleopConfig teleop_config() {
     saw::teleop::TeleopConfig c;
     c.stale_timeout = 0.5;
+    return c;
+  }
+  static saw::teleop::PortConfig port_config(bool waves) {
+    saw::teleop::PortConfig c;
+    if (waves) c.scheme = saw::teleop::PortScheme::wave;
     return c;
   }
   saw::drivers::SimHapticDevice master, slave;
@@ -130,23 +137,27 @@ TEST(RtGuard, SimulatedTeleoperationOnThreadsIsRtClean) {
   EXPECT_RT_CLEAN(counts);
 }
 
-TEST(RtGuard, PassiveBilateralTeleoperationSteppedIsRtClean) {
+class BilateralGuard : public ::testing::TestWithParam<bool> {};
+
+TEST_P(BilateralGuard, SteppedIsRtClean) {
   saw::testing::GuardWindow window;
-  BilateralDeployment d;
+  BilateralDeployment d(GetParam());
   d.m.start_stepped();
   d.m.step_until(3'000'000'000);
   const auto counts = window.counts();
   EXPECT_EQ(d.teleop.operating_state(), saw::OperatingStateValue::enabled);
   EXPECT_GT(slave_travel(d), 0.001) << "the slave should be following the master";
-  EXPECT_GT(d.port.controller().energy().in + d.port.controller().energy().out, 0) << "the port observed";
+  if (!GetParam()) {
+    EXPECT_GT(d.port.controller().energy().in + d.port.controller().energy().out, 0) << "the port observed";
+  }
   d.m.stop();
   EXPECT_EQ(counts.cycles, 5 * 3001u);
   EXPECT_RT_CLEAN(counts);
 }
 
-TEST(RtGuard, PassiveBilateralTeleoperationOnThreadsIsRtClean) {
+TEST_P(BilateralGuard, OnThreadsIsRtClean) {
   saw::testing::GuardWindow window;
-  BilateralDeployment d;
+  BilateralDeployment d(GetParam());
   saw::testing::run_threads_until(d.m, [&] { return d.teleop.statistics().cycles >= 500; });
   const auto counts = window.counts();
   ASSERT_GE(d.teleop.statistics().cycles, 500u);
@@ -156,5 +167,8 @@ TEST(RtGuard, PassiveBilateralTeleoperationOnThreadsIsRtClean) {
   EXPECT_LE(counts.cycles, ran + 5);
   EXPECT_RT_CLEAN(counts);
 }
+
+INSTANTIATE_TEST_SUITE_P(RtGuard, BilateralGuard, ::testing::Values(false, true),
+                         [](const auto& p) { return p.param ? "WaveVariables" : "TimeDomainPassivity"; });
 
 }  // namespace

@@ -36,6 +36,7 @@ class Law:
     label: str
     params: str  # the teleop's law and settings (YAML flow mapping entries)
     passivity: bool  # the master port's controller acts (else it only observes)
+    port: str = ""  # the master port's other parameters (YAML flow mapping entries)
 
 
 # One coupling stiffness (600 N/m, 1.5 N·s/m where the law has a damper): what differs is the
@@ -49,6 +50,9 @@ LAWS = [
     Law("coupling", "the same coupling with damping, no passivity (passive_bilateral, passivity off)",
         "law: passive_bilateral, gains: {master: 600, slave: 600}, damping: 1.5, passivity: false, "
         "force_limits: {master: 3, slave: 3}", False),
+    Law("wave", "wave variables (wave_variables, b = 3 N·s/m; velocities travel)",
+        "law: wave_variables, impedance: 3, stiffness: 600, damping: 1.5, force_limit: 3", True,
+        "scheme: wave, wave_impedance: 3"),
     Law("tdpa", "bilateral + time-domain passivity (passive_bilateral, ours)",
         "law: passive_bilateral, gains: {master: 600, slave: 600}, damping: 1.5, "
         "force_limits: {master: 3, slave: 3}", True),
@@ -82,7 +86,7 @@ def deployment(law: Law, delay_ms: float, loss: float, jitter_ms: float = 0.0, s
 components:
   - {{name: master, type: sim_haptic_device, task: {{period: 1ms}}, params: {{model: omni, hand: {HAND}}}}}
   - {{name: slave, type: sim_haptic_device, task: {{period: 1ms}}, params: {{model: omni, wall: {wall_yaml(wall)}}}}}
-  - {{name: port, type: passivity_port, task: {{period: 1ms}}, params: {{passivity: {str(law.passivity).lower()}}}}}{link_component}
+  - {{name: port, type: passivity_port, task: {{period: 1ms}}, params: {{passivity: {str(law.passivity).lower()}{", " + law.port if law.port else ""}}}}}{link_component}
   - name: teleop
     type: teleop
     task: {{period: 1ms}}
@@ -111,7 +115,7 @@ hosts:
 {hosts}
 {gateway}components:
   - {{name: master, host: operator, type: sim_haptic_device, task: {{period: 1ms, priority: 80}}, params: {{model: omni, hand: {HAND}}}}}
-  - {{name: {port}, host: operator, type: passivity_port, task: {{period: 1ms, priority: 79}}, params: {{passivity: {str(law.passivity).lower()}}}}}
+  - {{name: {port}, host: operator, type: passivity_port, task: {{period: 1ms, priority: 79}}, params: {{passivity: {str(law.passivity).lower()}{", " + law.port if law.port else ""}}}}}
   - {{name: slave, host: patient, type: sim_haptic_device, task: {{period: 1ms, priority: 80}}, params: {{model: omni, wall: {wall_yaml(WALL_STIFFNESS)}}}}}
   - {{name: link, host: patient, type: delay, task: {{period: 1ms, priority: 79}}, params: {{{link}, seed: 1, commands: {{{link}}}}}}}
   - name: teleop

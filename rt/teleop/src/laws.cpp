@@ -3,6 +3,7 @@
 #include "saw/teleop/laws/collaborative.hpp"
 #include "saw/teleop/laws/passive_bilateral.hpp"
 #include "saw/teleop/laws/position_position.hpp"
+#include "saw/teleop/laws/wave_variables.hpp"
 
 namespace saw::teleop {
 
@@ -12,6 +13,7 @@ LawRegistry& law_registry() {
     r.add<CollaborativeLaw>();
     r.add<PositionPositionLaw>();
     r.add<PassiveBilateralLaw>();
+    r.add<WaveVariableLaw>();
     return r;
   }();
   return registry;

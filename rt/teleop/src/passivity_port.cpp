@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "saw/eigen.hpp"
+#include "saw/teleop/wave.hpp"
 
 namespace saw::teleop {
 
@@ -13,6 +14,10 @@ PassivityPort::PassivityPort(std::string name, TaskConfig task, PortConfig confi
   if (!(config_.max_damping >= 0))
     throw std::invalid_argument("a passivity port's max_damping must not be negative");
   if (config_.command_hold <= 0) config_.command_hold = 5 * task.period.count();
+  if (!(config_.wave_impedance > 0) || !std::isfinite(config_.wave_impedance))
+    throw std::invalid_argument("a passivity port's wave_impedance must be positive and finite");
+  if (!(config_.force_limit >= 0) || !std::isfinite(config_.force_limit))
+    throw std::invalid_argument("a passivity port's force_limit must be finite and not negative");
   namespace arm = crtk::arm;
   auto& st = state_table();
   auto& p = provide(std::string(arm::interface_name));
@@ -21,6 +26,8 @@ PassivityPort::PassivityPort(std::string name, TaskConfig task, PortConfig confi
   crtk::provide(p, port::energy, st, &energy_in_);
   crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { on_command(w); });
   crtk::provide(p, port::remote_energy, [this](const double& e) { on_remote_energy(e); });
+  crtk::provide(p, port::wave, st, &wave_out_);
+  crtk::provide(p, port::remote_wave, [this](const Vec3& v) { on_remote_wave(v); });
   // What the controller did, for the recorder and a GUI.
   p.add_command_read("port_energy_out", st.add_column("port_energy_out", &energy_out_));
   p.add_command_read("port_dissipated", st.add_column("port_dissipated", &dissipated_));
@@ -53,8 +60,13 @@ void PassivityPort::on_remote_energy(double e) noexcept {
   if (e > remote_in_) remote_in_ = e;
 }
 
+void PassivityPort::on_remote_wave(const Vec3& v) noexcept {
+  if (!to_eigen(v).allFinite()) return void(++rejected_);
+  pending_wave_ = to_eigen(v);
+  has_wave_ = true;
+}
+
 void PassivityPort::run() {
-  const TimeNs t = now();
   Pose cp;
   Twist cv;
   RowStamp stamp;
@@ -67,6 +79,15 @@ void PassivityPort::run() {
   }
   // The row stands for the device's reading: a device that stopped publishing ages here too.
   stamp_row(device_time_);
+  const Eigen::Vector3d velocity = to_eigen(cv_.linear);
+  if (config_.scheme == PortScheme::wave)
+    apply_wave(velocity);
+  else
+    apply_passivity(velocity, static_cast<double>(config().period.count()) * 1e-9);
+}
+
+void PassivityPort::apply_passivity(const Eigen::Vector3d& velocity, double dt) noexcept {
+  const TimeNs t = now();
   if (has_pending_) {
     held_ = to_eigen(pending_.force);
     held_since_ = t;
@@ -74,13 +95,10 @@ void PassivityPort::run() {
   }
   const bool commanding = held_since_ >= 0 && t - held_since_ <= config_.command_hold;
   if (!commanding) return;  // the device's watchdog takes it from here
-  const double dt = static_cast<double>(config().period.count()) * 1e-9;
   // The power this cycle is the force applied now against the velocity now: only a device-side
-  // observer sees both (the controller far away sees neither in time).
-  Eigen::Vector3d f = held_;
-  const Eigen::Vector3d velocity = to_eigen(cv_.linear);
-  // Observing only, the controller has no damping to give: its figures are the law's own.
-  f = pc_.step(f, velocity, remote_in_, dt).force;
+  // observer sees both (the controller far away sees neither in time). Observing only, the
+  // controller has no damping to give: its figures are the law's own.
+  const Eigen::Vector3d f = pc_.step(held_, velocity, remote_in_, dt).force;
   Wrench w;
   w.force = to_vec3(f);
   (void)write_cf_(w);
@@ -90,6 +108,22 @@ void PassivityPort::run() {
   dissipated_ = pc_.dissipated();
   damping_ = pc_.last_damping();
   remote_shown_ = remote_in_;
+}
+
+void PassivityPort::apply_wave(const Eigen::Vector3d& velocity) noexcept {
+  const TimeNs t = now();
+  // A cycle without a wave is a zero wave: a lost or late packet brings no energy.
+  const Eigen::Vector3d v = has_wave_ ? pending_wave_ : Eigen::Vector3d::Zero();
+  if (has_wave_) held_since_ = t;
+  has_wave_ = false;
+  has_pending_ = false;  // the force is made here
+  const wave::MasterEnd end = wave::master_end(config_.wave_impedance, velocity, v, config_.force_limit);
+  wave_out_ = to_vec3(end.u);
+  if (held_since_ < 0 || t - held_since_ > config_.command_hold) return;
+  Wrench w;
+  w.force = to_vec3(end.force);
+  (void)write_cf_(w);
+  applied_ = w.force;
 }
 
 }  // namespace saw::teleop

@@ -75,7 +75,11 @@ struct PortSpec {
 
 PortSpec parse_port(const ComponentContext& ctx, Params& p) {
   PortConfig c;
+  c.scheme = p.get_enum<PortScheme>(
+      "scheme", {{"passivity", PortScheme::passivity}, {"wave", PortScheme::wave}}, PortScheme::passivity);
   c.passivity = p.get_or<bool>("passivity", true);
+  c.wave_impedance = p.get_in_range("wave_impedance", 1e-3, 1e3, c.wave_impedance);
+  c.force_limit = p.get_in_range("force_limit", 0, 100, c.force_limit);
   if (p.has("max_damping")) c.max_damping = p.get_in_range("max_damping", 0, 1e6, 0);
   c.command_hold = duration_in(p, "command_hold", 0ns);
   return {deploy::periodic_task(ctx, p, "passivity_port"), c};

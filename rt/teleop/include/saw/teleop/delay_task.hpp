@@ -14,12 +14,15 @@ struct DelayedSample {
   Twist cv{};
   TimeNs source_time = 0;
   double port_energy = -1;  // J, the source port's input energy; -1: the source has no port
+  Vec3 port_wave{};         // the source port's outgoing wave (scheme wave)
 };
 
 // One force command as it travels, with the energy bookkeeping of a passive network beside it.
 struct DelayedCommand {
   Wrench wrench{};
   double remote_energy = -1;  // J, for the device's port; -1: none sent
+  Vec3 remote_wave{};         // for the device's port, when has_wave
+  bool has_wave = false;
 };
 
 // What a DelayTask adds to the arm interface it re-publishes; Teleoperation reads
@@ -43,11 +46,13 @@ struct DelayConfig {
 // Required "source" (a device's arm interface), provided "arm" with the same CRTK names.
 // Positions and velocities come out through the `measured` link (late, jittered, some lost: the
 // newest arrived is shown and held); force commands through the `commands` link; button events
-// pass through. A source that is a passivity port has its port_energy carried with its positions,
-// and port_remote_energy travels with the force commands (the same packets). The rows are this task's,
-// stamped with its cycle: "source_time" says when the source wrote the value shown (it stops advancing when
-// the source dies) and "delay" how late it is meant to be, so that a consumer can judge staleness on the
-// source (the teleoperation does).
+// pass through. A source that is a passivity port has its port_energy and port_wave carried with
+// its positions, and port_remote_energy and port_remote_wave travel with the force commands (the
+// same packets). A wave is delivered once, in the cycle its packet arrives: a held (repeated)
+// command carries none, since a repeated wave would bring energy that was never sent. The rows are this
+// task's, stamped with its cycle: "source_time" says when the source wrote the value shown (it stops
+// advancing when the source dies) and "delay" how late it is meant to be, so that a consumer can judge
+// staleness on the source (the teleoperation does).
 class DelayTask : public Task {
  public:
   DelayTask(std::string name, TaskConfig task, double delay_seconds);
@@ -61,6 +66,7 @@ class DelayTask : public Task {
  private:
   void pass_command(const Wrench& w) noexcept;
   void pass_energy(double e) noexcept;
+  void pass_wave(const Vec3& w) noexcept;
 
   TimeNs delay_;
   bool commands_direct_;
@@ -71,6 +77,9 @@ class DelayTask : public Task {
   DelayChannel<DelayedSample> measured_;
   double port_energy_ = -1;    // shown, with the row shown
   double remote_energy_ = -1;  // the newest written, sent with the next command
+  Vec3 port_wave_{};           // shown, with the row shown
+  Vec3 remote_wave_{};         // the newest written, sent with the next command
+  bool has_remote_wave_ = false;
   DelayChannel<DelayedCommand> commands_;
   bool have_output_ = false;
   DelayedCommand held_{};
@@ -80,6 +89,8 @@ class DelayTask : public Task {
   FunctionWrite<Wrench> write_cf_;
   FunctionRead<double> read_energy_;
   FunctionWrite<double> write_remote_energy_;
+  FunctionRead<Vec3> read_wave_;
+  FunctionWrite<Vec3> write_remote_wave_;
   EventWrite<ButtonEvent>* clutch_ = nullptr;
   EventWrite<ButtonEvent>* operator_present_ = nullptr;
 };

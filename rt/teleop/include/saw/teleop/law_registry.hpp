@@ -30,6 +30,7 @@ class LawModel {
   virtual int last_refusal() const noexcept = 0;
   // The law exchanges energies with a passivity port at the master (law.hpp).
   virtual bool uses_ports() const noexcept = 0;
+  virtual bool uses_waves() const noexcept = 0;
   // Setup: each declared setting as a latched state column and read command `name`, and (when
   // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`. Each declared
   // read-out as a state column and read command.
@@ -66,6 +67,12 @@ class LawHolder final : public LawModel {
   bool uses_ports() const noexcept override {
     if constexpr (requires { L::uses_ports; })
       return L::uses_ports;
+    else
+      return false;
+  }
+  bool uses_waves() const noexcept override {
+    if constexpr (requires { L::uses_waves; })
+      return L::uses_waves;
     else
       return false;
   }
