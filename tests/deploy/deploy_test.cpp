@@ -111,7 +111,7 @@ TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
   const std::string collaborative = "params: {gains: {master: 100, slave: 100}}";
   const Case cases[] = {
       {"params: {gains: {master: 100, slave: 100}}", "params: {law: springy}",
-       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.law': 'springy' is not one of: collaborative, position_position)"},
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.law': 'springy' is not one of: collaborative, passive_bilateral, position_position, wave_variables)"},
       {"params: {gains: {master: 100, slave: 100}}", "params: {law: position_position, stiffness: 1e9}",
        R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.stiffness': .*out of range)"},
       // Another law's setting is not this law's: an unknown parameter.

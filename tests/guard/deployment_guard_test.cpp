@@ -8,6 +8,9 @@
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/manager.hpp"
 #include "saw/teleop/delay_task.hpp"
+#include "saw/teleop/laws/passive_bilateral.hpp"
+#include "saw/teleop/laws/wave_variables.hpp"
+#include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/teleop_rig.hpp"
 
@@ -54,7 +57,51 @@ struct Deployment {
   saw::Manager m;
 };
 
-double slave_travel(const Deployment& d) {
+// The bilateral laws under delay: the master's port between the master and the link, the slave
+// against a wall; time-domain passivity at both ports, or wave variables.
+struct BilateralDeployment {
+  explicit BilateralDeployment(bool waves = false)
+      : master("master", saw::TaskConfig::periodic(1ms, 0), Deployment::master_config()),
+        slave("slave", saw::TaskConfig::periodic(1ms, 0), slave_config()),
+        port("port", saw::TaskConfig::periodic(1ms, 0), port_config(waves)),
+        delay("master_delay", saw::TaskConfig::periodic(1ms, 0), Deployment::link_config()),
+        teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config(),
+               waves ? saw::teleop::law_spec<saw::teleop::WaveVariableLaw>()
+                     : saw::teleop::law_spec<saw::teleop::PassiveBilateralLaw>()) {
+    for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &port, &delay, &teleop})
+      m.add(*c);
+    m.connect("port", "device", "master", "arm");
+    m.connect("master_delay", "source", "port", "arm");
+    m.connect("teleop", "master", "master_delay", "arm");
+    m.connect("teleop", "slave", "slave", "arm");
+  }
+  static saw::drivers::SimDeviceConfig slave_config() {
+    saw::drivers::SimDeviceConfig c;
+    c.wall.enabled = true;
+    c.wall.point = Eigen::Vector3d(0.01, 0, 0);
+    c.wall.normal = Eigen::Vector3d(-1, 0, 0);
+    c.wall.stiffness = 100;
+    return c;
+  }
+  static saw::teleop::TeleopConfig teleop_config() {
+    saw::teleop::TeleopConfig c;
+    c.stale_timeout = 0.5;
+    return c;
+  }
+  static saw::teleop::PortConfig port_config(bool waves) {
+    saw::teleop::PortConfig c;
+    if (waves) c.scheme = saw::teleop::PortScheme::wave;
+    return c;
+  }
+  saw::drivers::SimHapticDevice master, slave;
+  saw::teleop::PassivityPort port;
+  saw::teleop::DelayTask delay;
+  saw::teleop::Teleoperation teleop;
+  saw::Manager m;
+};
+
+template <class D>
+double slave_travel(const D& d) {
   std::array<saw::Pose, 200> h;
   const auto n = d.slave.state_table().read_history(d.slave.columns().measured_cp, std::span<saw::Pose>(h));
   double lo = 1, hi = -1;
@@ -89,5 +136,39 @@ TEST(RtGuard, SimulatedTeleoperationOnThreadsIsRtClean) {
   EXPECT_LE(counts.cycles, ran + 4);
   EXPECT_RT_CLEAN(counts);
 }
+
+class BilateralGuard : public ::testing::TestWithParam<bool> {};
+
+TEST_P(BilateralGuard, SteppedIsRtClean) {
+  saw::testing::GuardWindow window;
+  BilateralDeployment d(GetParam());
+  d.m.start_stepped();
+  d.m.step_until(3'000'000'000);
+  const auto counts = window.counts();
+  EXPECT_EQ(d.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_GT(slave_travel(d), 0.001) << "the slave should be following the master";
+  if (!GetParam()) {
+    EXPECT_GT(d.port.controller().energy().in + d.port.controller().energy().out, 0) << "the port observed";
+  }
+  d.m.stop();
+  EXPECT_EQ(counts.cycles, 5 * 3001u);
+  EXPECT_RT_CLEAN(counts);
+}
+
+TEST_P(BilateralGuard, OnThreadsIsRtClean) {
+  saw::testing::GuardWindow window;
+  BilateralDeployment d(GetParam());
+  saw::testing::run_threads_until(d.m, [&] { return d.teleop.statistics().cycles >= 500; });
+  const auto counts = window.counts();
+  ASSERT_GE(d.teleop.statistics().cycles, 500u);
+  const auto ran = d.master.statistics().cycles + d.slave.statistics().cycles + d.port.statistics().cycles +
+                   d.delay.statistics().cycles + d.teleop.statistics().cycles;
+  EXPECT_GE(counts.cycles, ran) << "the guard did not sample every cycle";
+  EXPECT_LE(counts.cycles, ran + 5);
+  EXPECT_RT_CLEAN(counts);
+}
+
+INSTANTIATE_TEST_SUITE_P(RtGuard, BilateralGuard, ::testing::Values(false, true),
+                         [](const auto& p) { return p.param ? "WaveVariables" : "TimeDomainPassivity"; });
 
 }  // namespace

@@ -53,6 +53,10 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
   crtk::provide(p, delayed_arm::source_time, state_table(), &source_time_);
   crtk::provide(p, delayed_arm::delay, state_table(), &delay_);
   crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { pass_command(w); });
+  crtk::provide(p, port::energy, state_table(), &port_energy_);
+  crtk::provide(p, port::remote_energy, [this](const double& e) { pass_energy(e); });
+  crtk::provide(p, port::wave, state_table(), &port_wave_);
+  crtk::provide(p, port::remote_wave, [this](const Vec3& w) { pass_wave(w); });
   clutch_ = &crtk::provide(p, arm::clutch);
   operator_present_ = &crtk::provide(p, arm::operator_present);
 
@@ -60,6 +64,10 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
   crtk::require(r, arm::measured_cp, read_cp_);
   crtk::require(r, arm::measured_cv, read_cv_);
   crtk::require(r, arm::servo_cf, write_cf_, Need::optional);
+  crtk::require(r, port::energy, read_energy_, Need::optional);
+  crtk::require(r, port::remote_energy, write_remote_energy_, Need::optional);
+  crtk::require(r, port::wave, read_wave_, Need::optional);
+  crtk::require(r, port::remote_wave, write_remote_wave_, Need::optional);
   crtk::require(
       r, arm::clutch, [this](const ButtonEvent& b) { (void)(*clutch_)(b); }, Need::optional);
   crtk::require(
@@ -68,10 +76,23 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
 }
 
 void DelayTask::pass_command(const Wrench& w) noexcept {
-  if (commands_direct_)
-    (void)write_cf_(w);
+  if (commands_direct_) return void(write_cf_(w));
+  commands_.send(now(), DelayedCommand{w, remote_energy_, remote_wave_, has_remote_wave_});
+  has_remote_wave_ = false;  // each wave in one packet only
+}
+
+void DelayTask::pass_wave(const Vec3& w) noexcept {
+  if (commands_direct_ && write_remote_wave_.is_bound()) return void(write_remote_wave_(w));
+  remote_wave_ = w;
+  has_remote_wave_ = true;
+}
+
+void DelayTask::pass_energy(double e) noexcept {
+  // Checked by the port that uses it; here it only travels (with the next command).
+  if (commands_direct_ && write_remote_energy_.is_bound())
+    (void)write_remote_energy_(e);
   else
-    commands_.send(now(), w);
+    remote_energy_ = e;
 }
 
 void DelayTask::run() {
@@ -82,12 +103,16 @@ void DelayTask::run() {
   RowStamp stamp;
   if (read_cp_(sample.cp, stamp) == Status::ok && read_cv_(sample.cv) == Status::ok) {
     sample.source_time = stamp.time;
+    if (read_energy_.is_bound() && read_energy_(sample.port_energy) != Status::ok) sample.port_energy = -1;
+    if (read_wave_.is_bound() && read_wave_(sample.port_wave) != Status::ok) sample.port_wave = {};
     measured_.send(t, sample);
     // Until the first sample arrives, the output is the source as it is now (nothing older exists).
     if (!have_output_) {
       measured_cp_ = sample.cp;
       measured_cv_ = sample.cv;
       source_time_ = sample.source_time;
+      port_energy_ = sample.port_energy;
+      port_wave_ = sample.port_wave;
     }
   }
   DelayedSample shown;
@@ -95,15 +120,22 @@ void DelayTask::run() {
     measured_cp_ = shown.cp;
     measured_cv_ = shown.cv;
     source_time_ = shown.source_time;
+    port_energy_ = shown.port_energy;
+    port_wave_ = shown.port_wave;
     have_output_ = true;
   }
   if (commands_direct_) return;
-  Wrench w;
-  if (commands_.receive(t, w)) {
-    held_ = w;
+  DelayedCommand c;
+  if (commands_.receive(t, c)) {
+    held_ = c;
     held_since_ = t;
+    if (c.has_wave && write_remote_wave_.is_bound()) (void)write_remote_wave_(c.remote_wave);
   }
-  if (held_since_ >= 0 && t - held_since_ <= command_hold_) (void)write_cf_(held_);
+  if (held_since_ < 0 || t - held_since_ > command_hold_) return;
+  // The energy first: a port never applies a force before the energy that allows it.
+  if (held_.remote_energy >= 0 && write_remote_energy_.is_bound())
+    (void)write_remote_energy_(held_.remote_energy);
+  (void)write_cf_(held_.wrench);
 }
 
 }  // namespace saw::teleop

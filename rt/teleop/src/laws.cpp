@@ -1,7 +1,9 @@
 // The built-in control laws: one line each.
 #include "saw/teleop/law_registry.hpp"
 #include "saw/teleop/laws/collaborative.hpp"
+#include "saw/teleop/laws/passive_bilateral.hpp"
 #include "saw/teleop/laws/position_position.hpp"
+#include "saw/teleop/laws/wave_variables.hpp"
 
 namespace saw::teleop {
 
@@ -10,6 +12,8 @@ LawRegistry& law_registry() {
     LawRegistry r;
     r.add<CollaborativeLaw>();
     r.add<PositionPositionLaw>();
+    r.add<PassiveBilateralLaw>();
+    r.add<WaveVariableLaw>();
     return r;
   }();
   return registry;

@@ -9,6 +9,7 @@ PassivityController::Step PassivityController::step(const Eigen::Vector3d& force
                                                     const Eigen::Vector3d& velocity, double remote_in,
                                                     double dt) noexcept {
   Step s{force, 0};
+  damping_ = 0;
   if (!(dt > 0)) return s;
   const double power = force.dot(velocity);  // out of the network into the device
   if (power <= 0) {
@@ -25,6 +26,7 @@ PassivityController::Step PassivityController::step(const Eigen::Vector3d& force
     s.damping = std::min(excess / (dt * v2), max_damping_);
     s.force = force - s.damping * velocity;
   }
+  damping_ = s.damping;
   const double taken = s.damping * v2 * dt;
   energy_.out += wanted - taken;
   dissipated_ += taken;

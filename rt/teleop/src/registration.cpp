@@ -4,6 +4,7 @@
 #include "saw/teleop/delay_task.hpp"
 #include "saw/teleop/law_registry.hpp"
 #include "saw/teleop/laws/collaborative.hpp"
+#include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
 
 namespace saw::teleop {
@@ -67,6 +68,23 @@ DelaySpec parse_delay(const ComponentContext& ctx, Params& p) {
   return {deploy::periodic_task(ctx, p, "delay"), c};
 }
 
+struct PortSpec {
+  TaskConfig task;
+  PortConfig config;
+};
+
+PortSpec parse_port(const ComponentContext& ctx, Params& p) {
+  PortConfig c;
+  c.scheme = p.get_enum<PortScheme>(
+      "scheme", {{"passivity", PortScheme::passivity}, {"wave", PortScheme::wave}}, PortScheme::passivity);
+  c.passivity = p.get_or<bool>("passivity", true);
+  c.wave_impedance = p.get_in_range("wave_impedance", 1e-3, 1e3, c.wave_impedance);
+  c.force_limit = p.get_in_range("force_limit", 0, 100, c.force_limit);
+  if (p.has("max_damping")) c.max_damping = p.get_in_range("max_damping", 0, 1e6, 0);
+  c.command_hold = duration_in(p, "command_hold", 0ns);
+  return {deploy::periodic_task(ctx, p, "passivity_port"), c};
+}
+
 }  // namespace
 
 void register_components(deploy::ComponentRegistry& registry) {
@@ -79,6 +97,12 @@ void register_components(deploy::ComponentRegistry& registry) {
   registry.add("delay", "a simulated network link to a device: delay, jitter and loss, each direction",
                parse_delay, [](const std::string& name, const DelaySpec& s) {
                  return std::make_unique<DelayTask>(name, s.task, s.config);
+               });
+  registry.add("passivity_port",
+               "the master's end of a passive bilateral teleoperation: energy observed and the passivity "
+               "controller applied beside the device",
+               parse_port, [](const std::string& name, const PortSpec& s) {
+                 return std::make_unique<PassivityPort>(name, s.task, s.config);
                });
   registry.add_summary_format<TeleopSummary>([](const TeleopSummary& s) { return to_string(s); });
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "saw/crtk_arm.hpp"
 #include "saw/eigen.hpp"
@@ -70,6 +71,17 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
 }
 
 void Teleoperation::startup() {
+  // A passive law without the master's port would have no energy to spend: refuse to start.
+  if (law_->uses_ports() && (!master_.port_energy.is_bound() || !master_.remote_energy.is_bound()))
+    throw std::runtime_error("law '" + std::string(law_->name()) +
+                             "' needs a passivity port at the master (" + std::string(port::energy.name) +
+                             ", " + std::string(port::remote_energy.name) +
+                             "): put a passivity_port component between the master device and the link");
+  if (law_->uses_waves() && (!master_.wave.is_bound() || !master_.remote_wave.is_bound()))
+    throw std::runtime_error(
+        "law '" + std::string(law_->name()) + "' needs a wave port at the master (" +
+        std::string(port::wave.name) + ", " + std::string(port::remote_wave.name) +
+        "): put a passivity_port with scheme: wave between the master device and the link");
   // Connected by now: say which components play each role (a client need not guess by name).
   ComponentDescription::set(description_.servers[0], required("master")->connected_to());
   ComponentDescription::set(description_.servers[1], required("slave")->connected_to());
@@ -85,6 +97,10 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   crtk::require(r, delayed_arm::source_time, s.source_time, Need::optional);
   crtk::require(r, delayed_arm::delay, s.delay, Need::optional);
   crtk::require(r, crtk::operating_state, s.state, Need::optional);
+  crtk::require(r, port::energy, s.port_energy, Need::optional);
+  crtk::require(r, port::remote_energy, s.remote_energy, Need::optional);
+  crtk::require(r, port::wave, s.wave, Need::optional);
+  crtk::require(r, port::remote_wave, s.remote_wave, Need::optional);
 }
 
 void Teleoperation::set_operating_state(OperatingStateValue s) noexcept {
@@ -154,9 +170,21 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   Twist twist;
   RowStamp stamp;
   TimeNs time = 0;
+  s.wave_fresh = false;
   Status st = s.cp(pose, stamp);
   if (st == Status::ok) st = s.cv(twist);
   if (st == Status::ok) st = read_time(s, stamp.time, time);
+  // A passive law spends the port's energy: a port that reports none valid fails the read.
+  double energy = 0;
+  if (st == Status::ok && law_->uses_ports() && s.port_energy.is_bound()) {
+    st = s.port_energy(energy);
+    if (st == Status::ok && !(energy >= 0 && std::isfinite(energy))) st = Status::invalid;
+  }
+  Vec3 wave{};
+  if (st == Status::ok && law_->uses_waves() && s.wave.is_bound()) {
+    st = s.wave(wave);
+    if (st == Status::ok && !to_eigen(wave).allFinite()) st = Status::invalid;
+  }
   // A row from the future (more than a period ahead) would never go stale: refused.
   if (st == Status::ok && time > now() + config().period.count()) st = Status::invalid;
   if (st == Status::ok) {
@@ -168,6 +196,10 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
     } else {
       s.last.position = position;
       s.last.velocity = velocity;
+      s.energy = std::max(s.energy, energy);  // only grows: a late row tells nothing new
+      // A wave is new when its row is: one shown again (nothing arrived) is no wave.
+      s.wave_fresh = time != s.time;
+      s.wave_value = to_eigen(wave);
       s.time = time;
       s.valid = true;
     }
@@ -304,7 +336,9 @@ void Teleoperation::cycle_body() noexcept {
   FaultInfo why{};
   if (!read_side(master_, why) || !read_side(slave_, why)) return on_input_failure(why);
   inputs_seen_ = true;
-  const LawInputs in{master_.last, slave_.last, seconds(config())};
+  LawInputs in{master_.last, slave_.last, seconds(config()), master_.energy};
+  in.master_wave = master_.wave_value;
+  in.master_wave_fresh = master_.wave_fresh;
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const bool busy = waiting_for_devices();
   if (state_.state != OperatingStateValue::enabled || clutched_ || busy) {
@@ -331,6 +365,11 @@ void Teleoperation::cycle_body() noexcept {
   }
   ratcheting_ = law.limiting;
   account(law);
+  // The energy before the force: the port never applies a force before the energy allowing it.
+  if (law.slave_port_energy >= 0 && master_.remote_energy.is_bound())
+    (void)master_.remote_energy(law.slave_port_energy);
+  if (law.sends_wave && master_.remote_wave.is_bound())
+    (void)master_.remote_wave(to_vec3(law.master_wave_out));
   send_forces(law.master_force, law.slave_force);
 }
 

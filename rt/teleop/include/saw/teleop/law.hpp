@@ -23,6 +23,14 @@ struct SideSample {
 struct LawInputs {
   SideSample master, slave;
   double period = 0.001;  // s, the task's
+  // For a law that `uses_ports`: the energy that has entered the network at the master's
+  // passivity port (J), as it arrived here — late by the link's delay. The task fails the master's
+  // read when its port reports nothing valid, so this is a checked, finite value ≥ 0.
+  double master_port_energy = 0;
+  // For a law that `uses_waves`: the wave the master's port sent (u), and whether it is a new one
+  // this cycle (a cycle with none is a zero wave: a lost packet carries no energy).
+  Eigen::Vector3d master_wave = Eigen::Vector3d::Zero();
+  bool master_wave_fresh = false;
 };
 
 // What a law answers: the forces to send, and what it shows of itself. The task checks the
@@ -34,6 +42,12 @@ struct LawCommand {
   Eigen::Vector3d master_error = Eigen::Vector3d::Zero(), slave_error = Eigen::Vector3d::Zero();
   Eigen::Vector3d slave_offset = Eigen::Vector3d::Zero();  // m, where the slave's goal sits
   bool limiting = false;                                   // a force is held at its limit (the ratchet slips)
+  // For a law that `uses_ports`: the energy that has entered the network at the slave's port
+  // (J), sent to the master's port with the force.
+  double slave_port_energy = -1;
+  // For a law that `uses_waves`: the wave to send back to the master's port (v).
+  Eigen::Vector3d master_wave_out = Eigen::Vector3d::Zero();
+  bool sends_wave = false;
   // False when the law's arithmetic overflowed (a huge input): the task then faults with zero
   // force, naming `bad_side`.
   bool finite = true;
@@ -62,6 +76,9 @@ struct LawContext {
 //     std::uint64_t refusals() const noexcept; int last_refusal() const noexcept;  // e.g. a planner's
 //     static constexpr auto declared_readouts = std::tuple{Readout<MyLaw, double>{...}, ...};
 //                                              // values it computes, shown as the task's state
+//     static constexpr bool uses_ports = true;  // a passive law: the master has a passivity port
+//                                              // (its input energy in, the slave's sent to it)
+//     static constexpr bool uses_waves = true;  // the same, with wave variables
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {

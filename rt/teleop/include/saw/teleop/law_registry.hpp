@@ -29,6 +29,9 @@ class LawModel {
   virtual LawCommand step(const LawInputs& in) noexcept = 0;
   virtual std::uint64_t refusals() const noexcept = 0;
   virtual int last_refusal() const noexcept = 0;
+  // The law exchanges energies with a passivity port at the master (law.hpp).
+  virtual bool uses_ports() const noexcept = 0;
+  virtual bool uses_waves() const noexcept = 0;
   // Setup: each declared setting as a latched state column and read command `name`, and (when
   // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`. Each declared
   // read-out as a state column and read command.
@@ -64,6 +67,18 @@ class LawHolder final : public LawModel {
       return law_.last_refusal();
     else
       return 0;
+  }
+  bool uses_ports() const noexcept override {
+    if constexpr (requires { L::uses_ports; })
+      return L::uses_ports;
+    else
+      return false;
+  }
+  bool uses_waves() const noexcept override {
+    if constexpr (requires { L::uses_waves; })
+      return L::uses_waves;
+    else
+      return false;
   }
   void provide_settings(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected) override {
     std::apply([&](const auto&... s) { (provide(p, table, rejected, s), ...); }, L::declared_settings);

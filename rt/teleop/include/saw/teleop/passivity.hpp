@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 
 namespace saw::teleop {
 
@@ -20,12 +21,15 @@ struct PortEnergy {
 // other: for each direction, E_out(here, t) ≤ E_in(there, t − T), where the remote input arrives
 // over the same link as the data, T late. Each step, the force the law wants is applied unless
 // its output this step would break that bound; then a damping α·v is subtracted, just enough
-// to keep it (capped at `max_damping`, the most the device renders stably). Since the remote input
+// to keep it. The damping force never exceeds the law force's own component along the motion
+// (α·|v|² ≤ F·v), so it needs no cap to stay bounded; `max_damping` caps α where a device must not
+// be given more (the bound may then be broken, and margin() says by how much). Since the remote input
 // arrives late, a delayed channel has less energy to spend the longer the delay: transparency
 // degrades with delay, stability does not.
 class PassivityController {
  public:
-  explicit PassivityController(double max_damping = 1e3) noexcept : max_damping_(max_damping) {}
+  explicit PassivityController(double max_damping = std::numeric_limits<double>::infinity()) noexcept
+      : max_damping_(max_damping) {}
 
   struct Step {
     Eigen::Vector3d force;  // to apply
@@ -40,12 +44,15 @@ class PassivityController {
   // only when the damping cap kept it from restoring passivity).
   double dissipated() const noexcept { return dissipated_; }
   double margin() const noexcept { return margin_; }
+  double last_damping() const noexcept { return damping_; }  // α of the last step, N·s/m
   void reset() noexcept { *this = PassivityController(max_damping_); }
+  // 0: observe only (the force is never changed, the figures still kept).
+  void set_max_damping(double d) noexcept { max_damping_ = d; }
 
  private:
   double max_damping_;
   PortEnergy energy_;
-  double dissipated_ = 0, margin_ = 0;
+  double dissipated_ = 0, margin_ = 0, damping_ = 0;
 };
 
 }  // namespace saw::teleop

@@ -120,6 +120,13 @@ class Teleoperation : public Task {
     FunctionWrite<Wrench> cf;
     FunctionRead<TimeNs> source_time, delay;  // bound when a DelayTask sits in between
     FunctionRead<OperatingState> state;       // bound when the device reports its state
+    FunctionRead<double> port_energy;         // bound when the device has a passivity port
+    FunctionWrite<double> remote_energy;
+    double energy = 0;        // the port's input energy, last good read
+    FunctionRead<Vec3> wave;  // bound when the device has a wave port
+    FunctionWrite<Vec3> remote_wave;
+    Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();
+    bool wave_fresh = false;  // a new wave arrived with this cycle's row
     SideSample last{};
     TimeNs time = 0;  // of the last good input: its row's, or its source row's plus the delay
     bool valid = false, not_finite = false;

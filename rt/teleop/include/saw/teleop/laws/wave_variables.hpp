@@ -1,0 +1,56 @@
+// WaveVariableLaw: bilateral teleoperation through wave variables — the channel passive by
+// construction at any delay (Niemeyer & Slotine 1991).
+#pragma once
+
+#include <string_view>
+#include <tuple>
+
+#include "saw/teleop/law.hpp"
+#include "saw/teleop/law_setting.hpp"
+#include "saw/teleop/teleop_law.hpp"
+
+namespace saw::teleop {
+
+struct WaveVariableSettings {
+  double impedance = 2.0;    // N·s/m, b (the master port's must be the same)
+  double stiffness = 600.0;  // N/m, the slave's tracking of the wave's velocity, integrated
+  double damping = 1.5;      // N·s/m
+  double force_limit = 3.0;  // N
+};
+
+// The slave's end of the wave transform: the master's port sends u = (b·ẋ_m + F_m)/√(2b); here the
+// slave is driven toward x_d, the integral of ẋ_d = (√(2b)·u − F_s)/b, by F_s = K·(x_d − x_s) +
+// B·(ẋ_d − ẋ_s) (solved together, saturated), and v = (b·ẋ_d − F_s)/√(2b) goes back, from which
+// the master's port makes the force the operator feels. A cycle without a new u is a zero wave.
+// Velocities travel, not positions: what the channel loses (a dropped packet) shows as drift.
+class WaveVariableLaw {
+ public:
+  using Settings = WaveVariableSettings;
+  static constexpr std::string_view name = "wave_variables";
+  static constexpr std::string_view description =
+      "bilateral teleoperation through wave variables (passive at any delay; velocities travel, "
+      "positions may drift)";
+  static constexpr bool uses_waves = true;
+  static constexpr auto declared_settings = std::tuple{
+      Setting<Settings, double>{"impedance", "N·s/m", 1e-3, 1e3, &Settings::impedance,
+                                "wave impedance b (the master port's wave_impedance must match)"},
+      Setting<Settings, double>{"stiffness", "N/m", 0, max_gain, &Settings::stiffness,
+                                "the slave's spring to the wave's integrated velocity"},
+      Setting<Settings, double>{"damping", "N·s/m", 0, 100, &Settings::damping, "the slave's damper"},
+      Setting<Settings, double>{"force_limit", "N", 0, max_force_limit, &Settings::force_limit,
+                                "the slave force's magnitude limit"},
+  };
+
+  WaveVariableLaw(const Settings& s, const LawContext& ctx) : s_(s), dt_(ctx.period) {}
+  Settings& settings() noexcept { return s_; }
+  void reset(const LawInputs& in) noexcept;
+  LawCommand step(const LawInputs& in) noexcept;
+
+ private:
+  Settings s_;
+  double dt_;
+  Eigen::Vector3d desired_ = Eigen::Vector3d::Zero();  // x_d
+  Eigen::Vector3d offset_ = Eigen::Vector3d::Zero();   // for the tracking figure: p_m + o = p_s
+};
+
+}  // namespace saw::teleop

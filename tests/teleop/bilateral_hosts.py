@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""The bilateral laws across two processes and two hosts, with the verdicts of the stepped clock:
+the passive law stable at 50 ms with 10 % loss and jitter each way, the same coupling without
+passivity unstable at 20 ms (the delay task makes the network: the kernel here has no netem). The run is placed on hosts
+"operator" (the master and its passivity port) and "patient" (the slave, the delay task and the
+law). `bridge`: both hosts on this machine, joined by the shared-memory bridge. `netns`: two network
+namespaces joined by a veth pair, each with its own /dev/shm, joined by their gateways over DDS.
+Exit 77 (skipped, the reason printed) where namespaces cannot be made.
+usage: bilateral_hosts.py bridge|netns SAW_RT WORKDIR"""
+import os
+import pathlib
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "tools" / "experiments"))
+import numpy as np  # noqa: E402
+import bilateral_run as br  # noqa: E402
+
+MODE, SAW_RT, WORK = sys.argv[1], sys.argv[2], pathlib.Path(sys.argv[3])
+WORK.mkdir(parents=True, exist_ok=True)
+LAWS = {law.key: law for law in br.LAWS}
+# Real threads on a shared VM: long enough for the unstable law to show, short enough for CI.
+PATIENT_S, OPERATOR_S = 8, 11
+
+
+def sh(*args):
+    return subprocess.run(args, capture_output=True, text=True)
+
+
+class Namespaces:
+    """Two network namespaces ("hosts") joined by a veth pair."""
+
+    def __init__(self):
+        tag = str(os.getpid())
+        self.ns = {"operator": f"sbo-{tag}", "patient": f"sbp-{tag}"}
+        net = f"10.212.{os.getpid() % 200 + 10}"
+        self.ip = {"operator": f"{net}.1", "patient": f"{net}.2"}
+        veth = {"operator": f"bo{tag}"[:15], "patient": f"bp{tag}"[:15]}
+        r = sh("ip", "netns", "add", self.ns["operator"])
+        if r.returncode != 0:
+            print(f"SKIP: cannot create a network namespace here: {r.stderr.strip()}")
+            sys.exit(77)
+        cmds = [["ip", "netns", "add", self.ns["patient"]],
+                ["ip", "link", "add", veth["operator"], "type", "veth", "peer", "name", veth["patient"]]]
+        for h in ("operator", "patient"):
+            cmds += [["ip", "link", "set", veth[h], "netns", self.ns[h]],
+                     ["ip", "-n", self.ns[h], "addr", "add", f"{self.ip[h]}/24", "dev", veth[h]],
+                     ["ip", "-n", self.ns[h], "link", "set", veth[h], "up"],
+                     ["ip", "-n", self.ns[h], "link", "set", "lo", "up"]]
+        for cmd in cmds:
+            r = sh(*cmd)
+            if r.returncode != 0:
+                self.close()
+                print(f"SKIP: cannot build the two-host network ({' '.join(cmd)}): {r.stderr.strip()}")
+                sys.exit(77)
+
+    def command(self, host, shell):
+        # Each host its own /dev/shm (a mount namespace), so the bridge cannot shortcut the link.
+        return ["ip", "netns", "exec", self.ns[host], "unshare", "--mount", "--propagation", "private", "sh",
+                "-c", "mount -t tmpfs tmpfs /dev/shm && exec sh -c \"$0\"", shell]
+
+    def close(self):
+        for n in self.ns.values():
+            sh("ip", "netns", "del", n)
+
+
+def run(law, net, delay_ms, loss, jitter_ms):
+    name = f"{MODE}_{law.key}"
+    cfg = WORK / f"{name}.yaml"
+    addresses = net.ip if net else None
+    port = f"port{os.getpid()}"  # the segment the operator exports: /dev/shm is shared with other suites
+    cfg.write_text(br.hosts_deployment(law, delay_ms, loss, jitter_ms, addresses, 20 + os.getpid() % 80, port))
+    csv = {h: WORK / f"{name}_{h}.csv" for h in ("operator", "patient")}
+    lines = {h: f"{SAW_RT} {cfg} --host {h} --duration {d} --record {csv[h]} > {WORK}/{name}_{h}.log 2>&1"
+             for h, d in (("patient", PATIENT_S), ("operator", OPERATOR_S))}
+    # The operator first. Over the bridge the patient finds the port's segment at its start, so
+    # it starts once the segment is there; over DDS its gateway mirrors the port when it appears.
+    procs = {"operator": subprocess.Popen(net.command("operator", lines["operator"]) if net
+                                          else ["sh", "-c", lines["operator"]])}
+    segment = pathlib.Path(f"/dev/shm/saw.{port}")
+    deadline = time.monotonic() + 20
+    while not net and not segment.exists() and procs["operator"].poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    procs["patient"] = subprocess.Popen(net.command("patient", lines["patient"]) if net
+                                        else ["sh", "-c", lines["patient"]])
+    try:
+        codes = {h: p.wait(timeout=90) for h, p in procs.items()}
+    finally:
+        for p in procs.values():
+            if p.poll() is None:
+                p.kill()
+    for h in procs:
+        print(f"--- {name} {h}\n{(WORK / f'{name}_{h}.log').read_text().strip()}")
+    if any(codes.values()):
+        return None, f"saw-rt exited {codes}"
+    data = {h: np.genfromtxt(csv[h], delimiter=",", names=True) for h in csv}
+    stable, why, tracking, energy = br.split_figures(data["operator"], data["patient"], port)
+    print(f"figure: {MODE} {law.key} at {delay_ms} ms, {loss * 100:.0f} % loss, ±{jitter_ms} ms: {why}; "
+          f"tracking RMS {tracking * 1e3:.2f} mm; channel energy over the second half {energy:.4f} J")
+    return stable, why
+
+
+net = Namespaces() if MODE == "netns" else None
+failures = []
+try:
+    for key, delay_ms, loss, jitter_ms, want in (("tdpa", 50, 0.1, 10, True), ("coupling", 20, 0, 0, False)):
+        stable, why = run(LAWS[key], net, delay_ms, loss, jitter_ms)
+        if stable is None or stable != want:
+            failures.append(f"{key}: expected {'stable' if want else 'unstable'}, got {why}")
+finally:
+    if net:
+        net.close()
+if failures:
+    print("\n".join(failures), file=sys.stderr)
+    sys.exit(1)

@@ -1,0 +1,151 @@
+// Wave variables: the transform's power identity at both ends, a lost wave brings nothing, the
+// master port makes its force from the returning wave, and the delay task delivers a wave once.
+#include "saw/teleop/wave.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "saw/teleop/delay_task.hpp"
+#include "saw/teleop/laws/wave_variables.hpp"
+#include "saw/teleop/passivity_port.hpp"
+#include "saw/testing/fake_device.hpp"
+#include "saw/testing/stepper.hpp"
+
+namespace {
+
+using saw::Status;
+using saw::teleop::LawInputs;
+using saw::teleop::WaveVariableLaw;
+using V = Eigen::Vector3d;
+namespace port = saw::teleop::port;
+
+TEST(WaveTransform, ThePowerIntoTheNetworkIsHalfTheWavesSquaresDifference) {
+  const double b = 3;
+  const V velocity(0.1, -0.05, 0.02), v(0.3, 0.1, -0.2);
+  const auto end = saw::teleop::wave::master_end(b, velocity, v, 100);
+  const V resist = -end.force;
+  EXPECT_NEAR(velocity.dot(resist), 0.5 * end.u.squaredNorm() - 0.5 * v.squaredNorm(), 1e-12);
+  // Limited: the force is the limit's, and u is made from the force applied.
+  const auto limited = saw::teleop::wave::master_end(b, velocity, V(10, 0, 0), 0.5);
+  EXPECT_NEAR(limited.force.norm(), 0.5, 1e-12);
+  EXPECT_TRUE(limited.u.isApprox((b * velocity - limited.force) / std::sqrt(2 * b)));
+}
+
+LawInputs wave_in(V slave, V slave_velocity, V u, bool fresh) {
+  LawInputs in;
+  in.slave.position = slave;
+  in.slave.velocity = slave_velocity;
+  in.master_wave = u;
+  in.master_wave_fresh = fresh;
+  return in;
+}
+
+TEST(WaveVariableLaw, TheSlavesEndKeepsThePowerIdentityAndALostWaveBringsNothing) {
+  WaveVariableLaw law({}, saw::teleop::LawContext{});
+  law.reset(wave_in(V::Zero(), V::Zero(), V::Zero(), false));
+  const double b = law.settings().impedance, dt = 0.001;
+  V desired = V::Zero();
+  for (int k = 0; k < 50; ++k) {
+    const V u(0.2, 0, 0.1);
+    const auto out = law.step(wave_in(V::Zero(), V::Zero(), u, true));
+    ASSERT_TRUE(out.sends_wave);
+    // The slave's desired velocity is what the wave and the force imply; the power out of the
+    // network at the slave is F·ẋ_d = ½|u|² − ½|v|².
+    const V xd_dot = (std::sqrt(2 * b) * u - out.slave_force) / b;
+    EXPECT_NEAR(out.slave_force.dot(xd_dot), 0.5 * u.squaredNorm() - 0.5 * out.master_wave_out.squaredNorm(),
+                1e-12);
+    desired += dt * xd_dot;
+  }
+  EXPECT_GT(desired.x(), 0) << "the wave moves the slave's goal";
+  // No new wave this cycle: a zero wave, whatever the last one was: v = −√(2/b)·F.
+  const auto lost = law.step(wave_in(V::Zero(), V::Zero(), V(5, 5, 5), false));
+  EXPECT_TRUE(lost.master_wave_out.isApprox(-lost.slave_force * (std::sqrt(2 * b) / b)));
+  EXPECT_LT(lost.slave_force.norm(), 3.0 + 1e-12);
+}
+
+// A port in the wave scheme between a device and a far side that sends waves.
+class WaveFarSide : public saw::Component {
+ public:
+  WaveFarSide() : Component("far") {
+    auto& r = require("arm");
+    saw::crtk::require(r, port::wave, wave);
+    saw::crtk::require(r, port::remote_wave, remote_wave);
+    saw::crtk::require(r, saw::crtk::arm::servo_cf, servo_cf);
+  }
+  saw::FunctionRead<saw::Vec3> wave;
+  saw::FunctionWrite<saw::Vec3> remote_wave;
+  saw::FunctionWrite<saw::Wrench> servo_cf;
+};
+
+TEST(PassivityPort, TheWaveSchemeMakesTheForceFromTheReturningWaveAndStopsWithoutOne) {
+  saw::teleop::PortConfig c;
+  c.scheme = saw::teleop::PortScheme::wave;
+  c.wave_impedance = 2;
+  saw::testing::FakeDevice device{"device"};
+  saw::teleop::PassivityPort port_task("port", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), c);
+  WaveFarSide far;
+  saw::Manager manager;
+  manager.add(device);
+  manager.add(port_task);
+  manager.add(far);
+  manager.connect("port", "device", "device", "arm");
+  manager.connect("far", "arm", "port", "arm");
+  manager.start_stepped();
+  saw::testing::Stepper stepper{manager};
+  device.velocity = {0.1, 0, 0};
+  stepper({&device});
+  stepper({&device});
+  saw::Vec3 u{};
+  ASSERT_EQ(far.wave(u), Status::ok);
+  EXPECT_NEAR(u[0], std::sqrt(2 * 2.0) * 0.1, 1e-12) << "u = √(2b)·ẋ with nothing back";
+  EXPECT_EQ(device.commands, 0) << "no wave has arrived: nothing is written";
+  ASSERT_EQ(far.servo_cf(saw::Wrench{{9, 9, 9}, {}}), Status::ok);  // ignored in this scheme
+  ASSERT_EQ(far.remote_wave(saw::Vec3{0.05, 0, 0}), Status::ok);
+  stepper({&device});
+  EXPECT_NEAR(device.force[0], -(2.0 * 0.1 - std::sqrt(4.0) * 0.05), 1e-12);
+  EXPECT_EQ(device.force[1], 0);
+  const int before = device.commands;
+  for (int i = 0; i < 20; ++i) stepper({&device});
+  EXPECT_LE(device.commands - before, 5) << "without waves the port stops writing after command_hold";
+}
+
+TEST(DelayTask, AWaveIsDeliveredOnceInTheCycleItArrivesNeverRepeated) {
+  saw::teleop::DelayConfig dc;
+  dc.measured = {0, 0, 0, 1};
+  dc.commands = {5'000'000, 0, 0, 2};
+  saw::teleop::PortConfig pc;
+  pc.scheme = saw::teleop::PortScheme::wave;
+  saw::testing::FakeDevice device{"device"};
+  saw::teleop::PassivityPort port_task("port", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0),
+                                       pc);
+  saw::teleop::DelayTask link("link", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), dc);
+  WaveFarSide far;
+  saw::Manager manager;
+  manager.add(device);
+  manager.add(port_task);
+  manager.add(link);
+  manager.add(far);
+  manager.connect("port", "device", "device", "arm");
+  manager.connect("link", "source", "port", "arm");
+  manager.connect("far", "arm", "link", "arm");
+  manager.start_stepped();
+  saw::testing::Stepper stepper{manager};
+  // One wave, with one command, then only commands: the port applies the wave in one cycle only.
+  ASSERT_EQ(far.remote_wave(saw::Vec3{0.5, 0, 0}), Status::ok);
+  ASSERT_EQ(far.servo_cf(saw::Wrench{}), Status::ok);
+  std::vector<double> forces;
+  for (int k = 0; k < 15; ++k) {
+    if (k > 0) {
+      ASSERT_EQ(far.servo_cf(saw::Wrench{}), Status::ok);
+    }
+    const int before = device.commands;
+    stepper({&device});
+    if (device.commands > before) forces.push_back(device.force[0]);
+  }
+  ASSERT_FALSE(forces.empty()) << "the wave arrived after the link's delay";
+  EXPECT_NEAR(forces.front(), std::sqrt(4.0) * 0.5, 1e-12) << "the wave's force, the device at rest";
+  for (std::size_t i = 1; i < forces.size(); ++i) EXPECT_EQ(forces[i], 0) << "then a zero wave: " << i;
+}
+
+}  // namespace

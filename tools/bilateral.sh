@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Bilateral teleoperation under delay: the laws against delay, jitter and loss, into docs/.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+tools/build.sh saw-rt
+exec .venv/bin/python tools/experiments/bilateral.py "$@"
