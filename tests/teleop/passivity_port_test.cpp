@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "port_chain.hpp"
 #include "saw/component.hpp"
 #include "saw/teleop/delay_task.hpp"
 #include "saw/testing/fake_device.hpp"
@@ -38,30 +39,14 @@ class FarSide : public saw::Component {
   saw::FunctionWrite<double> remote_energy;
 };
 
-struct PortRig {
-  explicit PortRig(PortConfig c = {})
-      : port_task("port", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), c) {
-    manager.add(device);
-    manager.add(port_task);
-    manager.add(far);
-    manager.connect("port", "device", "device", "arm");
-    manager.connect("far", "arm", "port", "arm");
-    manager.start_stepped();
-  }
-  void step(int n = 1, bool publish = true) {
-    for (int i = 0; i < n; ++i) publish ? stepper({&device}) : stepper({});
-  }
+struct PortRig : PortChain<FarSide> {
+  using PortChain::PortChain;
   void command(double fx) { ASSERT_EQ(far.servo_cf(saw::Wrench{{fx, 0, 0}, {}}), Status::ok); }
   double energy_in() {
     double e = -1;
     EXPECT_EQ(far.energy(e), Status::ok);
     return e;
   }
-  saw::testing::FakeDevice device{"device"};
-  PassivityPort port_task;
-  FarSide far;
-  saw::Manager manager;
-  saw::testing::Stepper stepper{manager};
 };
 
 TEST(PassivityPort, WithNothingInFromTheOtherSideTheDeviceGetsNoEnergy) {
@@ -73,7 +58,7 @@ TEST(PassivityPort, WithNothingInFromTheOtherSideTheDeviceGetsNoEnergy) {
     rig.step();
     EXPECT_LE(rig.device.force[0] * 0.1, 1e-12) << "no output beyond what came in, cycle " << i;
   }
-  EXPECT_GT(rig.port_task.controller().dissipated(), 0);
+  EXPECT_GT(rig.port.controller().dissipated(), 0);
   // Energy arrives from the other port: the law's force passes untouched.
   ASSERT_EQ(rig.far.remote_energy(1.0), Status::ok);
   rig.command(1.0);
@@ -105,9 +90,8 @@ TEST(PassivityPort, ObservingOnlyNeverChangesTheForce) {
     rig.step();
     EXPECT_DOUBLE_EQ(rig.device.force[0], 1.0);
   }
-  EXPECT_NEAR(rig.port_task.controller().energy().out, 20 * 0.1 * 1e-3, 1e-4)
-      << "the output is still counted";
-  EXPECT_EQ(rig.port_task.controller().dissipated(), 0);
+  EXPECT_NEAR(rig.port.controller().energy().out, 20 * 0.1 * 1e-3, 1e-4) << "the output is still counted";
+  EXPECT_EQ(rig.port.controller().dissipated(), 0);
 }
 
 TEST(PassivityPort, ACommandIsAppliedABoundedTimeThenTheDevicesWatchdogDecides) {
@@ -129,7 +113,7 @@ TEST(PassivityPort, WhatIsNotANumberIsRefusedAndAnOlderEnergyTellsNothing) {
   ASSERT_EQ(rig.far.remote_energy(-1.0), Status::ok);
   rig.step(2);
   EXPECT_EQ(rig.device.commands, 0) << "a NaN force never reaches the device";
-  EXPECT_EQ(rig.port_task.rejected(), 3u);
+  EXPECT_EQ(rig.port.rejected(), 3u);
   // Energies only grow: a late, smaller value does not take back what arrived.
   ASSERT_EQ(rig.far.remote_energy(2.0), Status::ok);
   ASSERT_EQ(rig.far.remote_energy(1.0), Status::ok);
@@ -156,20 +140,11 @@ TEST(DelayTask, EnergiesTravelWithTheDataTheyBelongTo) {
   saw::teleop::DelayConfig c;
   c.measured = {10 * ms, 0, 0, 1};
   c.commands = {10 * ms, 0, 0, 2};
-  saw::testing::FakeDevice device{"device"};
-  PassivityPort port_task("port", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), PortConfig{});
-  saw::teleop::DelayTask link("link", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), c);
-  FarSide far;
-  saw::Manager manager;
-  manager.add(device);
-  manager.add(port_task);
-  manager.add(link);
-  manager.add(far);
-  manager.connect("port", "device", "device", "arm");
-  manager.connect("link", "source", "port", "arm");
-  manager.connect("far", "arm", "link", "arm");
-  manager.start_stepped();
-  saw::testing::Stepper stepper{manager};
+  PortChain<FarSide> rig(PortConfig{}, c);
+  auto& device = rig.device;
+  auto& far = rig.far;
+  auto& port_task = rig.port;
+  auto& stepper = rig.stepper;
   device.velocity = {0.1, 0, 0};
   int first_energy = -1, first_force = -1;
   for (int k = 0; k < 60; ++k) {

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "port_chain.hpp"
 #include "saw/teleop/delay_task.hpp"
 #include "saw/teleop/laws/wave_variables.hpp"
 #include "saw/teleop/passivity_port.hpp"
@@ -82,17 +83,10 @@ TEST(PassivityPort, TheWaveSchemeMakesTheForceFromTheReturningWaveAndStopsWithou
   saw::teleop::PortConfig c;
   c.scheme = saw::teleop::PortScheme::wave;
   c.wave_impedance = 2;
-  saw::testing::FakeDevice device{"device"};
-  saw::teleop::PassivityPort port_task("port", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), c);
-  WaveFarSide far;
-  saw::Manager manager;
-  manager.add(device);
-  manager.add(port_task);
-  manager.add(far);
-  manager.connect("port", "device", "device", "arm");
-  manager.connect("far", "arm", "port", "arm");
-  manager.start_stepped();
-  saw::testing::Stepper stepper{manager};
+  PortChain<WaveFarSide> rig(c);
+  auto& device = rig.device;
+  auto& far = rig.far;
+  auto& stepper = rig.stepper;
   device.velocity = {0.1, 0, 0};
   stepper({&device});
   stepper({&device});
@@ -116,21 +110,10 @@ TEST(DelayTask, AWaveIsDeliveredOnceInTheCycleItArrivesNeverRepeated) {
   dc.commands = {5'000'000, 0, 0, 2};
   saw::teleop::PortConfig pc;
   pc.scheme = saw::teleop::PortScheme::wave;
-  saw::testing::FakeDevice device{"device"};
-  saw::teleop::PassivityPort port_task("port", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0),
-                                       pc);
-  saw::teleop::DelayTask link("link", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), dc);
-  WaveFarSide far;
-  saw::Manager manager;
-  manager.add(device);
-  manager.add(port_task);
-  manager.add(link);
-  manager.add(far);
-  manager.connect("port", "device", "device", "arm");
-  manager.connect("link", "source", "port", "arm");
-  manager.connect("far", "arm", "link", "arm");
-  manager.start_stepped();
-  saw::testing::Stepper stepper{manager};
+  PortChain<WaveFarSide> rig(pc, dc);
+  auto& device = rig.device;
+  auto& far = rig.far;
+  auto& stepper = rig.stepper;
   // One wave, with one command, then only commands: the port applies the wave in one cycle only.
   ASSERT_EQ(far.remote_wave(saw::Vec3{0.5, 0, 0}), Status::ok);
   ASSERT_EQ(far.servo_cf(saw::Wrench{}), Status::ok);

@@ -72,4 +72,25 @@ void check(const AxisConfig& a) {
   need(PdoKind::tpdo, cia402::object::position_actual_value, "the position actual value");
 }
 
+void note_heartbeat(AxisHealth& h, const HeartbeatEvent& e) noexcept {
+  h.nmt_state = e.state;
+  switch (e.kind) {
+    case HeartbeatEvent::Kind::appeared:
+    case HeartbeatEvent::Kind::back:
+      h.heartbeat_seen = true;
+      h.heartbeat_lost = false;
+      break;
+    case HeartbeatEvent::Kind::lost:
+      h.heartbeat_lost = true;
+      h.silent_for = e.silent_for;
+      ++h.heartbeat_losses;
+      break;
+    case HeartbeatEvent::Kind::boot_up:
+      ++h.boot_ups;
+      break;
+    case HeartbeatEvent::Kind::state_changed:
+      break;
+  }
+}
+
 }  // namespace saw::canopen

@@ -187,24 +187,7 @@ void BusMaster::Impl::heartbeat_events(TimeNs now) noexcept {
     Axis* a = by_node(e->node);
     if (a == nullptr) continue;
     AxisHealth& h = a->health;
-    h.nmt_state = e->state;
-    switch (e->kind) {
-      case HeartbeatEvent::Kind::appeared:
-      case HeartbeatEvent::Kind::back:
-        h.heartbeat_seen = true;
-        h.heartbeat_lost = false;
-        break;
-      case HeartbeatEvent::Kind::lost:
-        h.heartbeat_lost = true;
-        h.silent_for = e->silent_for;
-        ++h.heartbeat_losses;
-        break;
-      case HeartbeatEvent::Kind::boot_up:
-        ++h.boot_ups;
-        break;
-      case HeartbeatEvent::Kind::state_changed:
-        break;
-    }
+    note_heartbeat(h, *e);
   }
   counters.heartbeat_events_dropped = heartbeats.dropped_events();
   // Monitoring starts with a node's first heartbeat (CiA 301); a node silent from the start is

@@ -205,24 +205,7 @@ void IoNode::Impl::on_frame(const can::Frame& f, TimeNs now) noexcept {
 
 void IoNode::Impl::heartbeat_events(TimeNs now) noexcept {
   while (const auto e = heartbeats.poll(now)) {
-    health.nmt_state = e->state;
-    switch (e->kind) {
-      case HeartbeatEvent::Kind::appeared:
-      case HeartbeatEvent::Kind::back:
-        health.heartbeat_seen = true;
-        health.heartbeat_lost = false;
-        break;
-      case HeartbeatEvent::Kind::lost:
-        health.heartbeat_lost = true;
-        health.silent_for = e->silent_for;
-        ++health.heartbeat_losses;
-        break;
-      case HeartbeatEvent::Kind::boot_up:
-        ++health.boot_ups;
-        break;
-      case HeartbeatEvent::Kind::state_changed:
-        break;
-    }
+    note_heartbeat(health, *e);
   }
   // A node silent from the start is lost all the same once its timeout has passed.
   if (!health.heartbeat_seen && !health.heartbeat_lost && now - first_cycle > config.heartbeat_timeout) {

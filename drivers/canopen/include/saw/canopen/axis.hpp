@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "saw/canopen/cia402.hpp"
+#include "saw/canopen/heartbeat.hpp"
 #include "saw/canopen/nmt.hpp"
 #include "saw/canopen/pdo.hpp"
 #include "saw/canopen/units.hpp"
@@ -88,5 +89,8 @@ struct AxisHealth {
   std::uint8_t error_register = 0;  // from the newest EMCY (0 after an error reset)
   std::uint64_t bad_pdos = 0;       // frames on a TPDO identifier of the wrong length or kind
 };
+
+// What one heartbeat-consumer event says of a node's health (a drive's or an I/O node's).
+void note_heartbeat(AxisHealth& h, const HeartbeatEvent& e) noexcept;
 
 }  // namespace saw::canopen
