@@ -78,11 +78,12 @@ std::unique_ptr<Component> resolve(const std::string& name, TimeNs timeout) {
 
 }  // namespace
 
-Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned decimation, TimeNs timeout,
-                       std::function<void()> liveness_changed)
+Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned decimation,
+                       double display_rate, TimeNs timeout, std::function<void()> liveness_changed)
     : dds_(dds),
       name_(component),
       decimation_(decimation == 0 ? 1 : decimation),
+      display_period_(display_rate > 0 ? static_cast<TimeNs>(1e9 / display_rate) : 0),
       liveness_changed_(std::move(liveness_changed)),
       component_(resolve(component, timeout)),
       proxy_(dynamic_cast<bridge::Proxy*>(component_.get())) {
@@ -190,6 +191,14 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
           // A task's statistics are cumulative: a tenth of the rows tells a GUI as much, for a
           // tenth of the samples every subscriber takes.
           if (!latched && m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
+          // What a live view draws: the same values at the display rate, on a topic of their own,
+          // so that a GUI's reader is not sent (and does not decode) a thousand rows a second.
+          if (!latched && display_period_ > 0) {
+            info.display_topic = info.topic + "/display";
+            info.display_rate = display_rate;
+            states_.back().display = dds_.publisher->create_datawriter(dds_.topic(info.display_topic, *m),
+                                                                       DdsContext::writer_qos(Flow::state));
+          }
           if (m == operating_state && fault_writer_ == nullptr) fault_writer_ = w;
         }
       } else {
@@ -261,6 +270,7 @@ void Attachment::serve_queries() {
 
 void Attachment::add_stats(GatewayStats& s) const {
   s.published += published_.load(std::memory_order_relaxed);
+  s.displayed += displayed_.load(std::memory_order_relaxed);
   s.events += event_count_.load(std::memory_order_relaxed);
   s.commands += commands_in_.load(std::memory_order_relaxed);
   s.rejected += rejected_.load(std::memory_order_relaxed);
@@ -315,6 +325,31 @@ bool Attachment::publish_state(StateOut& s, bool only_if_changed) {
   return true;
 }
 
+void Attachment::publish_row(bool full, std::uint64_t published_rows) {
+  bool display = false;
+  bool first = true;
+  for (auto& s : states_) {
+    const bool full_here = full && published_rows % s.every == 0;
+    if (!full_here && !display && !(first && display_period_ > 0)) continue;
+    RowStamp stamp;
+    if (detail::Access::read_stamped(*s.command)(s.value.data(), stamp) != Status::ok) continue;
+    if (first) {
+      // Due by the rows' own times: the display samples are a period apart in the server's
+      // time (on a fixed grid, which a late gateway rejoins), whenever the gateway woke.
+      first = false;
+      display = display_period_ > 0 && stamp.time >= next_display_;
+      if (display) next_display_ += display_period_;
+      if (display && next_display_ <= stamp.time)
+        next_display_ = stamp.time + display_period_;  // a period behind
+    }
+    const TimeNs wall = wall_from_monotonic(stamp.time);
+    if (full_here && s.mapping->write(*s.writer, s.value.data(), wall, name_))
+      published_.fetch_add(1, std::memory_order_relaxed);
+    if (display && s.display != nullptr && s.mapping->write(*s.display, s.value.data(), wall, name_))
+      displayed_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
 void Attachment::run() {
   std::uint32_t seen = 0;
   unsigned rows = 0;
@@ -343,11 +378,13 @@ void Attachment::run() {
     } else if (row && alive) {
       for (auto& s : changed_states_) publish_state(s, true);
     }
-    if (row && alive && ++rows >= decimation_) {
-      rows = 0;
-      for (auto& s : states_)
-        if (published_rows % s.every == 0) publish_state(s, false);
-      ++published_rows;
+    if (row && alive) {
+      const bool full = ++rows >= decimation_;
+      publish_row(full, published_rows);
+      if (full) {
+        rows = 0;
+        ++published_rows;
+      }
     }
     detail::Access::remote_events(*proxy_)->drain();
     for (auto& c : commands_) {
