@@ -138,6 +138,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
     endpoints_.push_back(std::move(info));
   }
   detail::Access::remote_events(*proxy_)->set_consumer_attached();
+  block_.resize(proxy_->mirror_bytes());
   for (const auto& c : p.commands()) {
     const Signature& sig = c->signature;
     EndpointInfo info = describe(name_, p.name(), c->name, sig);
@@ -188,6 +189,9 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
           auto* w = dds_.publisher->create_datawriter(
               dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::state));
           (latched ? changed_states_ : states_).push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
+          if (!latched && !proxy_->read_slice(c->name, states_.back().offset, states_.back().size))
+            throw std::runtime_error("attach " + name_ + ": " + c->name +
+                                     " is not in the bridge's state rows");
           // A task's statistics are cumulative: a tenth of the rows tells a GUI as much, for a
           // tenth of the samples every subscriber takes.
           if (!latched && m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
@@ -271,6 +275,7 @@ void Attachment::serve_queries() {
 void Attachment::add_stats(GatewayStats& s) const {
   s.published += published_.load(std::memory_order_relaxed);
   s.displayed += displayed_.load(std::memory_order_relaxed);
+  s.rows_skipped += rows_skipped_.load(std::memory_order_relaxed);
   s.events += event_count_.load(std::memory_order_relaxed);
   s.commands += commands_in_.load(std::memory_order_relaxed);
   s.rejected += rejected_.load(std::memory_order_relaxed);
@@ -325,24 +330,49 @@ bool Attachment::publish_state(StateOut& s, bool only_if_changed) {
   return true;
 }
 
-void Attachment::publish_row(bool full, std::uint64_t published_rows) {
-  bool display = false;
-  bool first = true;
-  for (auto& s : states_) {
-    const bool full_here = full && published_rows % s.every == 0;
-    if (!full_here && !display && !(first && display_period_ > 0)) continue;
-    RowStamp stamp;
-    if (detail::Access::read_stamped(*s.command)(s.value.data(), stamp) != Status::ok) continue;
-    if (first) {
-      // Due by the rows' own times: the display samples are a period apart in the server's
-      // time (on a fixed grid, which a late gateway rejoins), whenever the gateway woke.
-      first = false;
-      display = display_period_ > 0 && stamp.time >= next_display_;
-      if (display) next_display_ += display_period_;
-      if (display && next_display_ <= stamp.time)
-        next_display_ = stamp.time + display_period_;  // a period behind
+void Attachment::publish_rows() {
+  const std::uint64_t written = proxy_->rows_written();
+  if (written == 0) return;
+  // From the newest row at attach, and again at a new server (whose rows count from 0 again).
+  if (!rows_known_ || written < next_row_) {
+    next_row_ = written - 1;
+    rows_known_ = true;
+  }
+  const std::uint64_t depth = proxy_->history_rows();
+  if (written - next_row_ > depth) {  // gone before we could read them
+    rows_skipped_.fetch_add(written - depth - next_row_, std::memory_order_relaxed);
+    next_row_ = written - depth;
+  }
+  for (; next_row_ < written; ++next_row_) {
+    const bool newest = next_row_ + 1 == written;
+    const bool full = rows_ + 1 >= decimation_;
+    if (full || (newest && display_period_ > 0)) {
+      const auto st = proxy_->read_row(next_row_, block_.data());
+      if (st == bridge::Proxy::RowStatus::overwritten)
+        rows_skipped_.fetch_add(1, std::memory_order_relaxed);
+      else if (st != bridge::Proxy::RowStatus::ok)
+        return;  // the server is gone (or the row not there yet): from this row at the next wake
+      else
+        publish_block(full, newest);
     }
-    const TimeNs wall = wall_from_monotonic(stamp.time);
+    rows_ = full ? 0 : rows_ + 1;
+    if (full) ++published_rows_;
+  }
+}
+
+void Attachment::publish_block(bool full, bool newest) {
+  TimeNs time = 0;
+  std::memcpy(&time, block_.data(), sizeof time);  // each row starts with its time
+  // Due by the rows' own times: the display samples are a period apart in the server's time (on
+  // a fixed grid, which a late gateway rejoins), whenever the gateway woke.
+  const bool display = newest && display_period_ > 0 && time >= next_display_;
+  if (display) next_display_ += display_period_;
+  if (display && next_display_ <= time) next_display_ = time + display_period_;  // a period behind
+  const TimeNs wall = wall_from_monotonic(time);
+  for (auto& s : states_) {
+    const bool full_here = full && published_rows_ % s.every == 0;
+    if (!full_here && !display) continue;
+    std::memcpy(s.value.data(), block_.data() + s.offset, std::min<std::size_t>(s.size, s.value.size()));
     if (full_here && s.mapping->write(*s.writer, s.value.data(), wall, name_))
       published_.fetch_add(1, std::memory_order_relaxed);
     if (display && s.display != nullptr && s.mapping->write(*s.display, s.value.data(), wall, name_))
@@ -352,8 +382,6 @@ void Attachment::publish_row(bool full, std::uint64_t published_rows) {
 
 void Attachment::run() {
   std::uint32_t seen = 0;
-  unsigned rows = 0;
-  std::uint64_t published_rows = 0;
   bool was_alive = true;
   bool announce = true;  // the latched states, once the mirror has a row (again)
   std::string why;
@@ -369,6 +397,7 @@ void Attachment::run() {
                       (last.empty() ? "" : " (" + last + ")"));
       }
       announce = alive;
+      rows_known_ = false;  // a server back, or another: from its newest row
       liveness_changed_();
     }
     if (row && alive && announce) {
@@ -378,14 +407,7 @@ void Attachment::run() {
     } else if (row && alive) {
       for (auto& s : changed_states_) publish_state(s, true);
     }
-    if (row && alive) {
-      const bool full = ++rows >= decimation_;
-      publish_row(full, published_rows);
-      if (full) {
-        rows = 0;
-        ++published_rows;
-      }
-    }
+    if (row && alive) publish_rows();
     detail::Access::remote_events(*proxy_)->drain();
     for (auto& c : commands_) {
       for (;;) {

@@ -43,6 +43,7 @@ class Attachment {
     std::vector<std::byte> previous = {};  // for states published on change
     unsigned every = 1;                    // of the published rows (a task's statistics: 1 in 10)
     fdds::DataWriter* display = nullptr;   // <topic>/display, at the display rate
+    std::uint32_t offset = 0, size = 0;    // where its value sits in a row of the bridge's mirror
   };
   struct EventOut {
     Attachment* self;
@@ -67,9 +68,13 @@ class Attachment {
   // Reads a state from the mirror and writes it; with `only_if_changed`, only when it differs
   // from the last read. True if a sample went out.
   bool publish_state(StateOut& s, bool only_if_changed);
-  // One row of the row-by-row states: to the full-rate topics when `full` (each its `every`), to
-  // the display streams when the row's time has reached the next display time.
-  void publish_row(bool full, std::uint64_t published_rows);
+  // Every row the server wrote since the last one published (from the bridge's row history):
+  // each `decimation`th to the full-rate topics, the newest to the display streams when due.
+  // Rows overwritten before they were read (the gateway was a history behind) are counted.
+  void publish_rows();
+  // The row in block_: to the full-rate topics when `full` (each state its `every`), to the
+  // display streams when `newest` and its time has reached the next display time.
+  void publish_block(bool full, bool newest);
   void serve_queries();
   // A command value against the limits its component declares; the reason in `why` if outside.
   static bool within_limits(CommandIn& c, std::string& why);
@@ -82,6 +87,13 @@ class Attachment {
   unsigned decimation_;
   TimeNs display_period_;    // 0: no display streams
   TimeNs next_display_ = 0;  // the row time from which the next display sample is due
+  // The run thread's place in the server's rows: the next row to publish (once known), rows since
+  // the last full-rate one, full-rate rows published, and one row's block.
+  bool rows_known_ = false;
+  std::uint64_t next_row_ = 0;
+  unsigned rows_ = 0;
+  std::uint64_t published_rows_ = 0;
+  std::vector<std::byte> block_;
   std::function<void()> liveness_changed_;
   std::unique_ptr<Component> component_;
   bridge::Proxy* proxy_ = nullptr;
@@ -101,7 +113,8 @@ class Attachment {
   fdds::DataWriter* fault_writer_ = nullptr;  // the OperatingState topic, if the component has one
   std::atomic<bool> alive_{true};
   std::atomic<bool> stop_{false};
-  std::atomic<std::uint64_t> published_{0}, displayed_{0}, event_count_{0}, commands_in_{0}, rejected_{0};
+  std::atomic<std::uint64_t> published_{0}, displayed_{0}, event_count_{0}, commands_in_{0}, rejected_{0},
+      rows_skipped_{0};
   std::thread thread_;
 };
 

@@ -141,12 +141,11 @@ int main(int argc, char** argv) {
     const auto st = gateway.stats();
     const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf(
-        "saw-gateway: published %llu state samples (and %llu on display streams), %llu events; %llu commands "
-        "in, %llu rejected; %llu reconnects; %llu queries; imported %llu samples, %llu rejected; mirrored "
-        "%llu "
-        "samples\n",
-        u(st.published), u(st.displayed), u(st.events), u(st.commands), u(st.rejected), u(st.reconnects),
-        u(st.queries), u(st.imported), u(st.imported_rejected), u(st.mirrored));
+        "saw-gateway: published %llu state samples (and %llu on display streams; %llu rows skipped), %llu "
+        "events; %llu commands in, %llu rejected; %llu reconnects; %llu queries; imported %llu samples, "
+        "%llu rejected; mirrored %llu samples\n",
+        u(st.published), u(st.displayed), u(st.rows_skipped), u(st.events), u(st.commands), u(st.rejected),
+        u(st.reconnects), u(st.queries), u(st.imported), u(st.imported_rejected), u(st.mirrored));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "saw-gateway: %s\n", e.what());
     return 1;

@@ -67,9 +67,12 @@ struct EndpointInfo {
 struct GatewayStats {
   std::uint64_t published = 0;  // state samples written (full rate)
   std::uint64_t displayed = 0;  // state samples written on the display streams
-  std::uint64_t events = 0;     // events written
-  std::uint64_t commands = 0;   // commands from DDS passed to the bridge
-  std::uint64_t rejected = 0;   // commands from DDS refused (invalid value, full ring, server gone)
+  // Rows of a server's state the gateway never published: overwritten in the bridge's history
+  // (ExportOptions::history_rows) before it read them. Fewer behind than that, it loses none.
+  std::uint64_t rows_skipped = 0;
+  std::uint64_t events = 0;    // events written
+  std::uint64_t commands = 0;  // commands from DDS passed to the bridge
+  std::uint64_t rejected = 0;  // commands from DDS refused (invalid value, full ring, server gone)
   std::uint64_t reconnects = 0;
   std::uint64_t queries = 0;            // qualified reads answered
   std::uint64_t imported = 0;           // samples taken from imported arms' topics
