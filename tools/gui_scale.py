@@ -1,14 +1,17 @@
 """What remote GUIs cost the RT loop: the 1 kHz simulated teleoperation (config/teleop-sim.yaml's
 components, their tasks on one CPU) and its gateway (on another CPU, as docs/deploy.md says),
 beside 0, 1 and 10 GUI-equivalent subscribers: `sawgui --headless`, the window's own DDS readers
-(sawdds.Live, what the window reads when it opens on the teleoperation), each a process of its own
-on the gateway's CPU. One run, the configurations one after the other; prints a Markdown table
-and writes JSON (figures, no assertion).
+(sawdds.Live, what the window reads when it opens on the teleoperation: the states' display streams,
+which the gateway publishes at --display-rate), each a process of its own on the gateway's CPU. A
+count written "10full" is ten subscribers reading every row instead (`sawgui --full-rate`, what
+the window read before the gateway had display streams). One run, the configurations one after
+the other; prints a Markdown table and writes JSON (figures, no assertion).
 
-The configurations alternate (0, 1, 10, 0, 1, 10, ...) for --rounds rounds, so that what the
+The configurations alternate (0, 1, 10, 10full, 0, 1, ...) for --rounds rounds, so that what the
 machine's other load does to the RT CPU falls on each alike; the table gives each one's median.
 
-usage: gui_scale.py SAW_RT SAW_GATEWAY [--seconds S] [--counts 0,1,10] [--rounds N] [--json OUT]
+usage: gui_scale.py SAW_RT SAW_GATEWAY [--seconds S] [--counts 0,1,10,10full] [--rounds N]
+                    [--display-rate HZ] [--json OUT]
 """
 import argparse
 import json
@@ -62,13 +65,25 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICK
 
 
-# What one subscriber's state topics carry per second (see `one`): three at 1 kHz (both arms'
-# measured_cp, the tracking error: what the teleoperation panel draws) and three tasks'
-# period_statistics, which the gateway publishes at a tenth of the rows.
-STATE_RATE_HZ = 3 * 1000 + 3 * 100
+def state_rate_hz(full_rate: bool, display_rate: float) -> float:
+    """What one subscriber's state topics carry per second: both arms' measured_cp and the tracking
+    error (what the teleoperation panel draws) and three tasks' period_statistics; every row of the
+    first three at 1 kHz and a tenth of the statistics' rows, or all six at the display rate."""
+    return 3 * 1000 + 3 * 100 if full_rate else 6 * display_rate
 
 
-def one(args, n: int, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> dict:
+def parse_count(text: str):
+    """"10" -> (10, False); "10full" -> (10, True)."""
+    full = text.endswith("full")
+    return int(text[:-4] if full else text), full
+
+
+def label(n: int, full: bool) -> str:
+    return f"{n}, every row" if full else str(n)
+
+
+def one(args, conf: str, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> dict:
+    n, full = parse_count(conf)
     fd, yaml = tempfile.mkstemp(suffix=".yaml", prefix="gui-scale-")
     with os.fdopen(fd, "w") as f:
         f.write(DEPLOYMENT.format(tag=tag, cpu=rt_cpu))
@@ -78,11 +93,12 @@ def one(args, n: int, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> dic
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     on_other = ["taskset", "-c", str(other_cpu)]
     attach = [a for c in names for a in ("--attach", c)]
-    gw = subprocess.Popen(on_other + [args.saw_gateway, *attach, "--domain", str(domain), "--wait", "10"],
+    gw = subprocess.Popen(on_other + [args.saw_gateway, *attach, "--domain", str(domain), "--wait", "10",
+                                      "--display-rate", str(args.display_rate)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "nonrt", "python"), PYTHONDONTWRITEBYTECODE="1")
     sawgui = [sys.executable, "-m", "sawgui", "--domain", str(domain), "--headless", str(args.seconds + warmup),
-              "--settle", str(warmup)]
+              "--settle", str(warmup)] + (["--full-rate"] if full else [])
     subs = [subprocess.Popen(on_other + sawgui, stdout=subprocess.PIPE, text=True, env=env) for _ in range(n)]
     try:
         time.sleep(warmup)  # the gateway attaches, subscribers discover it (their reports say if they did)
@@ -106,14 +122,14 @@ def one(args, n: int, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> dic
              for m in ROW.finditer(rt_out) if m.group(1) in names}
     published = re.search(r"published (\d+) state samples", gw_out)
     samples = [sum(r.get("settled", {}).get("samples", {}).values()) for r in reports]
-    return {"subscribers": n, "tasks": tasks, "overruns": sum(t["overruns"] for t in tasks.values()),
+    return {"subscribers": n, "full_rate": full, "configuration": conf, "tasks": tasks, "overruns": sum(t["overruns"] for t in tasks.values()),
             "p99_us": max((t["p99_us"] for t in tasks.values()), default=None),
             "gateway_cpu_percent": 100 * gw_cpu / args.seconds,
             "gateway_published": int(published.group(1)) if published else None,
             "samples_per_subscriber": samples, "topics_per_subscriber": [len(r.get("samples", {})) for r in reports],
             "subscriber_cpu_percent": [100 * r.get("settled", {}).get("cpu_s", 0) / args.seconds for r in reports],
             # What the subscribers' state topics carry per second (the others are events and states on change).
-            "state_rate_hz": STATE_RATE_HZ,
+            "state_rate_hz": state_rate_hz(full, args.display_rate), "display_rate_hz": args.display_rate,
             "seconds": args.seconds, "rt_summary": [l for l in rt_out.splitlines() if "1.00ms" in l]}
 
 
@@ -122,16 +138,17 @@ def main():
     p.add_argument("saw_rt")
     p.add_argument("saw_gateway")
     p.add_argument("--seconds", type=float, default=20)
-    p.add_argument("--counts", default="0,1,10")
+    p.add_argument("--counts", default="0,1,10,10full")
+    p.add_argument("--display-rate", type=float, default=50, help="the gateway's display streams, Hz")
     p.add_argument("--rounds", type=int, default=1)
     p.add_argument("--json")
     args = p.parse_args()
     cpus = sorted(os.sched_getaffinity(0))
     rt_cpu, other_cpu = cpus[-1], cpus[0]
     domain = 200 + os.getpid() % 29
-    counts = [int(n) for n in args.counts.split(",")]
-    runs = [one(args, n, f"s{os.getpid()}_{r}_{i}", domain, rt_cpu, other_cpu)
-            for r in range(args.rounds) for i, n in enumerate(counts)]
+    counts = args.counts.split(",")
+    runs = [one(args, c, f"s{os.getpid()}_{r}_{i}", domain, rt_cpu, other_cpu)
+            for r in range(args.rounds) for i, c in enumerate(counts)]
     print(f"# RT tasks on CPU {rt_cpu}; saw-gateway and the subscribers on CPU {other_cpu}; "
           f"{args.seconds:g} s measured per configuration, {args.rounds} round(s) alternating; "
           "RT figures over the whole run of each")
@@ -139,29 +156,34 @@ def main():
           "gateway CPU | samples each subscriber took (min–max) | subscriber CPU |")
     print("|---|---|---|---|---|---|---|")
     summary = []
-    for n in counts:
-        mine = [r for r in runs if r["subscribers"] == n]
+    for conf in counts:
+        n, full = parse_count(conf)
+        rate = state_rate_hz(full, args.display_rate)
+        mine = [r for r in runs if r["configuration"] == conf]
         p99 = sorted(r["p99_us"] for r in mine if r["p99_us"] is not None)
         samples = [x for r in mine for x in r["samples_per_subscriber"]]
         cpu = [x for r in mine for x in r["subscriber_cpu_percent"]]
-        summary.append({"subscribers": n, "overruns": [r["overruns"] for r in mine],
+        summary.append({"subscribers": n, "full_rate": full, "configuration": conf,
+                        "overruns": [r["overruns"] for r in mine],
                         "p99_median_us": p99[len(p99) // 2] if p99 else None, "p99_us": p99,
                         "gateway_cpu_percent": sum(r["gateway_cpu_percent"] for r in mine) / len(mine),
                         "samples_per_subscriber": samples, "subscriber_cpu_percent": cpu,
-                        "state_rate_hz": STATE_RATE_HZ, "seconds": args.seconds})
+                        "state_rate_hz": rate, "display_rate_hz": args.display_rate, "seconds": args.seconds})
     base = summary[0]["p99_median_us"] or 0
     for x in summary:
         s_ = x["samples_per_subscriber"]
         ratio = f"{x['p99_median_us'] / base:.2f}" if base and x["p99_median_us"] else "–"
-        print(f"| {x['subscribers']} | {', '.join(map(str, x['overruns']))} | {x['p99_median_us']} "
-              f"({x['p99_us'][0]}–{x['p99_us'][-1]}) | {ratio} | {x['gateway_cpu_percent']:.1f} % | "
-              + (f"{min(s_)}–{max(s_)} in {args.seconds:g} s, {min(s_) / (STATE_RATE_HZ * args.seconds):.1%}–"
-                 f"{max(s_) / (STATE_RATE_HZ * args.seconds):.1%} of {STATE_RATE_HZ} samples/s" if s_ else "–")
+        rate = x["state_rate_hz"]
+        print(f"| {label(x['subscribers'], x['full_rate'])} | {', '.join(map(str, x['overruns']))} | "
+              f"{x['p99_median_us']} ({x['p99_us'][0]}–{x['p99_us'][-1]}) | {ratio} | {x['gateway_cpu_percent']:.1f} % | "
+              + (f"{min(s_)}–{max(s_)} in {args.seconds:g} s, {min(s_) / (rate * args.seconds):.1%}–"
+                 f"{max(s_) / (rate * args.seconds):.1%} of {rate:g} samples/s" if s_ else "–")
               + " | " + (f"{sum(x['subscriber_cpu_percent']) / len(x['subscriber_cpu_percent']):.1f} % each"
                          if x["subscriber_cpu_percent"] else "–") + " |")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"rt_cpu": rt_cpu, "other_cpu": other_cpu, "seconds": args.seconds, "rounds": args.rounds,
+                       "display_rate_hz": args.display_rate,
                    "configurations": summary, "runs": runs}, f, indent=1)
     return 0
 

@@ -87,6 +87,7 @@ LayoutParams params_of(const Component& component, const ProvidedInterface& p, c
     event_payload = std::max(event_payload, e->signature().arg.size);
   }
   lp.mirror_bytes = mirror;
+  lp.mirror_rows = o.history_rows;
   lp.slot_count = o.slots;
   lp.ring_capacity = static_cast<std::uint32_t>(detail::SpscRing::round_capacity(o.ring_capacity));
   lp.command_payload = command_payload;
@@ -287,7 +288,7 @@ void Exporter::after_cycle(Component&, TimeNs time) noexcept {
   h.heartbeat.store(monotonic_now(), std::memory_order_release);
   std::memcpy(staging_.data(), &time, sizeof time);  // the row's time: proxies stamp reads with it
   for (const Read& r : reads_) (void)r.command->read(nullptr, staging_.data() + r.offset);
-  mirror_write(view_, mirror_seq_, staging_.data(), staging_.size() - 8);
+  mirror_write(view_, mirror_rows_, staging_.data(), staging_.size() - 8);
   // Non-RT clients may sleep on the bell: one wake-up call per cycle at most, none if nobody sleeps.
   h.update_bell.fetch_add(1, std::memory_order_seq_cst);
   bool sleepers = false;

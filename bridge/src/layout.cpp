@@ -82,6 +82,9 @@ std::string Layout::compute(const LayoutParams& p, Layout& out) {
   if (p.mirror_bytes > max_mirror_bytes)
     return number("state mirror of", p.mirror_bytes,
                   ("bytes, at most " + std::to_string(max_mirror_bytes)).c_str());
+  if (p.mirror_rows < 1 || p.mirror_rows > max_mirror_rows)
+    return number("state mirror of", p.mirror_rows,
+                  ("rows is outside 1.." + std::to_string(max_mirror_rows)).c_str());
   if (p.slot_count < 1 || p.slot_count > max_slots)
     return number("slot count", p.slot_count, ("is outside 1.." + std::to_string(max_slots)).c_str());
   if (p.ring_capacity < 2 || p.ring_capacity > max_ring_capacity || !std::has_single_bit(p.ring_capacity))
@@ -92,6 +95,7 @@ std::string Layout::compute(const LayoutParams& p, Layout& out) {
   Layout l;
   l.manifest_count = p.manifest_count;
   l.mirror_words = static_cast<std::uint32_t>(1 + (p.mirror_bytes + 7) / 8);  // seq word + data
+  l.mirror_rows = p.mirror_rows;
   l.slot_count = p.slot_count;
   l.ring_capacity = p.ring_capacity;
   l.command_slot_size = static_cast<std::uint32_t>((16 + p.command_payload + 15) / 16 * 16);
@@ -101,7 +105,7 @@ std::string Layout::compute(const LayoutParams& p, Layout& out) {
   bool ok = align_up(l.manifest_offset, sizeof(SegmentHeader), cache_line);
   ok = ok && mul(t, l.manifest_count, sizeof(ManifestEntry)) && add(t, t, l.manifest_offset) &&
        align_up(l.mirror_offset, t, cache_line);
-  ok = ok && mul(t, l.mirror_words, 8) && add(t, t, l.mirror_offset) &&
+  ok = ok && mul(t, l.mirror_words, 8) && mul(t, t, l.mirror_rows) && add(t, t, l.mirror_offset) &&
        align_up(l.server_slots_offset, t, cache_line);
   ok = ok && mul(t, l.ring_capacity, l.event_slot_size) && add(t, t, sizeof(ServerSlot)) &&
        align_up(l.server_slot_stride, t, cache_line);
@@ -131,6 +135,7 @@ void initialize(const SegmentView& v, std::string_view component, std::string_vi
   h->client_timeout = 0;
   h->manifest_count = l.manifest_count;
   h->mirror_words = l.mirror_words;
+  h->mirror_rows = l.mirror_rows;
   h->slot_count = l.slot_count;
   h->ring_capacity = l.ring_capacity;
   h->command_slot_size = l.command_slot_size;
@@ -142,8 +147,11 @@ void initialize(const SegmentView& v, std::string_view component, std::string_vi
   };
   copy(h->component, sizeof h->component, component);
   copy(h->interface, sizeof h->interface, interface);
+  // Every page of the history touched here, not by the RT thread's first pass through it.
   auto* words = v.mirror();
-  for (std::uint64_t i = 0; i < l.mirror_words; ++i) new (&words[i]) std::atomic<std::uint64_t>(0);
+  for (std::uint64_t i = 0; i < std::uint64_t{l.mirror_words} * l.mirror_rows; ++i)
+    new (&words[i]) std::atomic<std::uint64_t>(0);
+  h->rows_written.store(0, std::memory_order_relaxed);
   for (std::uint32_t i = 0; i < l.slot_count; ++i) {
     new (&v.server_slot(i)) ServerSlot{};
     new (&v.client_slot(i)) ClientSlot{};
@@ -178,6 +186,7 @@ std::string validate(const void* memory, std::size_t size, Layout* out) {
   LayoutParams p;
   p.manifest_count = h.manifest_count;
   p.mirror_bytes = (std::uint64_t{h.mirror_words} - 1) * 8;
+  p.mirror_rows = h.mirror_rows;
   p.slot_count = h.slot_count;
   p.ring_capacity = h.ring_capacity;
   if (h.command_slot_size < 16 || h.event_slot_size < 16 || h.command_slot_size % 16 != 0 ||
@@ -210,31 +219,51 @@ std::string validate(const void* memory, std::size_t size, Layout* out) {
   return {};
 }
 
-void mirror_write(const SegmentView& v, std::uint64_t& seq, const void* data, std::size_t size) noexcept {
-  auto* w = v.mirror();
+void mirror_write(const SegmentView& v, std::uint64_t& rows, const void* data, std::size_t size) noexcept {
+  const std::uint64_t row = rows;
+  auto* w = v.mirror(row);
   const auto words = std::min<std::size_t>((size + 7) / 8, v.layout().mirror_words - 1U);
-  w[0].store(++seq, std::memory_order_relaxed);  // odd: being written
+  w[0].store(2 * row + 1, std::memory_order_relaxed);  // odd: being written
   for (std::size_t i = 0; i < words; ++i) {
     std::uint64_t x = 0;
     std::memcpy(&x, static_cast<const std::byte*>(data) + i * 8, std::min<std::size_t>(8, size - i * 8));
     w[1 + i].store(x, std::memory_order_release);
   }
-  w[0].store(++seq, std::memory_order_release);  // even: done
+  w[0].store(2 * row + 2, std::memory_order_release);  // even: row `row` is done
+  rows = row + 1;
+  v.header().rows_written.store(rows, std::memory_order_release);
 }
 
+namespace {
+
+// The block expected to say `seq` (a row's 2n + 2, or 0 for the zeros before the first row):
+// 0 if copied whole, > 0 if it says more (overwritten, or being), < 0 if less (not yet written).
+int read_block(const std::atomic<std::uint64_t>* w, std::uint64_t seq, std::size_t words, void* data,
+               std::size_t size) noexcept {
+  const auto s1 = w[0].load(std::memory_order_acquire);
+  if (s1 != seq) return s1 > seq ? 1 : -1;
+  for (std::size_t i = 0; i < words; ++i) {
+    const auto x = w[1 + i].load(std::memory_order_acquire);
+    std::memcpy(static_cast<std::byte*>(data) + i * 8, &x, std::min<std::size_t>(8, size - i * 8));
+  }
+  return w[0].load(std::memory_order_relaxed) == s1 ? 0 : 1;
+}
+
+}  // namespace
+
 bool mirror_read(const SegmentView& v, void* data, std::size_t size) noexcept {
-  auto* w = v.mirror();
   const auto words = std::min<std::size_t>((size + 7) / 8, v.layout().mirror_words - 1U);
   for (int attempt = 0; attempt < 64; ++attempt) {
-    const auto s1 = w[0].load(std::memory_order_acquire);
-    if (s1 & 1U) continue;
-    for (std::size_t i = 0; i < words; ++i) {
-      const auto x = w[1 + i].load(std::memory_order_acquire);
-      std::memcpy(static_cast<std::byte*>(data) + i * 8, &x, std::min<std::size_t>(8, size - i * 8));
-    }
-    if (w[0].load(std::memory_order_relaxed) == s1) return true;
+    const auto n = v.header().rows_written.load(std::memory_order_acquire);
+    if (read_block(v.mirror(n == 0 ? 0 : n - 1), 2 * n, words, data, size) == 0) return true;
   }
   return false;
+}
+
+RowRead mirror_read_row(const SegmentView& v, std::uint64_t row, void* data, std::size_t size) noexcept {
+  const auto words = std::min<std::size_t>((size + 7) / 8, v.layout().mirror_words - 1U);
+  const int r = read_block(v.mirror(row), 2 * row + 2, words, data, size);
+  return r == 0 ? RowRead::ok : r > 0 ? RowRead::overwritten : RowRead::not_written;
 }
 
 int claim_slot(const SegmentView& v, std::uint64_t token, std::int32_t pid, std::int64_t now) noexcept {

@@ -90,6 +90,7 @@ void Proxy::build_interface(const Link& l) {
   interface_hash_ = h.interface_hash;
   incarnation_ = h.incarnation;
   mirror_bytes_ = (std::size_t{layout.mirror_words} - 1) * 8;
+  history_rows_ = layout.mirror_rows;
   events_ = std::make_unique<detail::Mailbox>(name() + " events (shared memory)", &l.server().events_head,
                                               &l.client().events_tail, l.view.event_storage(l.slot),
                                               layout.ring_capacity, layout.event_slot_size);
@@ -117,6 +118,7 @@ void Proxy::build_interface(const Link& l) {
     if (e.has_limits != 0) c.limits = Limits{e.limit_min, e.limit_max};
     if (kind == CommandKind::read) {
       const std::uint32_t offset = e.mirror_offset, size = e.arg_size;
+      slices_.push_back({e.name, offset, size});
       auto& stamped = detail::Access::read_stamped(c);
       stamped = [this, offset, size](void* out, RowStamp& stamp) {
         Link& lk = link();
@@ -225,6 +227,35 @@ bool Proxy::wait_for_update(std::uint32_t& seen, TimeNs timeout) noexcept {
     return false;
   seen = h.update_bell.load(std::memory_order_acquire);
   return true;
+}
+
+std::uint64_t Proxy::rows_written() noexcept {
+  Link& l = link();
+  return alive(l) ? l.view.header().rows_written.load(std::memory_order_acquire) : 0;
+}
+
+Proxy::RowStatus Proxy::read_row(std::uint64_t row, void* block) noexcept {
+  Link& l = link();
+  if (!alive(l)) return RowStatus::disconnected;
+  switch (mirror_read_row(l.view, row, block, mirror_bytes_)) {
+    case RowRead::ok:
+      return RowStatus::ok;
+    case RowRead::overwritten:
+      return RowStatus::overwritten;
+    case RowRead::not_written:
+      break;
+  }
+  return RowStatus::not_written;
+}
+
+bool Proxy::read_slice(std::string_view name, std::uint32_t& offset, std::uint32_t& size) const noexcept {
+  for (const Slice& s : slices_)
+    if (s.name == name) {
+      offset = s.offset;
+      size = s.size;
+      return true;
+    }
+  return false;
 }
 
 std::unique_ptr<Proxy::Link> Proxy::try_reconnect() {

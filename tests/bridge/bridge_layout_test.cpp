@@ -104,6 +104,39 @@ TEST(BridgeLayout, ACommandRingCarriesEveryRecordBetweenProcessesInOrder) {
   EXPECT_EQ(ring.corrupt_count(), 0u);
 }
 
+// A client that falls behind reads every row it missed while fewer than the history's depth
+// were written since; an older one is said overwritten, never read as another row's values.
+TEST(BridgeLayout, TheMirrorKeepsTheLastRowsAndSaysWhichAreGone) {
+  LayoutParams p = make(16, 1, 2, 16);
+  p.mirror_rows = 4;
+  Fixture f("history", p);
+  std::uint64_t rows = 0;
+  std::array<std::uint64_t, 2> v{};
+  EXPECT_TRUE(mirror_read(f.view, v.data(), sizeof v)) << "before the first row: zeros";
+  EXPECT_EQ(v[0], 0u);
+  EXPECT_EQ(mirror_read_row(f.view, 0, v.data(), sizeof v), RowRead::not_written);
+  for (std::uint64_t k = 0; k < 10; ++k) {
+    const std::array<std::uint64_t, 2> w{k, 100 + k};
+    mirror_write(f.view, rows, w.data(), sizeof w);
+  }
+  EXPECT_EQ(rows, 10u);
+  EXPECT_EQ(f.view.header().rows_written.load(), 10u);
+  for (std::uint64_t k = 6; k < 10; ++k) {
+    ASSERT_EQ(mirror_read_row(f.view, k, v.data(), sizeof v), RowRead::ok) << k;
+    EXPECT_EQ(v[0], k);
+    EXPECT_EQ(v[1], 100 + k);
+  }
+  for (std::uint64_t k = 0; k < 6; ++k)
+    EXPECT_EQ(mirror_read_row(f.view, k, v.data(), sizeof v), RowRead::overwritten) << k;
+  EXPECT_EQ(mirror_read_row(f.view, 10, v.data(), sizeof v), RowRead::not_written);
+  ASSERT_TRUE(mirror_read(f.view, v.data(), sizeof v));
+  EXPECT_EQ(v[0], 9u) << "the newest row";
+  LayoutParams none = p;
+  none.mirror_rows = 0;
+  Layout l;
+  EXPECT_NE(Layout::compute(none, l).find("rows is outside 1..4096"), std::string::npos);
+}
+
 TEST(BridgeLayout, TheMirrorIsNeverTornAcrossProcesses) {
   Fixture f("mirror");
   const pid_t child = fork();

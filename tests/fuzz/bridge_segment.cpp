@@ -42,7 +42,8 @@ void check_accepted(const void* memory, std::size_t size, const Layout& l) {
   };
   inside("manifest", l.manifest_offset, u128{l.manifest_count} * sizeof(ManifestEntry));
   if (l.mirror_words == 0) defect("a mirror without its sequence word", 0, 0);
-  inside("state mirror", l.mirror_offset, u128{l.mirror_words} * 8);
+  if (l.mirror_rows == 0) defect("a mirror without a row", 0, 0);
+  inside("state mirror", l.mirror_offset, u128{l.mirror_words} * l.mirror_rows * 8);
   inside("server slots", l.server_slots_offset, u128{l.slot_count} * l.server_slot_stride);
   inside("client slots", l.client_slots_offset, u128{l.slot_count} * l.client_slot_stride);
   if (sizeof(ServerSlot) + u128{l.ring_capacity} * l.event_slot_size > l.server_slot_stride)
@@ -62,7 +63,8 @@ void check_accepted(const void* memory, std::size_t size, const Layout& l) {
   const auto& h = *static_cast<const SegmentHeader*>(memory);
   if (!terminated(h.component, sizeof h.component) || !terminated(h.interface, sizeof h.interface))
     defect("unterminated component or interface name", 0, 0);
-  const auto* m = reinterpret_cast<const ManifestEntry*>(static_cast<const std::byte*>(memory) + l.manifest_offset);
+  const auto* m =
+      reinterpret_cast<const ManifestEntry*>(static_cast<const std::byte*>(memory) + l.manifest_offset);
   const std::uint64_t mirror_bytes = (std::uint64_t{l.mirror_words} - 1) * 8;
   for (std::uint64_t i = 0; i < l.manifest_count; ++i) {
     if (!terminated(m[i].name, sizeof m[i].name) || !terminated(m[i].arg_type, sizeof m[i].arg_type) ||
@@ -103,6 +105,14 @@ void attach(const std::uint8_t* data, std::size_t size) {
           (void)cmd->read(nullptr, out);
           ::operator delete(out);
         }
+  // And the history as a gateway reads it: rows about the newest the header claims, whatever it says.
+  if (auto* proxy = dynamic_cast<saw::bridge::Proxy*>(c.get())) {
+    auto* block = static_cast<std::byte*>(::operator new(proxy->mirror_bytes() + 1));
+    const std::uint64_t n = proxy->rows_written();
+    for (std::uint64_t r : {n - 1, n, n + 1, std::uint64_t{0}, n - proxy->history_rows()})
+      (void)proxy->read_row(r, block);
+    ::operator delete(block);
+  }
   c.reset();
   munmap(p, size);
 }

@@ -79,18 +79,20 @@ TEST(GatewaySection, IsCheckedLikeTheRestOfTheFile) {
   EXPECT_EQ(g.attach, std::vector<std::string>{"master"}) << "default: every export";
   EXPECT_EQ(g.domain, 3);
   EXPECT_EQ(g.interfaces, std::vector<std::string>{"127.0.0.1"});
+  EXPECT_EQ(g.display_rate, 50) << "live views read 50 samples/s by default";
 }
 
 TEST(GatewaySection, EverySettingOfTheGatewayCanBeWrittenInTheFile) {
   const auto spec = parse(std::string(good) + exported +
                           "gateway:\n  import: [{component: MTML, arm: MTML}]\n  namespace: dvrk\n"
                           "  clutch_topic: rt/pedals/clutch\n  operator_present_topic: ''\n  decimation: 4\n"
-                          "  name: lab-gateway\n  mirror: [far=near]\n");
+                          "  display_rate: 100\n  name: lab-gateway\n  mirror: [far=near]\n");
   const GatewaySettings& g = settings_of(spec);
   EXPECT_EQ(g.clutch_topic, "rt/pedals/clutch");
   EXPECT_EQ(g.operator_present_topic, "");
   EXPECT_EQ(g.ros_namespace, "dvrk");
   EXPECT_EQ(g.decimation, 4);
+  EXPECT_EQ(g.display_rate, 100);
   EXPECT_EQ(g.name, "lab-gateway");
   EXPECT_EQ(g.mirrors, std::vector<std::string>{"far=near"});
   ASSERT_EQ(g.imports.size(), 1u);
@@ -109,6 +111,7 @@ TEST(GatewaySection, ItsSerializedFormReadsBackTheSameThroughTheSameParser) {
   s.domain = 42;
   s.interfaces = {"127.0.0.1", "10.0.0.1"};
   s.decimation = 7;
+  s.display_rate = 25;
   s.insecure = true;
   s.name = "g";
   EXPECT_EQ(saw::gateway::settings_from_yaml(saw::gateway::to_yaml(s), "--settings"), s);

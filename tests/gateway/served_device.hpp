@@ -53,7 +53,8 @@ class CountingDevice : public Task {
 };
 
 struct ServedDevice {
-  explicit ServedDevice(const std::string& prefix, int domain_base)
+  explicit ServedDevice(const std::string& prefix, int domain_base,
+                        double display_rate = gateway::default_display_rate)
       : name(unique_name(prefix)),
         domain(domain_base + getpid() % 60),
         device(name),
@@ -63,6 +64,7 @@ struct ServedDevice {
     gateway::GatewayConfig config;
     config.attach = {name};
     config.dds.domain = domain;
+    config.display_rate = display_rate;
     served = std::make_unique<gateway::Gateway>(config);
   }
   ~ServedDevice() {

@@ -78,11 +78,12 @@ std::unique_ptr<Component> resolve(const std::string& name, TimeNs timeout) {
 
 }  // namespace
 
-Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned decimation, TimeNs timeout,
-                       std::function<void()> liveness_changed)
+Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned decimation,
+                       double display_rate, TimeNs timeout, std::function<void()> liveness_changed)
     : dds_(dds),
       name_(component),
       decimation_(decimation == 0 ? 1 : decimation),
+      display_period_(display_rate > 0 ? static_cast<TimeNs>(1e9 / display_rate) : 0),
       liveness_changed_(std::move(liveness_changed)),
       component_(resolve(component, timeout)),
       proxy_(dynamic_cast<bridge::Proxy*>(component_.get())) {
@@ -137,6 +138,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
     endpoints_.push_back(std::move(info));
   }
   detail::Access::remote_events(*proxy_)->set_consumer_attached();
+  block_.resize(proxy_->mirror_bytes());
   for (const auto& c : p.commands()) {
     const Signature& sig = c->signature;
     EndpointInfo info = describe(name_, p.name(), c->name, sig);
@@ -187,9 +189,20 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
           auto* w = dds_.publisher->create_datawriter(
               dds_.topic(info.topic, *m), DdsContext::writer_qos(latched ? Flow::latched : Flow::state));
           (latched ? changed_states_ : states_).push_back({c.get(), m, w, std::vector<std::byte>(m->size())});
+          if (!latched && !proxy_->read_slice(c->name, states_.back().offset, states_.back().size))
+            throw std::runtime_error("attach " + name_ + ": " + c->name +
+                                     " is not in the bridge's state rows");
           // A task's statistics are cumulative: a tenth of the rows tells a GUI as much, for a
           // tenth of the samples every subscriber takes.
           if (!latched && m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
+          // What a live view draws: the same values at the display rate, on a topic of their own,
+          // so that a GUI's reader is not sent (and does not decode) a thousand rows a second.
+          if (!latched && display_period_ > 0) {
+            info.display_topic = info.topic + "/display";
+            info.display_rate = display_rate;
+            states_.back().display = dds_.publisher->create_datawriter(dds_.topic(info.display_topic, *m),
+                                                                       DdsContext::writer_qos(Flow::state));
+          }
           if (m == operating_state && fault_writer_ == nullptr) fault_writer_ = w;
         }
       } else {
@@ -261,6 +274,8 @@ void Attachment::serve_queries() {
 
 void Attachment::add_stats(GatewayStats& s) const {
   s.published += published_.load(std::memory_order_relaxed);
+  s.displayed += displayed_.load(std::memory_order_relaxed);
+  s.rows_skipped += rows_skipped_.load(std::memory_order_relaxed);
   s.events += event_count_.load(std::memory_order_relaxed);
   s.commands += commands_in_.load(std::memory_order_relaxed);
   s.rejected += rejected_.load(std::memory_order_relaxed);
@@ -315,10 +330,58 @@ bool Attachment::publish_state(StateOut& s, bool only_if_changed) {
   return true;
 }
 
+void Attachment::publish_rows() {
+  const std::uint64_t written = proxy_->rows_written();
+  if (written == 0) return;
+  // From the newest row at attach, and again at a new server (whose rows count from 0 again).
+  if (!rows_known_ || written < next_row_) {
+    next_row_ = written - 1;
+    rows_known_ = true;
+  }
+  const std::uint64_t depth = proxy_->history_rows();
+  if (written - next_row_ > depth) {  // gone before we could read them
+    rows_skipped_.fetch_add(written - depth - next_row_, std::memory_order_relaxed);
+    next_row_ = written - depth;
+  }
+  for (; next_row_ < written; ++next_row_) {
+    const bool newest = next_row_ + 1 == written;
+    const bool full = rows_ + 1 >= decimation_;
+    if (full || (newest && display_period_ > 0)) {
+      const auto st = proxy_->read_row(next_row_, block_.data());
+      if (st == bridge::Proxy::RowStatus::overwritten)
+        rows_skipped_.fetch_add(1, std::memory_order_relaxed);
+      else if (st != bridge::Proxy::RowStatus::ok)
+        return;  // the server is gone (or the row not there yet): from this row at the next wake
+      else
+        publish_block(full, newest);
+    }
+    rows_ = full ? 0 : rows_ + 1;
+    if (full) ++published_rows_;
+  }
+}
+
+void Attachment::publish_block(bool full, bool newest) {
+  TimeNs time = 0;
+  std::memcpy(&time, block_.data(), sizeof time);  // each row starts with its time
+  // Due by the rows' own times: the display samples are a period apart in the server's time (on
+  // a fixed grid, which a late gateway rejoins), whenever the gateway woke.
+  const bool display = newest && display_period_ > 0 && time >= next_display_;
+  if (display) next_display_ += display_period_;
+  if (display && next_display_ <= time) next_display_ = time + display_period_;  // a period behind
+  const TimeNs wall = wall_from_monotonic(time);
+  for (auto& s : states_) {
+    const bool full_here = full && published_rows_ % s.every == 0;
+    if (!full_here && !display) continue;
+    std::memcpy(s.value.data(), block_.data() + s.offset, std::min<std::size_t>(s.size, s.value.size()));
+    if (full_here && s.mapping->write(*s.writer, s.value.data(), wall, name_))
+      published_.fetch_add(1, std::memory_order_relaxed);
+    if (display && s.display != nullptr && s.mapping->write(*s.display, s.value.data(), wall, name_))
+      displayed_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
 void Attachment::run() {
   std::uint32_t seen = 0;
-  unsigned rows = 0;
-  std::uint64_t published_rows = 0;
   bool was_alive = true;
   bool announce = true;  // the latched states, once the mirror has a row (again)
   std::string why;
@@ -334,6 +397,7 @@ void Attachment::run() {
                       (last.empty() ? "" : " (" + last + ")"));
       }
       announce = alive;
+      rows_known_ = false;  // a server back, or another: from its newest row
       liveness_changed_();
     }
     if (row && alive && announce) {
@@ -343,12 +407,7 @@ void Attachment::run() {
     } else if (row && alive) {
       for (auto& s : changed_states_) publish_state(s, true);
     }
-    if (row && alive && ++rows >= decimation_) {
-      rows = 0;
-      for (auto& s : states_)
-        if (published_rows % s.every == 0) publish_state(s, false);
-      ++published_rows;
-    }
+    if (row && alive) publish_rows();
     detail::Access::remote_events(*proxy_)->drain();
     for (auto& c : commands_) {
       for (;;) {

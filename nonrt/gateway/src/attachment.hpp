@@ -18,8 +18,9 @@ namespace saw::gateway {
 class Attachment {
  public:
   // Resolves the component through the bridge (waiting up to `timeout`), creates its topics.
-  Attachment(DdsContext& dds, const std::string& component, unsigned decimation, TimeNs timeout,
-             std::function<void()> liveness_changed);
+  // `display_rate` (Hz, 0: none): the row-by-row states' display streams (GatewayConfig).
+  Attachment(DdsContext& dds, const std::string& component, unsigned decimation, double display_rate,
+             TimeNs timeout, std::function<void()> liveness_changed);
   ~Attachment();
 
   const std::vector<EndpointInfo>& endpoints() const noexcept { return endpoints_; }
@@ -41,6 +42,8 @@ class Attachment {
     std::vector<std::byte> value;
     std::vector<std::byte> previous = {};  // for states published on change
     unsigned every = 1;                    // of the published rows (a task's statistics: 1 in 10)
+    fdds::DataWriter* display = nullptr;   // <topic>/display, at the display rate
+    std::uint32_t offset = 0, size = 0;    // where its value sits in a row of the bridge's mirror
   };
   struct EventOut {
     Attachment* self;
@@ -65,6 +68,13 @@ class Attachment {
   // Reads a state from the mirror and writes it; with `only_if_changed`, only when it differs
   // from the last read. True if a sample went out.
   bool publish_state(StateOut& s, bool only_if_changed);
+  // Every row the server wrote since the last one published (from the bridge's row history):
+  // each `decimation`th to the full-rate topics, the newest to the display streams when due.
+  // Rows overwritten before they were read (the gateway was a history behind) are counted.
+  void publish_rows();
+  // The row in block_: to the full-rate topics when `full` (each state its `every`), to the
+  // display streams when `newest` and its time has reached the next display time.
+  void publish_block(bool full, bool newest);
   void serve_queries();
   // A command value against the limits its component declares; the reason in `why` if outside.
   static bool within_limits(CommandIn& c, std::string& why);
@@ -75,6 +85,15 @@ class Attachment {
   DdsContext& dds_;
   std::string name_;
   unsigned decimation_;
+  TimeNs display_period_;    // 0: no display streams
+  TimeNs next_display_ = 0;  // the row time from which the next display sample is due
+  // The run thread's place in the server's rows: the next row to publish (once known), rows since
+  // the last full-rate one, full-rate rows published, and one row's block.
+  bool rows_known_ = false;
+  std::uint64_t next_row_ = 0;
+  unsigned rows_ = 0;
+  std::uint64_t published_rows_ = 0;
+  std::vector<std::byte> block_;
   std::function<void()> liveness_changed_;
   std::unique_ptr<Component> component_;
   bridge::Proxy* proxy_ = nullptr;
@@ -94,7 +113,8 @@ class Attachment {
   fdds::DataWriter* fault_writer_ = nullptr;  // the OperatingState topic, if the component has one
   std::atomic<bool> alive_{true};
   std::atomic<bool> stop_{false};
-  std::atomic<std::uint64_t> published_{0}, event_count_{0}, commands_in_{0}, rejected_{0};
+  std::atomic<std::uint64_t> published_{0}, displayed_{0}, event_count_{0}, commands_in_{0}, rejected_{0},
+      rows_skipped_{0};
   std::thread thread_;
 };
 

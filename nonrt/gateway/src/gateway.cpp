@@ -51,8 +51,9 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
       throw std::runtime_error(
           "DDS: could not create the gateway's publisher, subscriber or manifest writer");
     for (const auto& name : config_.attach) {
-      attachments_.push_back(std::make_unique<Attachment>(
-          ctx, name, config_.decimation, config_.attach_timeout, [this] { publish_manifest(); }));
+      attachments_.push_back(std::make_unique<Attachment>(ctx, name, config_.decimation, config_.display_rate,
+                                                          config_.attach_timeout,
+                                                          [this] { publish_manifest(); }));
       const auto& e = attachments_.back()->endpoints();
       endpoints_.insert(endpoints_.end(), e.begin(), e.end());
     }
@@ -146,6 +147,8 @@ void Gateway::publish_manifest() {
     out.latched(e.latched);
     out.dds_type(e.dds_type);
     out.topic(e.topic);
+    out.display_topic(e.display_topic);
+    out.display_rate(e.display_rate);
     m.endpoints().push_back(std::move(out));
   }
   dds_->manifest->write(&m);

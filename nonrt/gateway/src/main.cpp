@@ -41,6 +41,7 @@ saw::gateway::GatewayConfig config_of(const saw::gateway::GatewaySettings& s) {
   c.dds.interfaces = s.interfaces;
   if (!s.enclave.empty()) c.dds.enclave = s.enclave;
   c.decimation = static_cast<unsigned>(s.decimation);
+  c.display_rate = s.display_rate;
   c.name = s.name;
   return c;
 }
@@ -69,6 +70,9 @@ int main(int argc, char** argv) {
   app.add_option("--interface", s.interfaces,
                  "IPv4 address of a network interface DDS may use (repeatable; default loopback only)");
   app.add_option("--decimation", s.decimation, "publish state every Nth row")->check(CLI::PositiveNumber);
+  app.add_option("--display-rate", s.display_rate,
+                 "Hz of each state's display stream <topic>/display, what live views read (0: none)")
+      ->check(CLI::Range(0.0, 1000.0));
   app.add_option("--name", s.name, "gateway name, unique per host (default gateway.<pid>)");
   app.add_option("--wait", wait, "seconds to wait for the components to be exported")
       ->check(CLI::NonNegativeNumber);
@@ -91,7 +95,7 @@ int main(int argc, char** argv) {
   if (!settings.empty()) {
     for (const char* o :
          {"--attach", "--import", "--mirror", "--ros-namespace", "--clutch-topic", "--operator-present-topic",
-          "--domain", "--interface", "--decimation", "--name", "--enclave"})
+          "--domain", "--interface", "--decimation", "--display-rate", "--name", "--enclave"})
       if (app.count(o) != 0) {
         std::fprintf(stderr, "saw-gateway: --settings gives every setting; %s too is ambiguous\n", o);
         return 2;
@@ -137,10 +141,11 @@ int main(int argc, char** argv) {
     const auto st = gateway.stats();
     const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
     std::printf(
-        "saw-gateway: published %llu state samples, %llu events; %llu commands in, %llu rejected; "
-        "%llu reconnects; %llu queries; imported %llu samples, %llu rejected; mirrored %llu samples\n",
-        u(st.published), u(st.events), u(st.commands), u(st.rejected), u(st.reconnects), u(st.queries),
-        u(st.imported), u(st.imported_rejected), u(st.mirrored));
+        "saw-gateway: published %llu state samples (and %llu on display streams; %llu rows skipped), %llu "
+        "events; %llu commands in, %llu rejected; %llu reconnects; %llu queries; imported %llu samples, "
+        "%llu rejected; mirrored %llu samples\n",
+        u(st.published), u(st.displayed), u(st.rows_skipped), u(st.events), u(st.commands), u(st.rejected),
+        u(st.reconnects), u(st.queries), u(st.imported), u(st.imported_rejected), u(st.mirrored));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "saw-gateway: %s\n", e.what());
     return 1;

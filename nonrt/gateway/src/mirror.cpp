@@ -140,7 +140,7 @@ std::vector<EndpointInfo> find_remote(DdsContext& dds, const std::string& compon
           mine.push_back({e.component_name(), e.interface_name(), e.name(), e.kind(), e.saw_type(),
                           e.saw_size(), e.saw_version(), e.dds_type(), e.topic(), e.result_type(),
                           e.result_size(), e.result_version(), e.limited(), e.limit_min(), e.limit_max(),
-                          e.latched()});
+                          e.latched(), e.display_topic(), e.display_rate()});
       if (!mine.empty()) found = std::move(mine);
     }
     if (!found.empty()) break;

@@ -59,6 +59,7 @@ void read_keys(Params& g, const YAML::Node& node, const std::string& directory,
   gw.interfaces = g.get_or<std::vector<std::string>>("interfaces", gw.interfaces);
   if (gw.interfaces.empty()) g.fail_at("interfaces", "at least one interface address");
   gw.decimation = static_cast<int>(g.get_in_range("decimation", 1, 1000, 1));
+  gw.display_rate = g.get_in_range("display_rate", 0, 1000, gw.display_rate);
   gw.name = g.get_or<std::string>("name", "");
   if (g.has("enclave")) {
     gw.enclave = relative_to(directory, g.get<std::string>("enclave"));
@@ -141,6 +142,7 @@ std::string to_yaml(const GatewaySettings& s) {
   out << YAML::Key << "domain" << YAML::Value << s.domain;
   out << YAML::Key << "interfaces" << YAML::Value << s.interfaces;
   out << YAML::Key << "decimation" << YAML::Value << s.decimation;
+  out << YAML::Key << "display_rate" << YAML::Value << s.display_rate;
   if (!s.name.empty()) out << YAML::Key << "name" << YAML::Value << s.name;
   if (!s.enclave.empty()) out << YAML::Key << "enclave" << YAML::Value << s.enclave;
   if (s.insecure) out << YAML::Key << "security" << YAML::Value << "none";

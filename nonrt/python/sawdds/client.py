@@ -38,6 +38,14 @@ def latched(endpoint) -> bool:
     return bool(getattr(endpoint, "latched", False))
 
 
+def display_topic(endpoint) -> str:
+    """The topic on which the gateway also publishes `endpoint`'s state at its display rate
+    (Endpoint.display_rate, Hz; 50 by default), "" when it has none. A live view reads it: the same
+    values, a picture of them rather than every row. A recorder or a program that needs every row
+    reads `endpoint.topic`."""
+    return "" if latched(endpoint) else str(getattr(endpoint, "display_topic", "") or "")
+
+
 def interface_uri(interface: str = "lo", peers=("127.0.0.1",)) -> str:
     """A CYCLONEDDS_URI restricting DDS to one network interface, by name ("eth1") or by one of its
     addresses ("192.168.1.20", "127.0.0.1" on any OS); `peers` for unicast discovery (loopback has
@@ -158,13 +166,15 @@ class Client:
         e = self.find(topic)
         return self.reader_for(e, reliable, depth)
 
-    def reader_for(self, e, reliable: bool = False, depth: int = 16):
-        """A reader of endpoint `e`'s topic, with the QoS reader_qos() gives it."""
+    def reader_for(self, e, reliable: bool = False, depth: int = 16, display: bool = False):
+        """A reader of endpoint `e`'s topic, with the QoS reader_qos() gives it; with `display`, of
+        its display stream instead when the gateway publishes one (display_topic())."""
         cls = msgs.BY_DDS_NAME[e.dds_type]
         qos = reader_qos(e, depth)
         if reliable and not latched(e):
             qos = Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(depth), XCDR1)
-        return DataReader(self.participant, self._topic(e.topic, cls), qos=qos)
+        topic = display_topic(e) if display else ""
+        return DataReader(self.participant, self._topic(topic or e.topic, cls), qos=qos)
 
     def error_reader(self, component: str, depth: int = 16):
         """Commands the gateway refused for `component` (crtk_msgs/StringStamped on rt/<component>/error)."""

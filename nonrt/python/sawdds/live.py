@@ -1,7 +1,8 @@
 """A live, thread-safe picture of a sawrt system over DDS, kept by background threads.
 
 `Live` reads the registry (every gateway's manifest and whether the gateway is alive), each
-component's operating state and refusals, and the topics a caller watches, in a thread of its own:
+component's operating state and refusals, and the topics a caller watches (a state from its
+display stream, which the gateway publishes at a display rate for live views), in a thread of its own:
 a caller (a GUI's event loop) only ever copies what is there, under a lock, and never waits on the
 network. Commands and qualified reads go through a second thread, whose results the caller
 collects with `results()`. Every sample taken counts in the statistics; the window kept for
@@ -142,9 +143,12 @@ class Series:
 class Live:
     """The system as the registry and the watched topics show it, kept up to date off the caller's thread."""
 
-    def __init__(self, domain: int = 0, window: float = 10.0, period: float = 0.02):
+    def __init__(self, domain: int = 0, window: float = 10.0, period: float = 0.02, full_rate: bool = False):
         self.client = Client(domain)
         self.domain = domain
+        # A state's samples come from its display stream (the gateway's display rate), unless
+        # `full_rate`: every row, as a recorder takes them (what the window cost before there was one).
+        self.full_rate = full_rate
         self.window, self.period = window, period
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -205,6 +209,13 @@ class Live:
     def watched(self) -> list:
         with self._lock:
             return sorted(self._readers)
+
+    def source(self, topic: str) -> str:
+        """The DDS topic a watched `topic` is read from: its display stream, when the gateway
+        publishes one and this Live is not `full_rate`; else `topic` itself ("" if not read yet)."""
+        with self._lock:
+            r = self._readers.get(topic)
+            return r[0].topic.name if r else ""
 
     def latest(self, topic: str):
         """(sample, source time) of the newest sample of a watched topic, or (None, None)."""
@@ -404,7 +415,7 @@ class Live:
             if e is None or not e.topic or e.dds_type not in msgs.BY_DDS_NAME:
                 continue
             # Deep enough that nothing is lost between two passes of the loop at 1 kHz.
-            reader = self.client.reader_for(e, depth=1 if latched(e) else 1024)
+            reader = self.client.reader_for(e, depth=1 if latched(e) else 1024, display=not self.full_rate)
             with self._lock:
                 self._readers[t] = (reader, Series(e, self.window))
 

@@ -1,6 +1,7 @@
 """sawgui: a desktop GUI for a sawrt system over DDS.
 
-usage: sawgui [--domain N] [--interface NAME] [--peer ADDRESS ...] [--enclave DIR] [--headless SECONDS]
+usage: sawgui [--domain N] [--interface NAME] [--peer ADDRESS ...] [--enclave DIR] [--full-rate]
+              [--headless SECONDS]
 """
 import argparse
 import json
@@ -30,6 +31,9 @@ def parse(argv):
     p.add_argument("--headless", type=float, metavar="SECONDS",
                    help="no window: read what the window reads for SECONDS, then print what arrived as JSON")
     p.add_argument("--all-reads", action="store_true", help="with --headless: read every mapped topic")
+    p.add_argument("--full-rate", action="store_true",
+                   help="read every row of each state (the topics a recorder reads) rather than the gateway's "
+                        "display streams (50 samples/s by default)")
     p.add_argument("--settle", type=float, default=0.0, metavar="SECONDS",
                    help="with --headless: also count what arrives after the first SECONDS (discovery done)")
     return p.parse_args(argv)
@@ -58,7 +62,7 @@ def open_live(args):
     from cyclonedds.core import DDSException
     from sawdds.live import Live
     try:
-        return Live(args.domain)
+        return Live(args.domain, full_rate=args.full_rate)
     except DDSException as e:
         secure = " with DDS Security (check the enclave, and that the plugins are this Cyclone DDS's)" \
             if "<Security>" in os.environ.get("CYCLONEDDS_URI", "") else ""

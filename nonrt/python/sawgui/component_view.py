@@ -110,7 +110,7 @@ class ComponentView(QtWidgets.QWidget):
         left = QtWidgets.QWidget()
         ll = QtWidgets.QVBoxLayout(left)
         self.table = QtWidgets.QTableWidget(len(self.reads), 4)
-        self.table.setHorizontalHeaderLabels(["read", "value", "samples", "statistics (all samples)"])
+        self.table.setHorizontalHeaderLabels(["read", "value", "samples", "statistics (samples received)"])
         self.table.verticalHeader().hide()
         # Name and count as wide as they need; value and statistics share the rest (elided, never
         # pushed out of sight behind a scroll bar).

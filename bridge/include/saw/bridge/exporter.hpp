@@ -17,7 +17,8 @@ namespace saw::bridge {
 
 // The segment is "/saw.<component>". Each cycle of the exporting task, after its state row,
 // the exporter (in that task's thread, RT-safe: no allocation, lock or blocking call) refreshes
-// the heartbeat, copies the read commands' newest values into the state mirror, and runs the
+// the heartbeat, copies the read commands' newest values into the state mirror's next row (it
+// keeps the last `history_rows`), and runs the
 // void/write commands that client processes left in their slots' rings. Events emitted by the
 // task are copied into every claimed slot's event ring as they happen. A non-RT service thread
 // answers qualified reads (const and thread-safe by contract) and frees the slots of clients
@@ -34,6 +35,9 @@ struct ExportOptions {
   std::uint32_t ring_capacity = 64;     // per slot and direction
   TimeNs service_spin = 0;              // the query thread stays awake this long after a query
   TimeNs client_timeout = 500'000'000;  // a client slot whose heartbeat is older is freed
+  // Rows of state the mirror keeps (1 s of a 1 kHz task): a client that falls behind (a gateway
+  // descheduled) reads every row it missed, as long as it is fewer than this.
+  std::uint32_t history_rows = 1024;
 };
 
 class Exporter : public detail::CycleHook {
@@ -84,8 +88,8 @@ class Exporter : public detail::CycleHook {
   TimeNs service_spin_;
   TimeNs client_timeout_;
   ShmSegment segment_;
-  SegmentView view_;  // the layout this process computed; never re-read from the segment
-  std::uint64_t mirror_seq_ = 0;
+  SegmentView view_;                // the layout this process computed; never re-read from the segment
+  std::uint64_t mirror_rows_ = 0;   // rows written to the state mirror
   std::vector<Command*> commands_;  // by wire index; events take the indices after commands
   std::vector<Read> reads_;
   std::vector<std::byte> staging_;  // the mirror's next contents

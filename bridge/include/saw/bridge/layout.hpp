@@ -13,14 +13,15 @@
 namespace saw::bridge {
 
 inline constexpr std::uint64_t segment_magic = 0x3147445242574153ULL;  // "SAWBRDG1", little endian
-inline constexpr std::uint32_t layout_version = 4;                     // any change below bumps this
+inline constexpr std::uint32_t layout_version = 5;                     // any change below bumps this
 inline constexpr std::size_t page_size = 4096;
 
 enum class SegmentState : std::uint32_t { initializing = 0, ready = 1, closed = 2 };
 
 // A segment is two regions, each starting on a page:
 //   server region (written by the server only; mapped read-only by clients)
-//     SegmentHeader | ManifestEntry × manifest_count | state mirror | (ServerSlot + event ring) × slot_count
+//     SegmentHeader | ManifestEntry × manifest_count | state mirror (mirror_rows rows of mirror_words)
+//     | (ServerSlot + event ring) × slot_count
 //   client region (written by clients; the server reads it and trusts none of it)
 //     ClientCommon | (ClientSlot + command ring) × slot_count
 // The server computes every offset once, from its own parameters, and never reads one back;
@@ -42,12 +43,16 @@ struct alignas(cache_line) SegmentHeader {
   std::int64_t client_timeout;  // ns: a client slot whose heartbeat is older than this is free
   std::uint32_t manifest_count, mirror_words, slot_count, ring_capacity;
   std::uint32_t command_slot_size, event_slot_size;
+  std::uint32_t mirror_rows;  // the state mirror keeps this many rows, the newest last written
   char component[64];
   char interface[64];
   // Bumped by the owner after every state row; woken (one call per cycle at most) only when a
   // client's slot says it sleeps on it.
   alignas(cache_line) std::atomic<std::uint32_t> update_bell;
   std::atomic<std::uint32_t> service_sleeping;  // the service thread is (about to be) in futex_wait
+  // Rows written to the state mirror (release, after the row): row n is in block n % mirror_rows
+  // until row n + mirror_rows overwrites it.
+  std::atomic<std::uint64_t> rows_written;
 };
 
 // Server-written half of a client's slot; the event ring's storage follows it.
@@ -104,10 +109,12 @@ inline constexpr std::uint32_t max_slots = 64;
 inline constexpr std::uint32_t max_ring_capacity = 4096;
 inline constexpr std::uint32_t max_record_size = 4096;  // a ring slot: 16-byte header + argument
 inline constexpr std::uint32_t max_mirror_bytes = 4096;
+inline constexpr std::uint32_t max_mirror_rows = 4096;
 
 struct LayoutParams {
   std::uint32_t manifest_count = 0;
   std::size_t mirror_bytes = 0;
+  std::uint32_t mirror_rows = 1;  // the rows of history the mirror keeps
   std::uint32_t slot_count = 8;
   std::uint32_t ring_capacity = 64;
   std::size_t command_payload = 64;  // largest command argument
@@ -117,7 +124,7 @@ struct LayoutParams {
 // Every offset and size of a segment, computed with overflow-checked 64-bit arithmetic from a
 // few counts. Each process keeps its own copy: nothing here is read from shared memory again.
 struct Layout {
-  std::uint32_t manifest_count = 0, mirror_words = 0, slot_count = 0, ring_capacity = 0;
+  std::uint32_t manifest_count = 0, mirror_words = 0, mirror_rows = 0, slot_count = 0, ring_capacity = 0;
   std::uint32_t command_slot_size = 0, event_slot_size = 0;
   std::uint64_t manifest_offset = 0, mirror_offset = 0, server_slots_offset = 0, server_slot_stride = 0;
   std::uint64_t client_offset = 0, client_slots_offset = 0, client_slot_stride = 0, total_size = 0;
@@ -139,8 +146,10 @@ class SegmentView {
   ManifestEntry* manifest() const noexcept {
     return reinterpret_cast<ManifestEntry*>(base_ + layout_.manifest_offset);
   }
-  std::atomic<std::uint64_t>* mirror() const noexcept {
-    return reinterpret_cast<std::atomic<std::uint64_t>*>(base_ + layout_.mirror_offset);
+  // Row `row`'s block of the state mirror (its sequence word, then mirror_words - 1 data words).
+  std::atomic<std::uint64_t>* mirror(std::uint64_t row = 0) const noexcept {
+    return reinterpret_cast<std::atomic<std::uint64_t>*>(base_ + layout_.mirror_offset) +
+           (row % layout_.mirror_rows) * layout_.mirror_words;
   }
   ServerSlot& server_slot(std::uint32_t i) const noexcept {
     return *reinterpret_cast<ServerSlot*>(base_ + layout_.server_slots_offset +
@@ -202,11 +211,16 @@ void initialize(const SegmentView& v, std::string_view component, std::string_vi
 // [memory, memory + size), whatever the bytes; reads each header field once.
 std::string validate(const void* memory, std::size_t size, Layout* out = nullptr);
 
-// The state mirror: one seqlocked block (fence-free, as the state table's rows). One writer,
-// which keeps the sequence number in its own memory.
-void mirror_write(const SegmentView& v, std::uint64_t& seq, const void* data, std::size_t size) noexcept;
-// False if the writer was mid-update on every try.
+// The state mirror: a ring of seqlocked rows (fence-free, as the state table's rows). Row n's
+// block says 2n + 1 while it is written and 2n + 2 once it is. One writer, which keeps its count
+// of rows written in its own memory (`rows`, incremented here).
+void mirror_write(const SegmentView& v, std::uint64_t& rows, const void* data, std::size_t size) noexcept;
+// The newest row (zeros before the first); false if the writer was mid-update on every try.
 bool mirror_read(const SegmentView& v, void* data, std::size_t size) noexcept;
+// Row `row` of the history: ok, or overwritten (more than mirror_rows rows ago, or being
+// overwritten as it was read), or not written yet.
+enum class RowRead { ok, overwritten, not_written };
+RowRead mirror_read_row(const SegmentView& v, std::uint64_t row, void* data, std::size_t size) noexcept;
 
 // Claims a free slot for `token` (pid for messages); returns its index or -1 if all are taken.
 int claim_slot(const SegmentView& v, std::uint64_t token, std::int32_t pid, std::int64_t now) noexcept;

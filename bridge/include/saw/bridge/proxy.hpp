@@ -61,6 +61,18 @@ class Proxy : public Component {
   // `seen` (a counter this call updates), or `timeout` passes. True if there is a new row.
   bool wait_for_update(std::uint32_t& seen, TimeNs timeout) noexcept;
 
+  // The state mirror's history, for a non-RT consumer that must not skip rows (a gateway's
+  // full-rate topics). A row is a block of mirror_bytes(): the row's time (8 bytes), then each
+  // read's value at its offset (read_slice). From the calling thread.
+  std::uint64_t rows_written() noexcept;  // by the current server (0 while disconnected)
+  std::uint32_t history_rows() const noexcept { return history_rows_; }
+  std::size_t mirror_bytes() const noexcept { return mirror_bytes_; }
+  // Row `row` into `block` (mirror_bytes() bytes); disconnected when the server is gone.
+  enum class RowStatus { ok, overwritten, not_written, disconnected };
+  RowStatus read_row(std::uint64_t row, void* block) noexcept;
+  // Where read command `name`'s value sits in a row's block (offset, size); false if no such read.
+  bool read_slice(std::string_view name, std::uint32_t& offset, std::uint32_t& size) const noexcept;
+
  private:
   detail::Mailbox* remote_events() noexcept override { return events_.get(); }
 
@@ -93,6 +105,12 @@ class Proxy : public Component {
   ProxyOptions options_;
   std::uint64_t interface_hash_ = 0, incarnation_ = 0;
   std::size_t mirror_bytes_ = 0;
+  std::uint32_t history_rows_ = 1;
+  struct Slice {
+    std::string name;
+    std::uint32_t offset, size;
+  };
+  std::vector<Slice> slices_;                 // the read commands' places in a row
   std::deque<std::string> type_names_;        // TypeInfo points into these
   std::vector<std::unique_ptr<Link>> links_;  // the monitor's; the newest is last
   Link* link_ = nullptr;                      // the calling thread's

@@ -23,6 +23,9 @@ struct ImportConfig {
   std::string operator_present_topic = "rt/footpedals/operatorpresent";  // sensor_msgs/Joy; "" for none
 };
 
+// A live plot redrawn at 20–25 Hz loses nothing it can show at 50 samples/s.
+inline constexpr double default_display_rate = 50;
+
 struct GatewayConfig {
   std::vector<std::string> attach;  // exported component names ("/saw.<name>" segments)
   std::vector<ImportConfig> imports;
@@ -31,7 +34,11 @@ struct GatewayConfig {
   // "NAME" or "NAME=LOCAL" (exported here as LOCAL).
   std::vector<std::string> mirrors;
   ParticipantConfig dds;
-  unsigned decimation = 1;    // publish state every Nth row of the server's task
+  unsigned decimation = 1;  // publish state every Nth row of the server's task
+  // Live views (sawgui) need a picture, not every row: each row-by-row state is also published
+  // on <topic>/display at this rate (Hz, by the rows' own times; 0: not at all), so that ten
+  // GUIs cost the gateway's CPU 50 samples/s each per topic rather than 1,000.
+  double display_rate = default_display_rate;
   TimeNs attach_timeout = 0;  // wait this long for a component to be exported (0: fail at once)
   std::string name;           // unique per host; default "gateway.<pid>"
 };
@@ -49,16 +56,23 @@ struct EndpointInfo {
   // Published on change and kept for late joiners (TRANSIENT_LOCAL): an operating state, a
   // description, the read-back `X` of a setting `set_X`. Its readers ask for TRANSIENT_LOCAL.
   bool latched = false;
+  // A row-by-row state's display stream (GatewayConfig::display_rate): its topic and rate.
+  std::string display_topic;
+  double display_rate = 0;
   std::string label() const {  // "Pose v1"
     return saw_type.empty() ? "" : saw_type + " v" + std::to_string(saw_version);
   }
 };
 
 struct GatewayStats {
-  std::uint64_t published = 0;  // state samples written
-  std::uint64_t events = 0;     // events written
-  std::uint64_t commands = 0;   // commands from DDS passed to the bridge
-  std::uint64_t rejected = 0;   // commands from DDS refused (invalid value, full ring, server gone)
+  std::uint64_t published = 0;  // state samples written (full rate)
+  std::uint64_t displayed = 0;  // state samples written on the display streams
+  // Rows of a server's state the gateway never published: overwritten in the bridge's history
+  // (ExportOptions::history_rows) before it read them. Fewer behind than that, it loses none.
+  std::uint64_t rows_skipped = 0;
+  std::uint64_t events = 0;    // events written
+  std::uint64_t commands = 0;  // commands from DDS passed to the bridge
+  std::uint64_t rejected = 0;  // commands from DDS refused (invalid value, full ring, server gone)
   std::uint64_t reconnects = 0;
   std::uint64_t queries = 0;            // qualified reads answered
   std::uint64_t imported = 0;           // samples taken from imported arms' topics
@@ -71,11 +85,11 @@ class ImportedArm;
 
 // An ordinary (non-RT) process's object. Per attached component, one thread: it sleeps on the
 // bridge's update bell, publishes the read commands' values (best effort, keep last 1) every
-// `decimation` rows, publishes events (reliable), and passes commands arriving from DDS —
-// validated first — into the bridge. Operating states are latched (transient local, keep last
-// 1) and published at attach time, so a late joiner sees them at once. Each gateway publishes its
-// manifest on `rt/saw/manifest` (reliable, transient local), and republishes it with state FAULT
-// when a server stops.
+// `decimation` rows and, for live views, at `display_rate` on <topic>/display, publishes events (reliable),
+// and passes commands arriving from DDS — validated first — into the bridge. Operating states are latched
+// (transient local, keep last 1) and published at attach time, so a late joiner sees them at once. Each
+// gateway publishes its manifest on `rt/saw/manifest` (reliable, transient local), and republishes it with
+// state FAULT when a server stops.
 class Gateway {
  public:
   explicit Gateway(GatewayConfig config);  // throws std::runtime_error naming what failed

@@ -30,6 +30,8 @@ struct GatewaySettings {
   int domain = 0;
   std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
   int decimation = 1;                                // publish state every Nth row
+  double display_rate =
+      50;  // Hz of the states' display streams (<topic>/display); 0: none (GatewayConfig's default)
   // DDS Security: the gateway's enclave (made by `sawctl security enroll`), absolute. Off
   // loopback one is required unless the file says `security: none` (`insecure`).
   std::string enclave;
