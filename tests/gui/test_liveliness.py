@@ -46,11 +46,15 @@ def test_a_killed_gateway_is_gone_within_its_lease_and_a_new_one_brings_the_comp
     fd, yaml = tempfile.mkstemp(suffix=".yaml", prefix="sawgui-live-")
     with os.fdopen(fd, "w") as f:
         f.write(YAML.format(tag=tag))
-    rt = subprocess.Popen([saw_rt, yaml], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # Bounded, and stopped in `finally` whatever fails after it started (a missing saw-gateway too):
+    # a test never leaves an RT process behind.
+    rt = subprocess.Popen([saw_rt, yaml, "--duration", "120"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     start = [gateway, "--attach", arm, "--domain", str(domain), "--wait", "20"]
-    gw = subprocess.Popen(start, stdout=subprocess.DEVNULL)
-    live = Live(domain)
+    gw = None
+    live = None
     try:
+        gw = subprocess.Popen(start, stdout=subprocess.DEVNULL)
+        live = Live(domain)
         assert wait(lambda: live.components().get(arm, {}).get("state") == "ENABLED"), live.components()
         old = live.components()[arm]["gateway"]
         t0 = time.monotonic()
@@ -71,9 +75,10 @@ def test_a_killed_gateway_is_gone_within_its_lease_and_a_new_one_brings_the_comp
         figure(f"a gateway killed with -9 shown gone after {gone_ms:.0f} ms (lease 1 s); "
                f"a new gateway's component shown again {back_ms:.0f} ms after it started")
     finally:
-        live.close()
+        if live is not None:
+            live.close()
         for p in (gw, rt):
-            if p.poll() is None:
+            if p is not None and p.poll() is None:
                 p.send_signal(signal.SIGTERM)
                 p.wait(timeout=20)
         os.unlink(yaml)
