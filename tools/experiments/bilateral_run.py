@@ -134,13 +134,18 @@ record:  # each host records its own components' columns
 """
 
 
-def side_verdict(forces, power, dt):
-    """(longest run at the force limit in s, energy given out over the second half in J) of one port."""
-    at_limit = np.linalg.norm(forces, axis=1) >= FORCE_LIMIT - 1e-3
+def longest_run(mask) -> int:
+    """The most consecutive True samples."""
     longest, run_ = 0, 0
-    for x in at_limit:
+    for x in mask:
         run_ = run_ + 1 if x else 0
         longest = max(longest, run_)
+    return longest
+
+
+def side_verdict(forces, power, dt):
+    """(longest run at the force limit in s, energy given out over the second half in J) of one port."""
+    longest = longest_run(np.linalg.norm(forces, axis=1) >= FORCE_LIMIT - 1e-3)
     energy = np.cumsum(power) * dt
     half = len(energy) // 2
     return longest * dt, float(energy[-1] - energy[half]) if len(energy) else 0.0
@@ -223,12 +228,7 @@ def figures(d, wall: float = WALL_STIFFNESS) -> Result:
     energy = np.cumsum(power) * dt
     channel = float(np.max(energy))
     fmag = np.maximum(np.linalg.norm(fm, axis=1), np.linalg.norm(fs, axis=1))
-    at_limit = fmag >= FORCE_LIMIT - 1e-3
-    longest, run_ = 0, 0
-    for a in at_limit:
-        run_ = run_ + 1 if a else 0
-        longest = max(longest, run_)
-    saturated = longest * dt
+    saturated = longest_run(fmag >= FORCE_LIMIT - 1e-3) * dt
     # A passive network gives out no more than it stores (½·k·e² at the force limit: ~10 mJ); one
     # that keeps giving energy over the second half of the run is active, and its motion grows
     # until something saturates.
