@@ -98,7 +98,8 @@ Status QueryClient::call(const void* arg, std::size_t arg_size, void* result, st
   std::memcpy(i.request.data().data(), arg, arg_size);
   if (!i.writer->write(&i.request)) return Status::disconnected;
   const TimeNs deadline = monotonic_now() + timeout;
-  constexpr TimeNs resend_every = 1'000'000'000;
+  // Several tries fit in every call's timeout (a resend only after the timeout never happened).
+  const TimeNs resend_every = std::clamp<TimeNs>(timeout / 8, 10'000'000, 100'000'000);
   TimeNs resend_at = monotonic_now() + resend_every;
   fdds::SampleInfo info;
   for (;;) {
