@@ -351,7 +351,8 @@ void CanopenArm::publish() noexcept {
   const can::BusCounters bus = bus_.counters();
   const DeviceStatus& d = device_status();
   status_.state = operating_state().state;
-  status_.reason = reason_;
+  // The last fault's reason stays with the last fault (an enable clears reason_).
+  if (reason_ != FaultReason::none) status_.reason = reason_;
   status_.faults = d.faults;
   if (d.faults != 0) status_.fault = d.fault;
   status_.frames_received = c.frames_received;

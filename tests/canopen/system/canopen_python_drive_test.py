@@ -19,8 +19,13 @@ deployment (`canopen_drive`, CSP, 10 ms) on the same bus. Each case is what a re
                counted on the component's status, no FAULT
   error_emcy   an EMCY with the drive in FAULT: the arm's FAULT names the code and its name
   identity     the drive's vendor-ID is not the EDS's: start-up fails (exit 1) naming both
+  reboot       the enabled drive reboots (a power cycle: its object dictionary back to the EDS's
+               defaults, pre-operational, a boot-up message): saw-rt's FAULT names the reboot;
+               an `enable` sent as a lab sends it (sawctl, through the deployment's gateway) makes
+               the master configure the drive again (PDO maps, 0x1017, 0x1016, 0x6007, 0x6060,
+               NMT start) and enable it; a `servo_jp` then reaches the drive's 0x607A
 
-Usage: canopen_python_drive_test.py <saw-rt> <saw-socketcand> <sim_drive.eds> [case ...]
+Usage: canopen_python_drive_test.py <saw-rt> <saw-socketcand> <sawctl> <sim_drive.eds> [case ...]
 Exits 77 (skipped) when the tools venv has no `canopen`.
 """
 
@@ -30,6 +35,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 try:
@@ -44,7 +50,7 @@ sys.path.insert(0, HERE)
 from child_tools import check, fail, start_socketcand  # noqa: E402
 from python_drive import PythonDrive  # noqa: E402
 
-SAW_RT, SERVER, EDS = sys.argv[1], sys.argv[2], os.path.abspath(sys.argv[3])
+SAW_RT, SERVER, SAWCTL, EDS = sys.argv[1], sys.argv[2], sys.argv[3], os.path.abspath(sys.argv[4])
 NODE = 5
 
 DEPLOYMENT = """
@@ -70,7 +76,7 @@ components:
       rated_torque: 0.3
       min: -100
       max: 100
-{extra}"""
+{extra}{top}"""
 
 
 class Case:
@@ -78,7 +84,7 @@ class Case:
 
     # The master's heartbeat as the drive watches it: generous (above), except where the
     # default (100 ms, 300 ms) is under test.
-    def __init__(self, name, extra="", default_master=False, **drive_options):
+    def __init__(self, name, extra="", default_master=False, top="", **drive_options):
         self.name = name
         self.bus = f"sawpydrive{os.getpid()}{name.replace('_', '')}"
         self.server, port = start_socketcand(SERVER, self.bus)
@@ -89,13 +95,27 @@ class Case:
         self.drive.boot()
         with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
             master = "" if default_master else "      master_heartbeat: {period: 100ms, timeout: 3s}\n"
-            f.write(DEPLOYMENT.format(bus=self.bus, node=NODE, extra=extra, master=master))
+            f.write(DEPLOYMENT.format(bus=self.bus, node=NODE, extra=extra, master=master, top=top))
             self.config = f.name
         self.rt = None
 
     def start(self, duration=None):
         args = [SAW_RT, self.config] + (["--duration", str(duration)] if duration else [])
         self.rt = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        # Read as they come, so that a case can wait for a line while saw-rt runs.
+        self.lines = {"out": [], "err": []}
+        self.readers = [threading.Thread(target=self._read, args=(stream, self.lines[key]), daemon=True)
+                        for stream, key in ((self.rt.stdout, "out"), (self.rt.stderr, "err"))]
+        for r in self.readers:
+            r.start()
+
+    @staticmethod
+    def _read(stream, into):
+        for line in stream:
+            into.append(line)
+
+    def err_so_far(self):
+        return "".join(list(self.lines["err"]))
 
     def wait_for(self, condition, timeout, what):
         end = time.monotonic() + timeout
@@ -112,10 +132,13 @@ class Case:
         self.out, self.err = "", ""
         if self.rt is not None:
             try:
-                self.out, self.err = self.rt.communicate(timeout=timeout)
+                self.rt.wait(timeout=timeout)
             except subprocess.TimeoutExpired:
                 self.rt.kill()
-                self.out, self.err = self.rt.communicate()
+                self.rt.wait()
+            for r in self.readers:
+                r.join()
+            self.out, self.err = "".join(self.lines["out"]), "".join(self.lines["err"])
         self.drive.close()
         self.network.disconnect()
         self.server.send_signal(signal.SIGTERM)
@@ -259,10 +282,72 @@ def identity():
     print("ok identity: start-up refused naming both vendor-IDs; the right drive starts")
 
 
-CASES = [kill9, boot_fault, stuck_fault, stuck_enable, wrong_mode, pre_op, warning, error_emcy, identity]
+def configuration(drive):
+    """What the master configures, as the drive holds it: PDOs (identifier, entries), 0x1017,
+    0x1016:01, 0x6007, 0x6060."""
+    pdos = [drive._mapping(base + n, base + 0x200 + n) for base in (0x1400, 0x1800) for n in range(4)]
+    return {"pdos": pdos, "0x1017": drive._get(0x1017), "0x1016:01": drive._get(0x1016, 1),
+            "0x6007": drive._get(0x6007), "0x6060": drive._get(0x6060)}
+
+
+def reboot():
+    # The deployment's gateway on loopback (DDS domains 230-232: no other test's), as a lab runs it.
+    domain = str(230 + os.getpid() % 3)
+    top = f"exports:\n  - {{component: axis, provided: drive}}\ngateway:\n  domain: {domain}\n"
+    c = Case("reboot", extra="      max_velocity: 10\n", top=top)
+
+    def ctl(*args):
+        p = subprocess.run([SAWCTL, *args, "--domain", domain, "--timeout", "20"], capture_output=True, text=True,
+                           timeout=60)
+        return p.returncode, (p.stdout + p.stderr).strip()
+
+    c.start()
+    # The component's enable done (a reboot during an enable is the enable's to configure again).
+    c.wait_for(lambda: re.search(r"\bENABLED\b(?! busy)", ctl("echo", "rt/axis/operating_state", "-n", "1")[1]),
+               60, "saw-rt says the drive ENABLED (sawctl)")
+    c.expect(enabled(c), f"saw-rt says ENABLED, the drive is {c.drive.state}")
+    configured = configuration(c.drive)
+    c.drive.reboot()
+    rebooted = time.monotonic()
+    defaults = configuration(c.drive)
+    c.wait_for(lambda: "rebooted (boot-up seen)" in c.err_so_far(), 20, "saw-rt's FAULT naming the reboot")
+    state_rc, state = ctl("echo", "rt/axis/operating_state", "-n", "1")
+    enable_rc, enable = ctl("call", "rt/axis/state_command", "enable")
+    c.wait_for(lambda: enabled(c) and c.drive.node.nmt.state == "OPERATIONAL", 30,
+               "the drive configured again and enabled after the sawctl enable")
+    enabled_at = time.monotonic()
+    again = configuration(c.drive)
+    written = {(index, sub) for t, index, sub in c.drive.writes if t > rebooted}
+    # A target of this run's own (0.25 rad: 163 counts at 4096 per revolution), through the gateway.
+    jp_rc, jp = ctl("call", "rt/axis/servo_jp", "0.25")
+    c.wait_for(lambda: any(t > enabled_at and v == 163 for t, v in c.drive.targets), 30,
+               "the servo_jp target in the drive's 0x607A")
+    c.rt.send_signal(signal.SIGTERM)
+    code = c.finish()
+    c.expect(code == 0, f"saw-rt exited {code}")
+    c.expect(defaults != configured and defaults["0x1016:01"] == 0 and defaults["0x6007"] == 1
+             and defaults["0x1017"] == 0, f"the reboot did not bring back the EDS's defaults: {defaults}")
+    c.expect(re.search(r"axis: FAULT.*node rebooted", c.err), "no FAULT line naming the reboot")
+    c.expect(re.search(r"j \(node 5\) rebooted \(boot-up seen\)", c.err), "the reboot line does not name node 5")
+    c.expect(state_rc == 0 and "FAULT" in state, f"sawctl echo of the operating state: {state}")
+    c.expect(enable_rc == 0 and "delivered" in enable, f"sawctl call enable: {enable}")
+    c.expect(re.search(r"j \(node 5\) configured again after its reboot", c.err), "no line saying it was configured")
+    c.expect(re.search(r"axis: ENABLED", c.out), "the drive did not end ENABLED")
+    c.expect(re.search(r"1 faults; the last: node rebooted .* on j \(node 5\)", c.out),
+             "the summary does not say the last fault was the reboot")
+    c.expect(again == configured, f"the drive's configuration after the enable {again}, before the reboot {configured}")
+    for obj in [(0x1017, 0), (0x1016, 1), (0x6007, 0), (0x6060, 0), (0x1400, 1), (0x1600, 0), (0x1800, 1),
+                (0x1A00, 0)]:
+        c.expect(obj in written, f"0x{obj[0]:04X}:{obj[1]:02X} not written again after the reboot: {sorted(written)}")
+    c.expect(jp_rc == 0 and "delivered" in jp, f"sawctl call servo_jp: {jp}")
+    print(f"ok reboot: FAULT naming the reboot; after the sawctl enable the drive was configured again "
+          f"({len(written)} objects written), operational, operation enabled, and took a servo_jp target")
+
+
+CASES = [kill9, boot_fault, stuck_fault, stuck_enable, wrong_mode, pre_op, warning, error_emcy, identity, reboot]
 
 if __name__ == "__main__":
-    wanted = sys.argv[4:]
+    wanted = sys.argv[5:]
     for case in CASES:
         if not wanted or case.__name__ in wanted:
             case()

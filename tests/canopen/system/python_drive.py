@@ -14,7 +14,8 @@ to the application is written here from CiA 301/402, not from sawrt's code:
   option code 0x6007 (CiA 402: 0 nothing, 1 fault, 2 disable voltage, 3 quick stop).
 
 Scenario knobs: start in FAULT (and whether a fault reset clears it), a mode display that does
-not follow 0x6060, a state it does not leave, a different identity, and calls to fault, warn, leave operational and reboot.
+not follow 0x6060, a state it does not leave, a different identity, and calls to fault, warn,
+leave operational and reboot (a power cycle: every object back to the EDS's default).
 """
 
 import struct
@@ -80,6 +81,8 @@ class PythonDrive:
         self.consumer_events = []  # (node, time)
         self.enabled_with_mode = set()  # 0x6061 values seen while operation enabled
         self.syncs = 0
+        self.writes = []  # (time, index, subindex) of every SDO write the drive took
+        self.targets = []  # (time, 0x607A) applied from an RPDO at a SYNC
         if boot_fault is not None:
             self._fault(boot_fault, 0x03, send=False)
         self._stop = threading.Event()
@@ -139,6 +142,21 @@ class PythonDrive:
             elif command in (0x02, 0x80) and self.state == "operation enabled":
                 self._enter("quick stop active")  # leaving operational stops the motion
 
+    def reboot(self):
+        """A power cycle mid-run: the object dictionary back to the EDS's defaults (the PDO maps,
+        0x1016, 0x6007, 0x6060 and 0x1017 the master wrote are gone), the CiA 402 state machine
+        from its start, NMT initialising: the boot-up message, then pre-operational."""
+        with self.lock:
+            self.node.nmt.stop_heartbeat()
+            for cob, _ in self.rpdos:
+                self.network.unsubscribe(cob, self._on_rpdo)
+            self.node.data_store.clear()
+            self.watched, self.last_heartbeat, self.rpdos, self.tpdos, self.received = {}, {}, [], [], {}
+            self.previous_controlword = 0
+            self._note("reboot")
+            self._enter("switch on disabled")
+            self.boot()
+
     def leave_operational(self):
         """The drive goes pre-operational by itself (its heartbeat says so)."""
         with self.lock:
@@ -147,6 +165,7 @@ class PythonDrive:
 
     # ---- SDO writes the drive acts on ------------------------------------------------------
     def _on_write(self, index, subindex, od, data):
+        self.writes.append((time.monotonic(), index, subindex))
         if index == 0x1016 and subindex >= 1:
             value, = struct.unpack("<I", bytes(data))
             node, ms = (value >> 16) & 0x7F, value & 0xFFFF
@@ -230,6 +249,8 @@ class PythonDrive:
                 for index, sub, size in entries:
                     self.node.data_store.setdefault(index, {})[sub] = payload[at:at + size]
                     at += size
+                    if index == 0x607A:
+                        self.targets.append((time.monotonic(), self._get(0x607A)))
             self._step()
             for cob, entries in self.tpdos:
                 payload = b"".join(self.node.get_data(index, sub)[:size] for index, sub, size in entries)

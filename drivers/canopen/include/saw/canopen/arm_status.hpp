@@ -44,8 +44,8 @@ struct CanopenStatus {
   // 2: refused is the device base's; 3: fault_node, warnings; 4: shared_bus
   static constexpr std::uint32_t layout_version = 4;
   OperatingStateValue state = OperatingStateValue::disabled;
-  FaultReason reason = FaultReason::none;
-  std::uint8_t bus_state = 0;  // can::BusState
+  FaultReason reason = FaultReason::none;  // the last fault's (kept after recovery, as `fault`)
+  std::uint8_t bus_state = 0;              // can::BusState
   std::uint8_t joints = 0;
   std::uint8_t shared_bus = 0;  // 1: a client of a bus task (its SYNC and heartbeat are the task's)
   std::uint32_t faults = 0;     // times it went to FAULT
