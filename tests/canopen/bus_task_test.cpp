@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <memory>
 #include <stdexcept>
 
@@ -109,6 +110,39 @@ TEST(CanopenBusTask, RefusesANodeOrIdentifierTakenAndTheMastersOwnNode) {
   CanopenArmConfig c = client("no-such-bus", {5});
   EXPECT_THROW(CanopenArm("lost", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c),
                std::runtime_error);
+}
+
+// Each SYNC applies the RPDOs of the period before it: a client at another period than the bus
+// task's is refused when it joins, naming both and both periods; nothing of it is attached.
+TEST(CanopenBusTask, RefusesAClientWhosePeriodIsNotTheBusTasks) {
+  SharedRig rig;
+  const auto refusal = [](const std::function<void()>& make) -> std::string {
+    try {
+      make();
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "not refused";
+  };
+  EXPECT_EQ(
+      refusal([&] {
+        (void)CanopenArm("slow", TaskConfig::periodic(std::chrono::milliseconds(2), 0),
+                         client(rig.name, {1}));
+      }),
+      "'slow' runs every 2 ms, its bus task 'shared-test-bus' every 1 ms: a client of a canopen_bus must "
+      "have the bus task's period");
+  EXPECT_EQ(
+      refusal([&] {
+        (void)CanopenIo("fast", TaskConfig::periodic(std::chrono::microseconds(500), 0),
+                        gripper_config(rig.name, 10));
+      }),
+      "'fast' runs every 500 us, its bus task 'shared-test-bus' every 1 ms: a client of a canopen_bus must "
+      "have the bus task's period");
+  EXPECT_EQ(rig.task->clients(), 0u);
+  // The same clients at the bus task's period join it.
+  auto arm = rig.make("arm", {1});
+  auto io = rig.make_io("gripper", 10);
+  EXPECT_EQ(rig.task->clients(), 2u);
 }
 
 TEST(CanopenBusTask, NodesOfAClientThatNeverShutThemDownGoPreOperationalWithTheBusTask) {

@@ -3,10 +3,13 @@
 #include "saw/canopen/registration.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <string>
 
+#include "saw/can/virtual_bus.hpp"
 #include "saw/canopen/canopen_arm.hpp"
+#include "saw/deploy/deployment.hpp"
 #include "saw/deploy/deployment_spec.hpp"
 #include "saw/drivers/sim_registration.hpp"
 #include "saw/teleop/registration.hpp"
@@ -223,6 +226,25 @@ TEST(CanopenDeployment, AnIoNodeOnASharedBusParsesAndItsErrorsNameFileLineAndKey
              "no TPDO maps its input 0x6401:01");
   EXPECT_HAS(io_error_of("{bus: virtual:nowhere}", "{bus: can0}"),
              "key 'components[0].params.bus': 'can0' is not a bus: virtual:<name> or socketcan:<interface>");
+}
+
+// Built, the deployment refuses a client of a canopen_bus at another period than the bus task's,
+// at the client's entry, naming both components and both periods.
+TEST(CanopenDeployment, AClientOfABusTaskAtAnotherPeriodIsRefused) {
+  const std::string bus = "cfg-period-" + std::to_string(::getpid());
+  std::string text = io_file;
+  text.replace(text.find("virtual:nowhere"), 15, "virtual:" + bus);
+  text.replace(text.rfind("period: 1ms"), 11, "period: 2ms");
+  std::string error;
+  try {
+    (void)saw::deploy::build_deployment(parse(text), registry());
+  } catch (const ConfigError& e) {
+    error = e.what();
+  }
+  (void)saw::can::remove_virtual_bus(bus);
+  EXPECT_HAS(error,
+             "cfg.yaml:7:5: key 'components[1]': 'gripper' (canopen_io): 'gripper' runs every 2 ms, its bus "
+             "task 'can0' every 1 ms");
 }
 
 }  // namespace

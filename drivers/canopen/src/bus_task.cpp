@@ -1,6 +1,7 @@
 #include "saw/canopen/bus_task.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -233,8 +234,23 @@ bool is_bus_uri(const std::string& bus) noexcept {
   return bus.starts_with("virtual:") || bus.starts_with("socketcan:");
 }
 
-BusLink link_bus(const std::string& bus, const std::string& client, std::span<const std::uint8_t> nodes,
-                 std::span<const std::uint32_t> tpdos) {
+namespace {
+
+std::string period_text(TimeNs ns) {
+  char b[32];
+  if (ns % 1'000'000 == 0)
+    std::snprintf(b, sizeof b, "%lld ms", static_cast<long long>(ns / 1'000'000));
+  else if (ns % 1'000 == 0)
+    std::snprintf(b, sizeof b, "%lld us", static_cast<long long>(ns / 1'000));
+  else
+    std::snprintf(b, sizeof b, "%lld ns", static_cast<long long>(ns));
+  return b;
+}
+
+}  // namespace
+
+BusLink link_bus(const std::string& bus, const std::string& client, TimeNs period,
+                 std::span<const std::uint8_t> nodes, std::span<const std::uint32_t> tpdos) {
   BusLink l;
   if (is_bus_uri(bus)) {
     can::BusConfig c;
@@ -245,6 +261,12 @@ BusLink link_bus(const std::string& bus, const std::string& client, std::span<co
     return l;
   }
   l.task = find_bus_task(bus);
+  // A slower client would miss SYNCs' TPDOs and leave SYNCs without its RPDOs, a faster one
+  // would queue two setpoints for one SYNC: one period for the bus and its clients.
+  if (period != l.task->config().period)
+    throw std::runtime_error("'" + client + "' runs every " + period_text(period) + ", its bus task '" + bus +
+                             "' every " + period_text(l.task->config().period) +
+                             ": a client of a canopen_bus must have the bus task's period");
   try {
     l.port = &l.task->attach(client, nodes, tpdos);
   } catch (const std::invalid_argument& e) {

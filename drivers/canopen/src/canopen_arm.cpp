@@ -105,7 +105,7 @@ namespace {
 
 // A caller's bus (tests) is known by its address: two of them may share a name. A shared bus's
 // master heartbeat is its bus task's: the drives' consumers watch that one.
-BusLink link_of(const std::string& name, const CanopenArmConfig& c, can::Bus* bus) {
+BusLink link_of(const std::string& name, const CanopenArmConfig& c, TimeNs period, can::Bus* bus) {
   if (bus != nullptr) {
     BusLink l;
     l.claim = std::make_unique<BusClaim>(
@@ -120,7 +120,7 @@ BusLink link_of(const std::string& name, const CanopenArmConfig& c, can::Bus* bu
     for (const PdoMapping& m : a.pdos)
       if (m.enabled && m.kind == PdoKind::tpdo) tpdos.push_back(m.cob_id & CAN_SFF_MASK);
   }
-  return link_bus(c.bus, name, nodes, tpdos);
+  return link_bus(c.bus, name, period, nodes, tpdos);
 }
 
 CanopenArmConfig with_bus_task(CanopenArmConfig c, const BusLink& l) {
@@ -138,7 +138,7 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
     : Device(std::move(name), task, contract_of(checked(config, task))),
       config_(checked(std::move(config), task)),
       n_(config_.joints.size()),
-      link_(link_of(this->name(), config_, bus)),
+      link_(link_of(this->name(), config_, task.period.count(), bus)),
       bus_(*link_.bus) {
   config_ = with_bus_task(std::move(config_), link_);
   BusMasterConfig m;

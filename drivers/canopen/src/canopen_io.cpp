@@ -59,7 +59,7 @@ CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
   check(config_.node);
   const std::uint8_t nodes[] = {config_.node.node};
   const auto tpdos = tpdo_ids(config_.node);
-  link_ = link_bus(config_.bus, this->name(), nodes, tpdos);
+  link_ = link_bus(config_.bus, this->name(), task.period.count(), nodes, tpdos);
   if (!link_.shared()) {  // its own bus: it runs the bus task in its own cycle
     BusTaskConfig k;
     k.period = task.period.count();

@@ -166,8 +166,11 @@ struct BusLink {
 // A bus URI (`virtual:<name>`, `socketcan:<if>`), or else the name of a canopen_bus component.
 bool is_bus_uri(const std::string& bus) noexcept;
 // A URI: opened and claimed for `client` (throws std::runtime_error: cannot open, or claimed);
-// a name: the bus task found and joined with `nodes` and `tpdos` (attach()'s errors).
-BusLink link_bus(const std::string& bus, const std::string& client, std::span<const std::uint8_t> nodes,
-                 std::span<const std::uint32_t> tpdos);
+// a name: the bus task found and joined with `nodes` and `tpdos` (attach()'s errors). A client
+// whose `period` is not the bus task's is refused (std::runtime_error naming both components
+// and both periods): each SYNC applies the RPDOs queued in the period before it, and the client
+// reads the TPDOs of one SYNC per cycle.
+BusLink link_bus(const std::string& bus, const std::string& client, TimeNs period,
+                 std::span<const std::uint8_t> nodes, std::span<const std::uint32_t> tpdos);
 
 }  // namespace saw::canopen
