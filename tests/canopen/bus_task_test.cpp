@@ -246,3 +246,59 @@ TEST(CanopenBusTask, AnArmAndAGripperIoNodeShareTheBusAndFaultAlone) {
 
 }  // namespace
 }  // namespace saw::canopen::test
+
+namespace saw::canopen::test {
+namespace {
+
+// A later client's start-up reads the bus itself (no thread cycles yet): an EMCY of an earlier
+// client's node sent meanwhile goes to that client, whose first cycle reports it, instead of
+// being read and dropped by the other component's start-up.
+TEST(CanopenBusTask, AnEmcyOfAnEarlierClientsNodeDuringALaterClientsStartUpReachesIt) {
+  SharedRig rig;
+  auto gripper = rig.make_io("gripper", 10);
+  auto arm = rig.make("arm", {1, 2});
+  gripper->startup();
+  int pauses = 0;
+  rig.during_startup = [&] {
+    if (++pauses == 5)  // the arm's nodes reset, their boot-ups awaited
+      rig.io_node->send(0x80 + 10, {0x00, 0x50, 0x81, 0, 0, 0, 0, 0});  // 0x5000 device hardware
+  };
+  arm->startup();
+  ASSERT_GT(pauses, 5);
+  rig.during_startup = nullptr;
+  EXPECT_EQ(rig.task->counters().dropped, 0u);
+  rig.cycle({arm.get(), gripper.get()}, 30);
+  EXPECT_EQ(gripper->status().emcy, 1u);
+  EXPECT_EQ(gripper->status().last_emcy, 0x5000);
+  EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::fault);
+  EXPECT_EQ(gripper->device_status().reason_text(), "emergency message");
+  EXPECT_EQ(arm->operating_state().state, OperatingStateValue::enabled) << "the EMCY is the gripper's alone";
+  EXPECT_EQ(arm->status().emcy, 0u);
+}
+
+// More frames for an earlier client during a start-up than its in-ring holds: the rest are
+// counted dropped (the bus task's and the client's port's figures), none is lost silently.
+TEST(CanopenBusTask, FramesForAnEarlierClientBeyondItsRingDuringAStartUpAreCountedDropped) {
+  SharedRig rig;
+  auto gripper = rig.make_io("gripper", 10);
+  auto arm = rig.make("arm", {1});
+  gripper->startup();
+  constexpr int sent = 600;  // the ring holds 512
+  bool once = false;
+  rig.during_startup = [&] {
+    if (once) return;
+    once = true;
+    for (int i = 0; i < sent; ++i) rig.io_node->send(0x80 + 10, {0x10, 0x23, 0x02, 0, 0, 0, 0, 0});
+  };
+  arm->startup();
+  rig.during_startup = nullptr;
+  const std::uint64_t dropped = rig.task->counters().dropped;
+  EXPECT_EQ(dropped, static_cast<std::uint64_t>(sent - 512));
+  EXPECT_EQ(rig.task->port(0).dropped(), dropped);
+  rig.cycle({arm.get(), gripper.get()}, 30);
+  EXPECT_EQ(gripper->status().emcy + dropped, static_cast<std::uint64_t>(sent));
+  EXPECT_EQ(arm->operating_state().state, OperatingStateValue::enabled);
+}
+
+}  // namespace
+}  // namespace saw::canopen::test

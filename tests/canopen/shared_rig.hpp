@@ -156,6 +156,7 @@ struct SharedRig {
     CanopenArmConfig c = client(name, std::move(nodes));
     if (edit) edit(c);
     c.startup_pause = [this] {
+      if (during_startup) during_startup();
       drives.step(now);
       now += ms;
       bus_port.now = now;
@@ -170,6 +171,7 @@ struct SharedRig {
     io_node = fake_io.get();
     CanopenIoConfig c = gripper_config(name, node);
     c.startup_pause = [this] {
+      if (during_startup) during_startup();
       drives.step(now);
       io_node->step(now);
       now += ms;
@@ -195,7 +197,8 @@ struct SharedRig {
     }
   }
 
-  std::vector<can::Frame> seen;  // every frame on the bus during cycle() (unless not kept)
+  std::function<void()> during_startup;  // called at each pause of a client's start-up
+  std::vector<can::Frame> seen;          // every frame on the bus during cycle() (unless not kept)
   bool keep = true;
   std::unique_ptr<FakeIoNode> fake_io;
   FakeIoNode* io_node = nullptr;

@@ -47,14 +47,13 @@ BusPort::BusPort(BusTask& task, std::string client, std::vector<std::uint8_t> no
 BusPort::~BusPort() = default;
 
 std::size_t BusPort::receive(std::span<can::Received> out) noexcept {
-  if (!cycling()) {
-    // Start-up or exit: no thread cycles; the frames of other clients' nodes are theirs to
-    // miss (their consumers start with the first cycle).
-    return task_.bus().receive(out);
-  }
   std::size_t n = 0;
+  // Cycling: what the bus task routed here. Not cycling (this client's start-up): first what
+  // the start-ups of the clients before it routed here (older than anything on the bus now, and
+  // before this start-up's NMT reset, which ignores it), then the bus itself.
   while (n < out.size() && in_->pop(out[n])) ++n;
-  return n;
+  if (n > 0 || cycling()) return n;
+  return task_.receive_for(*this, out);
 }
 
 std::size_t BusPort::send(std::span<const can::Frame> frames) noexcept {
@@ -116,6 +115,37 @@ BusPort& BusTask::attach(const std::string& client, std::span<const std::uint8_t
       new BusPort(*this, client, std::vector<std::uint8_t>(nodes.begin(), nodes.end()), config_.ring)));
   routes_ = routes;
   return *ports_.back();
+}
+
+// A client's start-up reads the bus itself; a frame of another client's node (an EMCY or a
+// heartbeat of a node configured by an earlier start-up) goes to that client's in-ring, as the
+// cycle would route it, for its first cycle: not lost because another component was configuring
+// its own nodes. No thread cycles during the start-ups (every component's start-up runs on the
+// set-up thread before any task's thread is created), so this thread is then the only producer
+// (and, for its own port, consumer) of every ring; the creation of the bus task's and the
+// clients' threads happens after, and synchronizes with their start, so what is pushed here
+// (ring indices, slots, counters) is seen by the bus task (the rings' producer from then on) and
+// the clients (their consumers). Frames for no client are the caller's, as before.
+std::size_t BusTask::receive_for(BusPort& port, std::span<can::Received> out) noexcept {
+  std::size_t kept = 0;
+  while (kept == 0) {
+    const std::size_t n = bus_->receive(out);
+    if (n == 0) break;
+    for (std::size_t i = 0; i < n; ++i) {
+      const can::Received r = out[i];
+      const std::uint8_t route = canopen_data_frame(r.frame) ? routes_[r.frame.can_id() & CAN_SFF_MASK] : 0;
+      BusPort* owner = route == 0 ? nullptr : ports_[route - 1u].get();
+      if (owner == nullptr || owner == &port) {
+        out[kept++] = r;
+        continue;
+      }
+      if (!owner->in_->push(r)) {
+        ++counters_.dropped;
+        owner->dropped_.fetch_add(1, std::memory_order_relaxed);
+      }
+    }
+  }
+  return kept;
 }
 
 void BusTask::flush(std::span<const can::Frame> frames) noexcept {

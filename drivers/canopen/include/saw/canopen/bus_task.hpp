@@ -48,7 +48,8 @@ class BusTask;
 // reads what the bus task routed to it and queues what it sends for the bus task's next cycle
 // (lock-free rings, one writer each). Before (the client's start-up) and after (its last frames
 // at exit, once every task's thread has ended) it reads and writes the bus itself: then no
-// thread cycles, so nobody else touches the bus.
+// thread cycles, so nobody else touches the bus; a frame it reads then for another client's
+// node goes to that client's in-ring (its first cycle reads it), a full ring counting it dropped.
 class BusPort final : public can::Bus {
  public:
   std::size_t receive(std::span<can::Received> out) noexcept override;
@@ -118,6 +119,9 @@ class BusTask {
  private:
   friend class BusPort;
   void flush(std::span<const can::Frame> frames) noexcept;
+  // The bus read for a client that does not cycle: its frames (and those of no client) in
+  // `out`, the other clients' to their in-rings.
+  std::size_t receive_for(BusPort& port, std::span<can::Received> out) noexcept;
 
   std::unique_ptr<can::Bus> bus_;
   BusTaskConfig config_;
