@@ -110,10 +110,15 @@ if [ "$(cat "$out/can.vcan0.result")" = pass ]; then
   [ "$(cat "$out/accelerator" 2>/dev/null)" = kvm ] || rms=18
   check canopen.teleop 240 env SAW_TEST_CANOPEN_BUS=socketcan:vcan0 SAW_TEST_CANOPEN_MAX_RMS_MM=$rms python3 \
     "$src/tests/canopen/system/canopen_sim_teleop.py" "$saw_rt" "$saw_can_sim" "$src/config/canopen-sim.yaml"
+  # One bus task, an arm and a gripper's I/O node as its clients (config/canopen-shared-bus.yaml),
+  # saw-can-sim playing every node, on SocketCAN.
+  check canopen.shared_bus 180 env SAW_TEST_CANOPEN_BUS=socketcan:vcan0 python3 \
+    "$src/tests/canopen/system/canopen_shared_bus_sim.py" "$saw_rt" "$saw_can_sim" \
+    "$src/config/canopen-shared-bus.yaml"
   check guard 120 guard
   # Last: it takes vcan0 down and up again. Writes one result per check (can.classic, ...).
   check can.peers 240 "$src/.venv/bin/python" "$src/tests/kernel/can_peers.py" "$can_side" vcan0 "$out"
 else
-  for c in can.conformance canopen.teleop guard can.peers; do echo "fail: no vcan0 (can.vcan0.log)" > "$out/$c.result"; done
+  for c in can.conformance canopen.teleop canopen.shared_bus guard can.peers; do echo "fail: no vcan0 (can.vcan0.log)" > "$out/$c.result"; done
 fi
 date > "$out/done"

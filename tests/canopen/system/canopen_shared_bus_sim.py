@@ -13,6 +13,7 @@ Checks, on saw-rt's summary and saw-can-sim's (the nodes' states after saw-rt en
   pre-operational with its output at the gripper's safe opening (2000 counts, 0.02 m).
 
 Usage: canopen_shared_bus_sim.py <saw-rt> <saw-can-sim> <canopen-shared-bus.yaml>
+(SAW_TEST_CANOPEN_BUS=socketcan:vcan0 runs both on that bus instead of a private virtual one)
 """
 
 import os
@@ -32,7 +33,8 @@ def fail(message, *outputs):
 
 
 def main():
-    bus = f"virtual:sawsharedsim{os.getpid()}"
+    # SAW_TEST_CANOPEN_BUS: another bus, e.g. socketcan:vcan0 in the PREEMPT_RT guest (tests/kernel).
+    bus = os.environ.get("SAW_TEST_CANOPEN_BUS") or f"virtual:sawsharedsim{os.getpid()}"
     with open(CONFIG) as f:
         text = f.read()
     if "virtual:canopen-shared" not in text:
@@ -58,7 +60,7 @@ def main():
         sim_out = ready + sim.communicate(timeout=30)[0]
         os.unlink(config)
         shm = "/dev/shm/saw-can." + bus.split(":", 1)[1]
-        if os.path.exists(shm):
+        if bus.startswith("virtual:") and os.path.exists(shm):
             os.unlink(shm)
     out, err = rt.stdout, rt.stderr
     everything = (out, err, sim_out)
