@@ -313,6 +313,7 @@ def reboot():
     c.wait_for(lambda: "rebooted (boot-up seen)" in c.err_so_far(), 20, "saw-rt's FAULT naming the reboot")
     state_rc, state = ctl("echo", "rt/axis/operating_state", "-n", "1")
     enable_rc, enable = ctl("call", "rt/axis/state_command", "enable")
+    delivered = time.monotonic()
     c.wait_for(lambda: enabled(c) and c.drive.node.nmt.state == "OPERATIONAL", 30,
                "the drive configured again and enabled after the sawctl enable")
     enabled_at = time.monotonic()
@@ -342,6 +343,8 @@ def reboot():
     c.expect(jp_rc == 0 and "delivered" in jp, f"sawctl call servo_jp: {jp}")
     print(f"ok reboot: FAULT naming the reboot; after the sawctl enable the drive was configured again "
           f"({len(written)} objects written), operational, operation enabled, and took a servo_jp target")
+    print(f"figure: operation enabled {1000 * (enabled_at - delivered):.0f} ms after sawctl's enable returned "
+          f"({len(written)} objects written by SDO, NMT start, the 402 walk-up; a 10 ms period)")
 
 
 CASES = [kill9, boot_fault, stuck_fault, stuck_enable, wrong_mode, pre_op, warning, error_emcy, identity, reboot]
