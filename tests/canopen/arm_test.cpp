@@ -362,6 +362,10 @@ TEST(CanopenArm, ADriveThatRebootedFaultsAndTheNextEnableConfiguresItAgain) {
   EXPECT_TRUE(written(cia402::object::modes_of_operation));
   rig.cycle(100);
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled) << "its TPDOs and heartbeats came back";
+  // The status keeps the last fault and its reason after the recovery (the run's summary says it).
+  EXPECT_EQ(rig.arm->status().faults, 1u);
+  EXPECT_EQ(rig.arm->status().reason, FaultReason::node_rebooted);
+  EXPECT_EQ(rig.arm->status().fault.source_name(), "shoulder_pitch");
 }
 
 TEST(CanopenArm, AnEmcyWhoseDriveStaysOutOfFaultIsAWarning) {
