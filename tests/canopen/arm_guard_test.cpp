@@ -1,6 +1,7 @@
 // A CanopenArm's cycle with three drives (bus master, CiA 402 controllers, KDL, checks, faults
 // and their recovery, the watchdog, runtime SDO, a warning EMCY, a drive leaving operational, the
-// master's heartbeat, a drive that rebooted configured again) allocates, locks, waits and prints nothing:
+// master's heartbeat, a drive that rebooted configured again, one that rebooted during an enable)
+// allocates, locks, waits and prints nothing:
 // checked by the RT guard on every cycle, the in-process drives included.
 #include <gtest/gtest.h>
 
@@ -33,6 +34,7 @@ TEST(RtGuard, CanopenArmCycleWithThreeDrivesIsRtClean) {
   // Each fault as it came: its cycle and reason (the array is written in the cycle, read after).
   std::array<std::pair<int, FaultReason>, 8> faults{};
   std::uint32_t seen = 0;
+  bool rebooted_enabling = false;
   {
     saw::RtContextScope rt;
     for (int i = 0; i < cycles; ++i) {
@@ -56,6 +58,10 @@ TEST(RtGuard, CanopenArmCycleWithThreeDrivesIsRtClean) {
       if (i == 3300) rig.state_command(StateCommand::enable);
       if (i == 3500) rig.drives[2].reboot();  // configured again by the next enable, from the cycle
       if (i == 3600) rig.state_command(StateCommand::enable);
+      if (i == 3605) {  // during that enable: configured again by it, logged
+        rebooted_enabling = rig.arm->enabling();
+        rig.drives[0].reboot();
+      }
       if (i % 100 == 50) {
         SdoRequest q;
         q.node = static_cast<std::uint8_t>(1 + (i / 100) % 3);
@@ -83,6 +89,8 @@ TEST(RtGuard, CanopenArmCycleWithThreeDrivesIsRtClean) {
   EXPECT_EQ(faults[3].second, FaultReason::nmt_left) << history;
   EXPECT_EQ(faults[4].second, FaultReason::node_rebooted) << history;
   EXPECT_EQ(rig.drives[2].nmt_state(), saw::canopen::NmtState::operational);
+  EXPECT_TRUE(rebooted_enabling);
+  EXPECT_EQ(rig.drives[0].nmt_state(), saw::canopen::NmtState::operational);
   EXPECT_EQ(rig.arm->status().warnings, 1u);
   EXPECT_EQ(rig.arm->status().last_warning, 0x4210u);
   EXPECT_GT(rig.arm->master().counters().heartbeats, 30u) << "the master's own, every 100 ms";

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "arm_rig.hpp"
+#include "saw/log.hpp"
 
 namespace {
 
@@ -330,6 +331,31 @@ TEST(CanopenArm, AFaultThatPersistsEndsTheEnableInAFaultNamingItsErrorCode) {
   EXPECT_EQ(rig.arm->fault().detail, 0x5000u);
   EXPECT_EQ(rig.arm->status().fault_node, rig.arm->arm_config().joints[1].node);
   EXPECT_EQ(rig.arm->master().control(1).fault_resets, 3);
+}
+
+// A boot-up while an enable runs: the enable configures the drive again and goes on (no FAULT),
+// and the log says that the drive rebooted.
+TEST(CanopenArm, ADriveThatRebootsDuringAnEnableIsConfiguredAgainAndLogged) {
+  saw::LogRecord r;
+  while (saw::log_ring().pop(r)) {
+  }
+  ArmRig rig(arm_config(cia402::csp));
+  rig.state_command(StateCommand::enable);
+  rig.cycle(3);
+  ASSERT_TRUE(rig.arm->enabling());
+  const std::size_t before = rig.drives[1].writes().size();
+  rig.drives[1].reboot();
+  rig.cycle_until([&] { return rig.state() == OperatingStateValue::enabled; }, 2000);
+  EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
+  EXPECT_EQ(rig.arm->status().faults, 0u);
+  EXPECT_GT(rig.drives[1].writes().size(), before) << "configured again";
+  EXPECT_EQ(rig.drives[1].state(), cia402::State::operation_enabled);
+  bool logged = false;
+  while (saw::log_ring().pop(r))
+    logged = logged || saw::format_log_record(r).find(
+                           "shoulder_pitch (node 2) rebooted (boot-up seen) during the "
+                           "enable: configuring it again") != std::string::npos;
+  EXPECT_TRUE(logged);
 }
 
 TEST(CanopenArm, ADriveThatRebootedFaultsAndTheNextEnableConfiguresItAgain) {

@@ -266,6 +266,12 @@ Outcome CanopenArm::check_axis(std::size_t i) noexcept {
     boot_ups_seen_[i] = h.boot_ups;
     rebooted_[i] = true;  // its PDOs and mode are gone: the next enable configures it again
     reconfiguring_[i] = false;
+    // During an enable no FAULT says it (the enable configures the drive again and goes on):
+    // the log does, so that a drive that reboots is never unnoticed.
+    if (enabling())
+      saw::log(LogLevel::warning, name().c_str(),
+               "{} (node {}) rebooted (boot-up seen) during the enable: configuring it again", j.name.c_str(),
+               unsigned{j.node});
   }
   const bool drive_fault = f.state == cia402::State::fault || f.state == cia402::State::fault_reaction_active;
   if (const Outcome o = check_emcy(i, drive_fault); o.is_failed()) return o;
