@@ -1,7 +1,7 @@
 // A shared bus's cycle (the bus task routing frames to its clients, an arm of two CiA 402 drives and
 // a gripper's I/O node each on its port, faults of each and their recovery, the I/O node rebooted
-// and configured again from the cycle, its runtime SDO) allocates, locks, waits
-// and prints nothing: checked by the RT guard on every cycle, the in-process nodes included.
+// and configured again from the cycle (rebooting once more meanwhile), its runtime SDO) allocates, locks,
+// waits and prints nothing: checked by the RT guard on every cycle, the in-process nodes included.
 #include <gtest/gtest.h>
 
 #include "guard_support.hpp"
@@ -27,6 +27,7 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
 
   constexpr int cycles = 3000;
   int both_enabled = 0, gripper_faults = 0, sdo_ok = 0;
+  bool rebooted_enabling = false;
   OperatingStateValue previous = OperatingStateValue::disabled;
   {
     saw::RtContextScope rt;
@@ -46,6 +47,10 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
       if (i == 1600) client.command(StateCommand::enable);
       if (i == 2000) rig.io_node->reboot();  // configured again by the next enable, from the cycle
       if (i == 2100) client.command(StateCommand::enable);
+      if (i == 2102) {  // again, while that enable configures it: the configuration starts over
+        rebooted_enabling = gripper->enabling();
+        rig.io_node->reboot();
+      }
       if (i % 200 == 100) {  // a runtime SDO upload of the I/O node's device type
         SdoRequest q;
         q.node = 10;
@@ -63,6 +68,7 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
   }
   const auto counts = window.counts();
   EXPECT_EQ(gripper_faults, 3) << "the silent node, its EMCY, its reboot";
+  EXPECT_TRUE(rebooted_enabling);
   EXPECT_TRUE(rig.io_node->configured) << "configured again after its reboot";
   EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);
   EXPECT_EQ(arm->operating_state().state, OperatingStateValue::fault) << "its drive's fault, not re-enabled";

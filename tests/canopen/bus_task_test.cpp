@@ -9,6 +9,7 @@
 
 #include "saw/canopen/canopen_arm.hpp"
 #include "saw/detail/access.hpp"
+#include "saw/log.hpp"
 #include "shared_rig.hpp"
 
 namespace saw::canopen::test {
@@ -298,6 +299,48 @@ TEST(CanopenBusTask, FramesForAnEarlierClientBeyondItsRingDuringAStartUpAreCount
   rig.cycle({arm.get(), gripper.get()}, 30);
   EXPECT_EQ(gripper->status().emcy + dropped, static_cast<std::uint64_t>(sent));
   EXPECT_EQ(arm->operating_state().state, OperatingStateValue::enabled);
+}
+
+}  // namespace
+}  // namespace saw::canopen::test
+
+namespace saw::canopen::test {
+namespace {
+
+// The I/O node reboots again while the enable configures it after a first reboot: what was
+// written before is gone, so the configuration starts over (every download again), and the log
+// says that it rebooted (an enable under way shows no FAULT for it).
+TEST(CanopenBusTask, AnIoNodeThatRebootsWhileItIsConfiguredAgainGetsItAllAgainAndItIsLogged) {
+  saw::LogRecord r;
+  while (saw::log_ring().pop(r)) {
+  }
+  SharedRig rig;
+  auto gripper = rig.make_io("gripper", 10);
+  Client client(*gripper);
+  gripper->startup();
+  const int full = rig.io_node->downloads;
+  ASSERT_GT(full, 3);
+  rig.cycle({gripper.get()}, 30);
+  ASSERT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);
+  rig.io_node->reboot();
+  rig.cycle({gripper.get()}, 5);
+  ASSERT_EQ(gripper->operating_state().state, OperatingStateValue::fault);
+  client.command(StateCommand::enable);
+  for (int i = 0; i < 50 && rig.io_node->downloads < 2; ++i) rig.cycle({gripper.get()});
+  ASSERT_TRUE(gripper->enabling());
+  ASSERT_LT(rig.io_node->downloads, full) << "rebooted again in the middle of its configuration";
+  rig.io_node->reboot();
+  for (int i = 0; i < 500 && gripper->operating_state().state != OperatingStateValue::enabled; ++i)
+    rig.cycle({gripper.get()});
+  EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);
+  EXPECT_EQ(rig.io_node->downloads, full) << "every start-up write after the second reboot";
+  EXPECT_EQ(rig.io_node->state, 0x05);
+  bool logged = false;
+  while (saw::log_ring().pop(r))
+    logged = logged || saw::format_log_record(r).find(
+                           "node 10 rebooted (boot-up seen) during the enable: "
+                           "configuring it again") != std::string::npos;
+  EXPECT_TRUE(logged);
 }
 
 }  // namespace

@@ -69,6 +69,7 @@ struct FakeIoNode {
         case 0x81:
         case 0x82:
           state = 0x7F;
+          downloads = 0;
           send(0x700u + node, {0x00});  // boot-up
           break;
         case 0x01:
@@ -90,6 +91,7 @@ struct FakeIoNode {
             static_cast<std::uint8_t>(type ? 0x01 : 0), static_cast<std::uint8_t>(type ? 0x0C : 0), 0});
     } else if (id == 0x600u + node && f.len == 8 && (f.data[0] >> 5) == 1) {
       configured = true;
+      ++downloads;
       send(0x580u + node, {0x60, f.data[1], f.data[2], f.data[3], 0, 0, 0, 0});
     } else if (id == 0x200u + node && f.len == 2 && state == 0x05) {
       output = static_cast<std::int16_t>(f.data[0] | f.data[1] << 8);
@@ -103,11 +105,13 @@ struct FakeIoNode {
   void reboot() noexcept {
     state = 0x7F;
     configured = false;
+    downloads = 0;
     send(0x700u + node, {0x00});
   }
   RingPort& port;
   std::uint8_t node;
   bool configured = false;  // an SDO download came since the last reboot
+  int downloads = 0;        // SDO downloads since the last reboot or NMT reset
   std::uint8_t state = 0x7F;
   std::int16_t output = 0, input = 0;
   bool silent = false;

@@ -132,6 +132,11 @@ Outcome CanopenIo::check_node() noexcept {
   if (h.boot_ups != boot_ups_seen_) {
     boot_ups_seen_ = h.boot_ups;
     rebooted_ = true;
+    reconfiguring_ = false;  // a configuration under way starts over: the node lost what it had
+    // During an enable no FAULT says it (the enable configures the node again): the log does.
+    if (enabling())
+      saw::log(LogLevel::warning, name().c_str(),
+               "node {} rebooted (boot-up seen) during the enable: configuring it again", node);
   }
   if (rebooted_) {
     if (enabling()) return Outcome::done();  // the enable configures it again
