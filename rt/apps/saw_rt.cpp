@@ -11,6 +11,7 @@
 #include "packages.hpp"
 #include "run_summary.hpp"
 #include "saw/deploy/deployment.hpp"
+#include "service_notify.hpp"
 
 namespace {
 
@@ -37,6 +38,10 @@ int main(int argc, char** argv) {
   app.add_option("--plugin", plugins, "a plug-in to load before the file's own plugins: (repeatable)");
   app.add_option("--host", host, "the host (of the file's hosts: section) whose components to run here");
   CLI11_PARSE(app, argc, argv);
+  // From the first moment: a service manager's SIGTERM while the packages load or the devices
+  // start is an orderly stop, never the default death (which a slow start once met).
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
 
   saw::deploy::ComponentRegistry registry;
   try {
@@ -77,8 +82,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "saw-rt: the stepped clock needs --duration\n");
     return 2;
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  if (stop_requested.load()) {
+    std::fprintf(stderr, "saw-rt: stopped before it started (a signal while loading)\n");
+    return 0;
+  }
   try {
     d->start();
   } catch (const std::exception& e) {
@@ -86,6 +93,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "saw-rt: %s\n", e.what());
     return 1;
   }
+  // Every task runs: what a Type=notify unit (and a test that stops saw-rt) waits for.
+  saw::apps::notify_service("READY=1");
   const auto started = std::chrono::steady_clock::now();
   if (d->clock() == saw::deploy::Clock::stepped) {
     d->run_for(duration);
@@ -94,6 +103,7 @@ int main(int argc, char** argv) {
                                                            std::chrono::duration<double>(duration)))
       std::this_thread::sleep_for(20ms);
   }
+  saw::apps::notify_service("STOPPING=1");
   d->stop();
   const double ran = d->clock() == saw::deploy::Clock::stepped
                          ? duration

@@ -14,6 +14,8 @@ import subprocess
 import sys
 import tempfile
 
+from service_ready import NotifySocket
+
 SAW_RT, SOURCE = sys.argv[1:3]
 
 
@@ -34,8 +36,14 @@ def deployment(name, edit):
 
 
 def expect_one_line(config, component, reason):
-    rt = subprocess.run([SAW_RT, config, "--duration", "3"], capture_output=True, text=True, timeout=60)
+    notify = NotifySocket()
+    rt = subprocess.run([SAW_RT, config, "--duration", "3"], capture_output=True, text=True, timeout=60,
+                        env=notify.env())
     os.unlink(config)
+    said = notify.drain()
+    notify.close()
+    if "READY=1" in said:
+        fail("a failed start told its service manager READY=1", rt.stdout, rt.stderr)
     if rt.returncode != 1:
         fail(f"exit {rt.returncode}, not 1", rt.stdout, rt.stderr)
     lines = [l for l in rt.stderr.splitlines() if l.startswith("saw-rt:")]

@@ -24,6 +24,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "system"))
+from service_ready import NotifySocket  # noqa: E402
+
 SAW_RT, SIM, CONFIG = sys.argv[1:4]
 SIM_ARGS = ["--node", "1", "--node", "2", "--node", "3", "--load-inertia", "0.002", "--friction", "2e-6"]
 
@@ -62,9 +65,18 @@ def run(tag, rt_seconds, inject=(), terminate_after=None):
             rt = subprocess.run([SAW_RT, config, "--duration", str(rt_seconds)], capture_output=True, text=True,
                                 timeout=120)
         else:
-            # Stopped as a service manager stops it: SIGTERM, no duration.
-            p = subprocess.Popen([SAW_RT, config], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            # Stopped as a service manager stops it: SIGTERM, no duration, `terminate_after` s
+            # after saw-rt said it was ready (under emulation loading alone can take seconds).
+            notify = NotifySocket()
+            p = subprocess.Popen([SAW_RT, config], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                 env=notify.env())
             try:
+                said_ready = notify.wait("READY=1", p, 120)
+                notify.close()
+                if not said_ready:
+                    p.kill()
+                    out, err = p.communicate()
+                    fail("saw-rt never said READY=1 to its service manager", out, err)
                 out, err = p.communicate(timeout=terminate_after)
                 fail("saw-rt exited before it was terminated", out, err)
             except subprocess.TimeoutExpired:
@@ -153,7 +165,7 @@ else:
     print(f"ok: every drive left disabled and pre-operational; drive positions {moved}")
 
 # SIGTERM mid-run: the same safe state, and an orderly summary (exit 0).
-rt, sim_out = run("term", None, terminate_after=4)
+rt, sim_out = run("term", None, terminate_after=3)
 if starved_but_safe(rt, "SIGTERM"):
     drives_left_safe(sim_out)
     print("ok: SIGTERM left every drive disabled and pre-operational")
@@ -162,7 +174,7 @@ if rt.returncode != 0:
     fail(f"saw-rt exited {rt.returncode} on SIGTERM", rt.stdout, rt.stderr)
 m = re.search(r"teleop: ENABLED.* over (\d+) enabled cycles", rt.stdout)
 if not m or int(m.group(1)) < 100:
-    fail("the teleoperation was not running when SIGTERM came (this machine took over 4 s to start it)",
+    fail("the teleoperation was not running when SIGTERM came (fewer than 100 enabled cycles in 3 s after READY=1)",
          rt.stdout)
 drives_left_safe(sim_out)
 print(f"ok: SIGTERM after {m.group(1)} enabled cycles left every drive disabled and pre-operational")
