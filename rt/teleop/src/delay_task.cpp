@@ -57,6 +57,10 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
   crtk::provide(p, port::remote_energy, [this](const double& e) { pass_energy(e); });
   crtk::provide(p, port::wave, state_table(), &port_wave_);
   crtk::provide(p, port::remote_wave, [this](const Vec3& w) { pass_wave(w); });
+  // Configuration, not a signal: read through at once (undelayed), at start-up as at run time.
+  p.add_command_read_value<double>(std::string(port::wave_impedance.name), [this](double& out) noexcept {
+    return read_impedance_.is_bound() ? read_impedance_(out) : Status::disconnected;
+  });
   clutch_ = &crtk::provide(p, arm::clutch);
   operator_present_ = &crtk::provide(p, arm::operator_present);
 
@@ -68,6 +72,7 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
   crtk::require(r, port::remote_energy, write_remote_energy_, Need::optional);
   crtk::require(r, port::wave, read_wave_, Need::optional);
   crtk::require(r, port::remote_wave, write_remote_wave_, Need::optional);
+  crtk::require(r, port::wave_impedance, read_impedance_, Need::optional);
   crtk::require(
       r, arm::clutch, [this](const ButtonEvent& b) { (void)(*clutch_)(b); }, Need::optional);
   crtk::require(
