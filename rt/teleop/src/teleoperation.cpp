@@ -92,10 +92,15 @@ void Teleoperation::startup() {
 
 void Teleoperation::check_wave_port() const {
   if (!law_->uses_waves()) return;
-  const std::string master = required("master")->connected_to();
+  // The port, named as the deployment names it: behind a delay task, the component it carries.
+  std::string master = "'" + required("master")->connected_to() + "'";
+  ComponentDescription via{};
+  if (master_.description.is_bound() && master_.description(via) == Status::ok &&
+      ComponentDescription::get(via.kind) == "delay" && !ComponentDescription::get(via.servers[0]).empty())
+    master = "'" + std::string(ComponentDescription::get(via.servers[0])) + "', through " + master;
   const double law_b = law_->wave_impedance();
   const std::string law = "law '" + std::string(law_->name()) + "' has impedance " + setting_number(law_b) +
-                          " N·s/m, but the master's port ('" + master + "')";
+                          " N·s/m, but the master's port (" + master + ")";
   if (!master_.wave_impedance.is_bound())
     throw std::runtime_error(
         law + " does not say its " + std::string(port::wave_impedance.name) +
@@ -137,6 +142,7 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   crtk::require(r, port::wave, s.wave, Need::optional);
   crtk::require(r, port::remote_wave, s.remote_wave, Need::optional);
   crtk::require(r, port::wave_impedance, s.wave_impedance, Need::optional);
+  r.add_function("description", s.description, Need::optional);
 }
 
 void Teleoperation::set_operating_state(OperatingStateValue s) noexcept {

@@ -126,6 +126,7 @@ class Teleoperation : public Task {
     FunctionRead<Vec3> wave;  // bound when the device has a wave port
     FunctionWrite<Vec3> remote_wave;
     FunctionRead<double> wave_impedance;  // the wave port's b, checked against the law's at start-up
+    FunctionRead<ComponentDescription> description;  // a delay task's: the component behind it
     Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();
     bool wave_fresh = false;  // a new wave arrived with this cycle's row
     SideSample last{};
