@@ -210,6 +210,9 @@ TEST(WaveVariableLaw, TheTaskRefusesToStartItWhenThePortsImpedanceDiffersNamingB
   EXPECT_NE(why.find("master's port ('port.arm', through 'link.arm')"), std::string::npos) << why;
   EXPECT_EQ(why.find('\n'), std::string::npos) << "one line: " << why;
   EXPECT_EQ(rig.master.commands, 0) << "nothing was driven";
+  // Different past the digits a setting is shown with: still refused, and shown apart.
+  const std::string close = WaveTeleop(3 + 1e-9, 3).start();
+  EXPECT_NE(close.find("wave_impedance 3.000000001"), std::string::npos) << close;
 }
 
 TEST(WaveVariableLaw, TheTaskRefusesToStartItWithAPortInThePassivitySchemeOrNoPort) {

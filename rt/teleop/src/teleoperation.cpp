@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <thread>
 
@@ -121,10 +122,17 @@ void Teleoperation::check_wave_port() const {
                              "): the master side needs a passivity_port with scheme: wave");
   if (port_b == 0) throw std::runtime_error(law + " runs time-domain passivity: give the port scheme: wave");
   // Equal to the last bit: both are the deployment's numbers, carried as float64.
-  if (port_b != law_b)
-    throw std::runtime_error(law + " has wave_impedance " + setting_number(port_b) +
+  if (port_b != law_b) {
+    std::string shown = setting_number(port_b);
+    if (shown == setting_number(law_b)) {  // they differ past %g's digits: say by how much
+      char b[48];
+      std::snprintf(b, sizeof b, "%.17g (%+.3g)", port_b, port_b - law_b);
+      shown = b;
+    }
+    throw std::runtime_error(law + " has wave_impedance " + shown +
                              " N·s/m: the two ends of a wave channel must share b, or the channel is not "
                              "passive; set the same value in both");
+  }
 }
 
 void Teleoperation::require_side(Side& s, const char* iface) {
