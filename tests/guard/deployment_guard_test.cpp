@@ -7,6 +7,7 @@
 #include "guard_support.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/manager.hpp"
+#include "saw/rt_context.hpp"
 #include "saw/teleop/delay_task.hpp"
 #include "saw/teleop/laws/passive_bilateral.hpp"
 #include "saw/teleop/laws/wave_variables.hpp"
@@ -144,6 +145,17 @@ TEST_P(BilateralGuard, SteppedIsRtClean) {
   BilateralDeployment d(GetParam());
   d.m.start_stepped();
   d.m.step_until(3'000'000'000);
+  {
+    // What an exporter does with the link in an RT cycle: its reads that need no row, the port's
+    // wave impedance read through and the description of what it carries.
+    saw::RtContextScope rt;
+    double b = -1;
+    saw::ComponentDescription what;
+    const auto& arm = *d.delay.provided("arm");
+    EXPECT_EQ(arm.find_command(saw::teleop::port::wave_impedance.name)->read(nullptr, &b), saw::Status::ok);
+    EXPECT_EQ(arm.find_command("description")->read(nullptr, &what), saw::Status::ok);
+    EXPECT_EQ(b, GetParam() ? 2.0 : 0.0);
+  }
   const auto counts = window.counts();
   EXPECT_EQ(d.teleop.operating_state(), saw::OperatingStateValue::enabled);
   EXPECT_GT(slave_travel(d), 0.001) << "the slave should be following the master";

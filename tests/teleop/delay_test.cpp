@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <set>
 
 #include "saw/component.hpp"
@@ -87,6 +89,40 @@ TEST(DelayChannel, ASenderFasterThanItsPeriodOverwritesTheOldestAndCountsIt) {
   EXPECT_EQ(v, 99) << "the newest survives";
   EXPECT_THROW(DelayChannel<int>(LinkConfig{0, 0, 1.0, 1}, ms), std::invalid_argument);
   EXPECT_THROW(DelayChannel<int>(LinkConfig{-1, 0, 0, 1}, ms), std::invalid_argument);
+}
+
+// Each receive looks at the samples that may have arrived — the jitter window from the oldest not
+// yet delivered — not at every sample in flight: its cost does not grow with the delay. (A figure,
+// not a timing: the slots looked at are counted; the time per call is printed, never asserted.)
+TEST(DelayChannel, AReceiveLooksAtTheJitterWindowNotAtEverySampleInFlight) {
+  for (const TimeNs delay : {10 * ms, 100 * ms, 1000 * ms}) {
+    for (const TimeNs jitter : {TimeNs{0}, 3 * ms}) {
+      DelayChannel<int> c({delay, jitter, 0.1, 5}, ms);
+      constexpr int n = 5000;
+      std::uint64_t most = 0, delivered = 0;
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int k = 0; k < n; ++k) {
+        c.send(k * ms, k);
+        const std::uint64_t before = c.scanned();
+        int v = 0;
+        delivered += c.receive(k * ms, v) ? 1 : 0;
+        most = std::max(most, c.scanned() - before);
+      }
+      const double ns =
+          std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / n;
+      // Sent at most jitter + one period before the previous call's oldest undelivered sample
+      // became due, and due by now: jitter/period + 2 slots.
+      EXPECT_LE(most, static_cast<std::uint64_t>(jitter / ms) + 2)
+          << "delay " << delay / ms << " ms, jitter " << jitter / ms << " ms: " << delay / ms
+          << " samples in flight, not the jitter window, looked at";
+      EXPECT_GT(delivered, static_cast<std::uint64_t>(n - delay / ms) / 2) << "samples still arrive";
+      std::printf(
+          "figure: DelayChannel::receive, delay %lld ms, jitter %lld ms, 10 %% loss: at most %llu slots, "
+          "%.2f on average, %.0f ns per send+receive\n",
+          static_cast<long long>(delay / ms), static_cast<long long>(jitter / ms),
+          static_cast<unsigned long long>(most), static_cast<double>(c.scanned()) / n, ns);
+    }
+  }
 }
 
 // A controller: writes servo_cf (force x = its cycle count) through the delay task, reads measured_cp.

@@ -10,6 +10,7 @@
 #include "saw/teleop/delay_task.hpp"
 #include "saw/teleop/laws/wave_variables.hpp"
 #include "saw/teleop/passivity_port.hpp"
+#include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/fake_device.hpp"
 #include "saw/testing/stepper.hpp"
 
@@ -129,6 +130,111 @@ TEST(DelayTask, AWaveIsDeliveredOnceInTheCycleItArrivesNeverRepeated) {
   ASSERT_FALSE(forces.empty()) << "the wave arrived after the link's delay";
   EXPECT_NEAR(forces.front(), std::sqrt(4.0) * 0.5, 1e-12) << "the wave's force, the device at rest";
   for (std::size_t i = 1; i < forces.size(); ++i) EXPECT_EQ(forces[i], 0) << "then a zero wave: " << i;
+}
+
+// A wave law between a master behind its port (and a link) and a slave: how the task starts.
+struct WaveTeleop {
+  // port_b: the port's wave_impedance (scheme wave), or 0 for a port in the passivity scheme, or
+  // -1 for no port at all (the link's source is the device).
+  WaveTeleop(double port_b, double law_b) {
+    saw::teleop::PortConfig pc;
+    pc.scheme = port_b > 0 ? saw::teleop::PortScheme::wave : saw::teleop::PortScheme::passivity;
+    if (port_b > 0) pc.wave_impedance = port_b;
+    port.emplace("port", period(), pc);
+    link.emplace("link", period(), saw::teleop::DelayConfig{{20'000'000, 0, 0, 1}, {20'000'000, 0, 0, 2}, 0});
+    WaveVariableLaw::Settings ls;
+    ls.impedance = law_b;
+    teleop.emplace("teleop", period(), saw::teleop::TeleopConfig{},
+                   saw::teleop::law_spec<WaveVariableLaw>(ls));
+    for (saw::Component* c : {static_cast<saw::Component*>(&master), static_cast<saw::Component*>(&slave),
+                              static_cast<saw::Component*>(&*port), static_cast<saw::Component*>(&*link),
+                              static_cast<saw::Component*>(&*teleop)})
+      manager.add(*c);
+    manager.connect("port", "device", "master", "arm");
+    manager.connect("link", "source", port_b >= 0 ? "port" : "master", "arm");
+    manager.connect("teleop", "master", "link", "arm");
+    manager.connect("teleop", "slave", "slave", "arm");
+  }
+  static saw::TaskConfig period() { return saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0); }
+  // The StartError's text, or "" when the deployment started.
+  std::string start() {
+    try {
+      manager.start_stepped();
+    } catch (const saw::StartError& e) {
+      return e.what();
+    }
+    return "";
+  }
+
+  saw::testing::FakeDevice master{"master"}, slave{"slave"};
+  std::optional<saw::teleop::PassivityPort> port;
+  std::optional<saw::teleop::DelayTask> link;
+  std::optional<saw::teleop::Teleoperation> teleop;
+  saw::Manager manager;
+};
+
+TEST(PassivityPort, SaysItsWaveImpedanceBeforeItsFirstCycleAndZeroOutsideTheWaveScheme) {
+  saw::teleop::PortConfig c;
+  c.scheme = saw::teleop::PortScheme::wave;
+  c.wave_impedance = 3.5;
+  saw::teleop::PassivityPort wave_port("port", WaveTeleop::period(), c);
+  double b = -1;
+  const saw::Command* read = wave_port.provided("arm")->find_command(port::wave_impedance.name);
+  ASSERT_NE(read, nullptr);
+  ASSERT_EQ(read->read(nullptr, &b), Status::ok) << "no row needed: the port has not run";
+  EXPECT_EQ(b, 3.5);
+  c.scheme = saw::teleop::PortScheme::passivity;
+  saw::teleop::PassivityPort tdpa_port("port", WaveTeleop::period(), c);
+  ASSERT_EQ(tdpa_port.provided("arm")->find_command(port::wave_impedance.name)->read(nullptr, &b),
+            Status::ok);
+  EXPECT_EQ(b, 0) << "time-domain passivity has no wave impedance";
+}
+
+TEST(WaveVariableLaw, TheTaskStartsItWhenThePortsImpedanceIsTheLaws) {
+  WaveTeleop rig(3, 3);
+  EXPECT_EQ(rig.start(), "");
+  // Through the link, undelayed: a setting, not a signal.
+  double b = 0;
+  ASSERT_EQ(rig.link->provided("arm")->find_command(port::wave_impedance.name)->read(nullptr, &b),
+            Status::ok);
+  EXPECT_EQ(b, 3);
+}
+
+TEST(WaveVariableLaw, TheTaskRefusesToStartItWhenThePortsImpedanceDiffersNamingBoth) {
+  WaveTeleop rig(2, 3);
+  const std::string why = rig.start();
+  ASSERT_FALSE(why.empty()) << "a wave channel with b = 3 at the slave and b = 2 at the master started";
+  EXPECT_NE(why.find("component 'teleop'"), std::string::npos) << why;
+  EXPECT_NE(why.find("impedance 3 N·s/m"), std::string::npos) << why;
+  EXPECT_NE(why.find("wave_impedance 2 N·s/m"), std::string::npos) << why;
+  EXPECT_NE(why.find("master's port ('port.arm', through 'link.arm')"), std::string::npos) << why;
+  EXPECT_EQ(why.find('\n'), std::string::npos) << "one line: " << why;
+  EXPECT_EQ(rig.master.commands, 0) << "nothing was driven";
+  // Different past the digits a setting is shown with: still refused, and shown apart.
+  const std::string close = WaveTeleop(3 + 1e-9, 3).start();
+  EXPECT_NE(close.find("wave_impedance 3.000000001"), std::string::npos) << close;
+}
+
+TEST(WaveVariableLaw, TheTaskRefusesToStartItWithAPortInThePassivitySchemeOrNoPort) {
+  const std::string passivity = WaveTeleop(0, 3).start();
+  EXPECT_NE(passivity.find("runs time-domain passivity"), std::string::npos) << passivity;
+  const std::string none = WaveTeleop(-1, 3).start();
+  EXPECT_NE(none.find("gives no port_wave_impedance"), std::string::npos) << none;
+}
+
+TEST(WaveVariableLaw, ItsImpedanceIsFixedByTheDeploymentNotSetAtRunTime) {
+  // Changing b at one end mid-run makes the channel non-passive: no set_impedance, only the read.
+  WaveTeleop rig(2, 2);
+  ASSERT_EQ(rig.start(), "");
+  const saw::ProvidedInterface& p = *rig.teleop->provided("teleop");
+  EXPECT_EQ(p.find_command("set_impedance"), nullptr);
+  EXPECT_NE(p.find_command("set_stiffness"), nullptr) << "the other settings still are";
+  double b = 0;
+  ASSERT_NE(p.find_command("impedance"), nullptr);
+  saw::testing::Stepper stepper{rig.manager};
+  stepper({&rig.master, &rig.slave});
+  ASSERT_EQ(p.find_command("impedance")->read(nullptr, &b), Status::ok);
+  EXPECT_EQ(b, 2);
 }
 
 }  // namespace

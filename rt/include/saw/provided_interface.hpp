@@ -130,6 +130,18 @@ class ProvidedInterface {
     };
     add(std::move(c));
   }
+  // Served by `f`, `Status(T&) noexcept`, in the caller's thread (any thread, an RT one too: it
+  // must not allocate, lock or block): for a value that needs no row, readable before the
+  // server's first cycle (a setting fixed at construction). Another process reads it from the
+  // bridge's mirror, which the exporter fills by calling `f` each cycle.
+  template <Plain T, class F>
+  void add_command_read_value(std::string name, F&& f) {
+    Command c;
+    c.name = std::move(name);
+    c.signature = {CommandKind::read, type_info_of<T>()};
+    c.read = [f = std::forward<F>(f)](const void*, void* out) { return f(*static_cast<T*>(out)); };
+    add(std::move(c));
+  }
   // A const, thread-safe function of the qualifier, run in the caller's thread.
   template <Plain Q, Plain R, class F>
   void add_command_qualified_read(std::string name, F&& f) {

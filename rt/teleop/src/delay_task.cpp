@@ -57,10 +57,24 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
   crtk::provide(p, port::remote_energy, [this](const double& e) { pass_energy(e); });
   crtk::provide(p, port::wave, state_table(), &port_wave_);
   crtk::provide(p, port::remote_wave, [this](const Vec3& w) { pass_wave(w); });
+  // Configuration, not a signal: read through at once (undelayed), at start-up as at run time.
+  p.add_command_read_value<double>(std::string(port::wave_impedance.name), [this](double& out) noexcept {
+    return read_impedance_.is_bound() ? read_impedance_(out) : Status::disconnected;
+  });
+  // What this is and whom it carries, for a client that must name the component behind it (the
+  // teleoperation names the port whose wave impedance it checks). Connected before any read.
+  p.add_command_read_value<ComponentDescription>("description", [this](ComponentDescription& d) noexcept {
+    d = ComponentDescription{};
+    ComponentDescription::set(d.kind, "delay");
+    ComponentDescription::set(d.roles[0], "source");
+    ComponentDescription::set(d.servers[0], source_->connected_to());
+    return Status::ok;
+  });
   clutch_ = &crtk::provide(p, arm::clutch);
   operator_present_ = &crtk::provide(p, arm::operator_present);
 
   auto& r = require("source");
+  source_ = &r;
   crtk::require(r, arm::measured_cp, read_cp_);
   crtk::require(r, arm::measured_cv, read_cv_);
   crtk::require(r, arm::servo_cf, write_cf_, Need::optional);
@@ -68,6 +82,7 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
   crtk::require(r, port::remote_energy, write_remote_energy_, Need::optional);
   crtk::require(r, port::wave, read_wave_, Need::optional);
   crtk::require(r, port::remote_wave, write_remote_wave_, Need::optional);
+  crtk::require(r, port::wave_impedance, read_impedance_, Need::optional);
   crtk::require(
       r, arm::clutch, [this](const ButtonEvent& b) { (void)(*clutch_)(b); }, Need::optional);
   crtk::require(

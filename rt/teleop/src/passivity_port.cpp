@@ -28,6 +28,11 @@ PassivityPort::PassivityPort(std::string name, TaskConfig task, PortConfig confi
   crtk::provide(p, port::remote_energy, [this](const double& e) { on_remote_energy(e); });
   crtk::provide(p, port::wave, st, &wave_out_);
   crtk::provide(p, port::remote_wave, [this](const Vec3& v) { on_remote_wave(v); });
+  const double impedance = config_.scheme == PortScheme::wave ? config_.wave_impedance : 0.0;
+  p.add_command_read_value<double>(std::string(port::wave_impedance.name), [impedance](double& out) noexcept {
+    out = impedance;
+    return Status::ok;
+  });
   // What the controller did, for the recorder and a GUI.
   p.add_command_read("port_energy_out", st.add_column("port_energy_out", &energy_out_));
   p.add_command_read("port_dissipated", st.add_column("port_dissipated", &dissipated_));

@@ -1,8 +1,11 @@
 #include "saw/teleop/teleoperation.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
+#include <thread>
 
 #include "saw/crtk_arm.hpp"
 #include "saw/eigen.hpp"
@@ -82,9 +85,54 @@ void Teleoperation::startup() {
         "law '" + std::string(law_->name()) + "' needs a wave port at the master (" +
         std::string(port::wave.name) + ", " + std::string(port::remote_wave.name) +
         "): put a passivity_port with scheme: wave between the master device and the link");
+  check_wave_port();
   // Connected by now: say which components play each role (a client need not guess by name).
   ComponentDescription::set(description_.servers[0], required("master")->connected_to());
   ComponentDescription::set(description_.servers[1], required("slave")->connected_to());
+}
+
+void Teleoperation::check_wave_port() const {
+  if (!law_->uses_waves()) return;
+  // The port, named as the deployment names it: behind a delay task, the component it carries.
+  std::string master = "'" + required("master")->connected_to() + "'";
+  ComponentDescription via{};
+  if (master_.description.is_bound() && master_.description(via) == Status::ok &&
+      ComponentDescription::get(via.kind) == "delay" && !ComponentDescription::get(via.servers[0]).empty())
+    master = "'" + std::string(ComponentDescription::get(via.servers[0])) + "', through " + master;
+  const double law_b = law_->wave_impedance();
+  const std::string law = "law '" + std::string(law_->name()) + "' has impedance " + setting_number(law_b) +
+                          " N·s/m, but the master's port (" + master + ")";
+  if (!master_.wave_impedance.is_bound())
+    throw std::runtime_error(
+        law + " does not say its " + std::string(port::wave_impedance.name) +
+        ": put a passivity_port with scheme: wave between the master device and the link");
+  // A port in another process may not have published its first row yet: wait for it, as the
+  // task waits for its inputs (startup_timeout), at least a second. Not the RT path.
+  const double grace = std::max(1.0, config_.startup_timeout);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace);
+  double port_b = 0;
+  Status st = master_.wave_impedance(port_b);
+  while (st == Status::no_data && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    st = master_.wave_impedance(port_b);
+  }
+  if (st != Status::ok)
+    throw std::runtime_error(law + " gives no " + std::string(port::wave_impedance.name) + " (" +
+                             std::string(saw::to_string(st)) +
+                             "): the master side needs a passivity_port with scheme: wave");
+  if (port_b == 0) throw std::runtime_error(law + " runs time-domain passivity: give the port scheme: wave");
+  // Equal to the last bit: both are the deployment's numbers, carried as float64.
+  if (port_b != law_b) {
+    std::string shown = setting_number(port_b);
+    if (shown == setting_number(law_b)) {  // they differ past %g's digits: say by how much
+      char b[48];
+      std::snprintf(b, sizeof b, "%.17g (%+.3g)", port_b, port_b - law_b);
+      shown = b;
+    }
+    throw std::runtime_error(law + " has wave_impedance " + shown +
+                             " N·s/m: the two ends of a wave channel must share b, or the channel is not "
+                             "passive; set the same value in both");
+  }
 }
 
 void Teleoperation::require_side(Side& s, const char* iface) {
@@ -101,6 +149,8 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   crtk::require(r, port::remote_energy, s.remote_energy, Need::optional);
   crtk::require(r, port::wave, s.wave, Need::optional);
   crtk::require(r, port::remote_wave, s.remote_wave, Need::optional);
+  crtk::require(r, port::wave_impedance, s.wave_impedance, Need::optional);
+  r.add_function("description", s.description, Need::optional);
 }
 
 void Teleoperation::set_operating_state(OperatingStateValue s) noexcept {

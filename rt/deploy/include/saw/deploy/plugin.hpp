@@ -10,7 +10,8 @@ namespace saw::deploy {
 // Bumped whenever a change to the core or deploy libraries means a plug-in built against the
 // old headers would misbehave (class layouts, virtual functions, the registry's API). saw-rt
 // refuses a plug-in whose version differs, naming both.
-inline constexpr std::uint32_t plugin_abi_version = 4;  // 3: saw::Device; 4: LawModel::describe
+inline constexpr std::uint32_t plugin_abi_version =
+    5;  // 3: saw::Device; 4: LawModel::describe; 5: LawModel::wave_impedance
 
 }  // namespace saw::deploy
 

@@ -50,7 +50,7 @@ class DelayChannel {
       ++overwritten_;
       ++tail_;
     }
-    s = Slot{n, now + link_.delay + extra, value};
+    s = Slot{n, now + link_.delay + extra, now + link_.delay, value};
     ++head_;
   }
 
@@ -58,9 +58,14 @@ class DelayChannel {
   // and `out` set, or false (nothing new: the receiver holds what it has).
   bool receive(TimeNs now, T& out) noexcept {
     bool got = false;
-    // In flight in send order; arrival times are not in order (jitter), so each is looked at.
+    // In flight in send order; arrival times are not in order (jitter), so each that may have
+    // arrived is looked at. Once a sample's send time plus delay is past `now`, none sent after it
+    // can have arrived (sent no earlier, it arrives no earlier): the scan stops there, and covers
+    // the jitter window from the oldest sample not yet delivered, not every sample in flight.
     for (std::uint64_t i = tail_; i < head_; ++i) {
       Slot& s = ring_[i % ring_.size()];
+      if (s.earliest > now) break;
+      ++scanned_;
       if (s.arrival == kDelivered || s.arrival > now) continue;
       if (!have_ || s.sequence > last_) {
         out = s.value;  // the newest arrived so far (later ones in the loop are newer still)
@@ -79,6 +84,8 @@ class DelayChannel {
   std::uint64_t lost() const noexcept { return lost_; }
   std::uint64_t late() const noexcept { return late_; }
   std::uint64_t overwritten() const noexcept { return overwritten_; }
+  // Slots receive() has looked at, in all: its cost (bounded per call by the jitter window).
+  std::uint64_t scanned() const noexcept { return scanned_; }
   const LinkConfig& link() const noexcept { return link_; }
 
  private:
@@ -86,6 +93,7 @@ class DelayChannel {
   struct Slot {
     std::uint64_t sequence = 0;
     TimeNs arrival = kDelivered;
+    TimeNs earliest = 0;  // sent + delay: no sample sent after this one arrives before it
     T value{};
   };
   // splitmix64's finaliser: a well-mixed 64-bit value from any input.
@@ -100,7 +108,7 @@ class DelayChannel {
   LinkConfig link_;
   std::vector<Slot> ring_;
   std::uint64_t head_ = 0, tail_ = 0;  // sequence of slots: [tail_, head_) in flight or delivered
-  std::uint64_t sent_ = 0, lost_ = 0, late_ = 0, overwritten_ = 0;
+  std::uint64_t sent_ = 0, lost_ = 0, late_ = 0, overwritten_ = 0, scanned_ = 0;
   std::uint64_t last_ = 0;
   bool have_ = false;
 };

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "saw/crtk_arm.hpp"
+#include "saw/description.hpp"
 #include "saw/task.hpp"
 #include "saw/teleop/delay_channel.hpp"
 #include "saw/teleop/passivity_port.hpp"
@@ -48,11 +49,12 @@ struct DelayConfig {
 // newest arrived is shown and held); force commands through the `commands` link; button events
 // pass through. A source that is a passivity port has its port_energy and port_wave carried with
 // its positions, and port_remote_energy and port_remote_wave travel with the force commands (the
-// same packets). A wave is delivered once, in the cycle its packet arrives: a held (repeated)
-// command carries none, since a repeated wave would bring energy that was never sent. The rows are this
-// task's, stamped with its cycle: "source_time" says when the source wrote the value shown (it stops
-// advancing when the source dies) and "delay" how late it is meant to be, so that a consumer can judge
-// staleness on the source (the teleoperation does).
+// same packets); its port_wave_impedance, a setting, is read through undelayed (disconnected when
+// the source has none); `description` (kind "delay") names the source. A wave is delivered once, in the cycle
+// its packet arrives: a held (repeated) command carries none, since a repeated wave would bring energy that
+// was never sent. The rows are this task's, stamped with its cycle: "source_time" says when the source wrote
+// the value shown (it stops advancing when the source dies) and "delay" how late it is meant to be, so that a
+// consumer can judge staleness on the source (the teleoperation does).
 class DelayTask : public Task {
  public:
   DelayTask(std::string name, TaskConfig task, double delay_seconds);
@@ -91,6 +93,8 @@ class DelayTask : public Task {
   FunctionWrite<double> write_remote_energy_;
   FunctionRead<Vec3> read_wave_;
   FunctionWrite<Vec3> write_remote_wave_;
+  FunctionRead<double> read_impedance_;
+  const RequiredInterface* source_ = nullptr;
   EventWrite<ButtonEvent>* clutch_ = nullptr;
   EventWrite<ButtonEvent>* operator_present_ = nullptr;
 };

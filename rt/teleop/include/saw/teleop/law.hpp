@@ -78,7 +78,8 @@ struct LawContext {
 //                                              // values it computes, shown as the task's state
 //     static constexpr bool uses_ports = true;  // a passive law: the master has a passivity port
 //                                              // (its input energy in, the slave's sent to it)
-//     static constexpr bool uses_waves = true;  // the same, with wave variables
+//     static constexpr bool uses_waves = true;  // the same, with wave variables, and then
+//     double wave_impedance() const noexcept;   // its b: the master port's must be the same
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {

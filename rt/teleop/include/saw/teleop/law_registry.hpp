@@ -32,6 +32,9 @@ class LawModel {
   // The law exchanges energies with a passivity port at the master (law.hpp).
   virtual bool uses_ports() const noexcept = 0;
   virtual bool uses_waves() const noexcept = 0;
+  // For a law that uses_waves: its wave impedance b (N·s/m), which the master's port must share
+  // (the task refuses to start otherwise); 0 for other laws.
+  virtual double wave_impedance() const noexcept = 0;
   // Setup: each declared setting as a latched state column and read command `name`, and (when
   // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`. Each declared
   // read-out as a state column and read command.
@@ -79,6 +82,15 @@ class LawHolder final : public LawModel {
       return L::uses_waves;
     else
       return false;
+  }
+  double wave_impedance() const noexcept override {
+    if constexpr (requires { L::uses_waves; }) {
+      static_assert(
+          !L::uses_waves || requires { law_.wave_impedance(); },
+          "a law that uses_waves says its wave impedance: double wave_impedance() const noexcept");
+      if constexpr (L::uses_waves) return law_.wave_impedance();
+    }
+    return 0;
   }
   void provide_settings(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected) override {
     std::apply([&](const auto&... s) { (provide(p, table, rejected, s), ...); }, L::declared_settings);

@@ -22,6 +22,10 @@ inline constexpr crtk::Write<double> remote_energy{"port_remote_energy"};
 // The wave variables of the port (scheme `wave`): u leaving (with the positions), v arriving.
 inline constexpr crtk::Read<Vec3> wave{"port_wave"};
 inline constexpr crtk::Write<Vec3> remote_wave{"port_remote_wave"};
+// N·s/m: the wave impedance b the port runs with (scheme `wave`), 0 when it runs time-domain
+// passivity. Fixed by the deployment and readable before the port's first cycle (no row needed):
+// a wave law checks its own b against it at start-up (the two ends of a wave channel must share b).
+inline constexpr crtk::Read<double> wave_impedance{"port_wave_impedance"};
 }  // namespace port
 
 // How the port keeps the network passive: time-domain passivity on the forces it is sent, or wave
@@ -39,7 +43,7 @@ struct PortConfig {
 };
 
 // Required "device" (CRTK arm: measured_cp, measured_cv, servo_cf; clutch and operator_present
-// passed through), provided "arm" with the same names plus port_energy and port_remote_energy.
+// passed through), provided "arm" with the same names plus the port's own (namespace port).
 // Each cycle it reads the device, publishes its position and velocity stamped with the device's
 // row time (a dead device shows stale through this task), and applies the newest force command
 // through the passivity controller with the device's velocity of this very cycle: the port gives

@@ -125,6 +125,8 @@ class Teleoperation : public Task {
     double energy = 0;        // the port's input energy, last good read
     FunctionRead<Vec3> wave;  // bound when the device has a wave port
     FunctionWrite<Vec3> remote_wave;
+    FunctionRead<double> wave_impedance;  // the wave port's b, checked against the law's at start-up
+    FunctionRead<ComponentDescription> description;  // a delay task's: the component behind it
     Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();
     bool wave_fresh = false;  // a new wave arrived with this cycle's row
     SideSample last{};
@@ -136,6 +138,8 @@ class Teleoperation : public Task {
     Status status = Status::ok;  // of the last read
   };
   void require_side(Side& s, const char* iface);
+  // Start-up, a law that uses_waves: the master's port runs the wave scheme with the law's b.
+  void check_wave_port() const;
   bool read_side(Side& s, FaultInfo& why) noexcept;
   // True while enabled but a device cannot be driven (busy, paused, disabled): busy, and FAULT
   // once a disabled device has kept it waiting device_timeout.

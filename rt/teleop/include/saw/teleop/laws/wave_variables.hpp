@@ -32,8 +32,12 @@ class WaveVariableLaw {
       "positions may drift)";
   static constexpr bool uses_waves = true;
   static constexpr auto declared_settings = std::tuple{
+      // Fixed by the deployment: both ends of the channel must share b (checked at start-up
+      // against the master's port), and changing it at one end mid-run would break passivity.
       Setting<Settings, double>{"impedance", "N·s/m", 1e-3, 1e3, &Settings::impedance,
-                                "wave impedance b (the master port's wave_impedance must match)"},
+                                "wave impedance b, fixed by the deployment: the master port's wave_impedance "
+                                "must be the same (checked at start)",
+                                /*command=*/false},
       Setting<Settings, double>{"stiffness", "N/m", 0, max_gain, &Settings::stiffness,
                                 "the slave's spring to the wave's integrated velocity"},
       Setting<Settings, double>{"damping", "N·s/m", 0, 100, &Settings::damping, "the slave's damper"},
@@ -43,6 +47,7 @@ class WaveVariableLaw {
 
   WaveVariableLaw(const Settings& s, const LawContext& ctx) : s_(s), dt_(ctx.period) {}
   Settings& settings() noexcept { return s_; }
+  double wave_impedance() const noexcept { return s_.impedance; }
   void reset(const LawInputs& in) noexcept;
   LawCommand step(const LawInputs& in) noexcept;
 
