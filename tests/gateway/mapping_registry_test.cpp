@@ -13,7 +13,10 @@
 #include "saw/gateway/fields_conversion.hpp"
 #include "saw/gateway/type_map.hpp"
 #include "saw/teleop/dds/mappings.hpp"
+#include "saw/teleop/laws/collaborative.hpp"
+#include "saw/teleop/offset_trajectory.hpp"
 #include "saw/teleop/teleop_law.hpp"
+#include "saw/value_check.hpp"
 #include "saw_msgs/msg/MasterSlavePubSubTypes.h"
 
 namespace {
@@ -65,6 +68,41 @@ TEST(MappingRegistry, ATypesFieldsTravelWithoutAConversionWrittenByHand) {
   ASSERT_TRUE(Conv::from_msg(msg, g, why)) << why;
   EXPECT_EQ(g.master, 1.5);
   EXPECT_EQ(g.slave, 2.5);
+}
+
+// The collaborative law's offset limits and prediction: one registration line each, and a value
+// outside the type's own range (its `valid`) refused as the bridge refuses it, before it is sent.
+TEST(MappingRegistry, TheCollaborativeLawsOffsetLimitsAndPredictionAreMapped) {
+  saw::teleop::dds::register_mappings(mapping_registry());
+  const auto* limits = find_mapping(saw::type_info_of<saw::teleop::OffsetLimits>().name);
+  const auto* prediction = find_mapping(saw::type_info_of<saw::teleop::Prediction>().name);
+  ASSERT_NE(limits, nullptr);
+  ASSERT_NE(prediction, nullptr);
+  EXPECT_EQ(limits->dds_type(), "saw_msgs::msg::dds_::OffsetLimits_");
+  EXPECT_EQ(prediction->dds_type(), "saw_msgs::msg::dds_::Prediction_");
+  std::string why;
+  saw::teleop::OffsetLimits l;
+  ASSERT_TRUE(limits->from_text("0.1 1 20", &l, why)) << why;
+  EXPECT_EQ(l.velocity, 0.1);
+  EXPECT_EQ(l.acceleration, 1);
+  EXPECT_EQ(l.jerk, 20);
+  EXPECT_EQ(limits->to_text(&l), "0.1 1 20");
+  EXPECT_FALSE(limits->from_text("50 1 20", &l, why)) << "a velocity above 10 m/s";
+  EXPECT_NE(why.find("outside its type's range"), std::string::npos) << why;
+  EXPECT_FALSE(limits->from_text("0.1 0 20", &l, why)) << "a zero acceleration";
+  saw::teleop::Prediction p;
+  // (after a refusal: the reason of the last one is not taken for this one's)
+  ASSERT_TRUE(prediction->from_text("1 0.02 0.01", &p, why)) << why;
+  EXPECT_TRUE(p.enabled);
+  EXPECT_EQ(p.master_horizon, 0.02);
+  EXPECT_EQ(p.slave_horizon, 0.01);
+  EXPECT_EQ(prediction->to_text(&p), "1 0.02 0.01");
+  EXPECT_FALSE(prediction->from_text("1 2 0", &p, why)) << "a horizon above 1 s";
+  EXPECT_FALSE(prediction->from_text("2 0.02 0", &p, why)) << "a flag that is not 0 or 1";
+  // The bridge's check is the same: what the gateway lets through, the exporter takes.
+  EXPECT_FALSE(saw::check_value(saw::teleop::Prediction{true, -0.1, 0}));
+  EXPECT_FALSE(saw::check_value(saw::teleop::OffsetLimits{0.05, 0.5, 1e6}));
+  EXPECT_TRUE(saw::check_value(saw::teleop::OffsetLimits{}));
 }
 
 // Three numbers where the message has two, and a type with a flag where it has a number.

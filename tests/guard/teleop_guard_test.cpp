@@ -93,6 +93,7 @@ class Console : public saw::Task {
     r.add_function("set_gains", gains_);
     r.add_function("set_force_limits", limits_);
     r.add_function("set_prediction", prediction_);
+    r.add_function("set_offset_limits", offset_limits_);
     r.add_function("set_slave_offset", offset_);
     r.add_event_handler_write<saw::OperatingState>("operating_state", [this](const saw::OperatingState& s) {
       if (seen_ < states_.size()) states_[seen_++] = s.state;
@@ -114,6 +115,8 @@ class Console : public saw::Task {
         return send(limits_(saw::teleop::ForceLimits{2, 2}));
       case 40:
         return send(prediction_(saw::teleop::Prediction{true, 0.01, 0.01}));
+      case 45:  // new limits for the offset's trajectory (on its way next cycle)
+        return send(offset_limits_(saw::teleop::OffsetLimits{0.1, 1.0, 20.0}));
       case 50:
         return send(offset_(saw::Vec3{0.01, 0, 0}));
       case 60:
@@ -133,6 +136,7 @@ class Console : public saw::Task {
         send(gains_(saw::teleop::Gains{-1, 50}));
         send(limits_(saw::teleop::ForceLimits{nan, 2}));
         send(prediction_(saw::teleop::Prediction{true, 5.0, 0}));
+        send(offset_limits_(saw::teleop::OffsetLimits{50.0, 1.0, 20.0}));
         return send(offset_(saw::Vec3{nan, 0, 0}));
       case 130:  // rescale and re-enable in one cycle
         send(scale_(1.0));
@@ -155,6 +159,7 @@ class Console : public saw::Task {
   saw::FunctionWrite<saw::teleop::Gains> gains_;
   saw::FunctionWrite<saw::teleop::ForceLimits> limits_;
   saw::FunctionWrite<saw::teleop::Prediction> prediction_;
+  saw::FunctionWrite<saw::teleop::OffsetLimits> offset_limits_;
   saw::FunctionWrite<saw::Vec3> offset_;
 };
 
@@ -179,8 +184,8 @@ TEST(RtGuard, EveryTeleoperationCommandIsRtClean) {
   rig.manager.stop();
   const auto counts = window.counts();
   EXPECT_EQ(rig.op.failed_, 0) << "every command should have been queued";
-  EXPECT_EQ(rig.op.sent_, 18);
-  EXPECT_GE(rig.teleop.rejected_commands(), 5u) << "the invalid commands should have been refused";
+  EXPECT_EQ(rig.op.sent_, 20);
+  EXPECT_GE(rig.teleop.rejected_commands(), 6u) << "the invalid commands should have been refused";
   ASSERT_EQ(rig.op.seen_, 4u);  // the last enable finds it enabled: no change, no event
   EXPECT_EQ(rig.op.states_[0], OperatingStateValue::paused);
   EXPECT_EQ(rig.op.states_[1], OperatingStateValue::enabled);

@@ -88,7 +88,8 @@ def main(saw_rt, saw_gateway, sawctl):
 
 def teleop_settings(saw_rt, sawctl, domain):
     """The teleoperation's settings over DDS: their bounds are in the registry, sawctl refuses a
-    value outside them before sending, and a valid one is delivered."""
+    value outside them (or its type's range) before sending, a valid one is delivered, and each
+    setting's read-back shows the value in force."""
     config = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "config", "teleop-sim.yaml")
     tele = f"teleop{os.getpid()}"  # its own shared-memory segment, beside other tests' deployments
     with open(config) as src, tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
@@ -116,10 +117,37 @@ def teleop_settings(saw_rt, sawctl, domain):
         check(rc == 0 and "delivered" in out, f"valid force limits are delivered: {out.strip()}")
         rc, out = ctl("call", f"rt/{tele}/set_scale", "0.5")
         check(rc == 0 and "delivered" in out, f"a scale is delivered: {out.strip()}")
+        # The collaborative law's offset limits and prediction: read back, set, refused out of range.
+        rc, out = ctl("echo", f"rt/{tele}/offset_limits")
+        check(rc == 0 and "0.05 0.5 10" in out, f"the offset limits in force are read back: {out.strip()}")
+        rc, out = ctl("call", f"rt/{tele}/set_offset_limits", "50", "0.5", "10")
+        check(rc == 2 and "outside its type's range" in out,
+              f"an offset velocity above 10 m/s is refused before sending: {out.strip()}")
+        rc, out = ctl("call", f"rt/{tele}/set_offset_limits", "0.1", "1", "20")
+        check(rc == 0 and "delivered" in out, f"valid offset limits are delivered: {out.strip()}")
+        check(echoed(ctl, f"rt/{tele}/offset_limits", "0.1 1 20"), "the new offset limits are read back")
+        rc, out = ctl("call", f"rt/{tele}/set_prediction", "1", "2", "0")
+        check(rc == 2 and "outside its type's range" in out,
+              f"a prediction horizon above 1 s is refused before sending: {out.strip()}")
+        rc, out = ctl("call", f"rt/{tele}/set_prediction", "1", "0.02", "0.01")
+        check(rc == 0 and "delivered" in out, f"a prediction is delivered: {out.strip()}")
+        check(echoed(ctl, f"rt/{tele}/prediction", "1 0.02 0.01"), "the new prediction is read back")
     finally:
         rt.terminate()
         rt.wait(timeout=20)
         os.unlink(f.name)
+
+
+def echoed(ctl, topic, text, attempts=10):
+    """Whether `sawctl echo` of a latched read-back prints `text` within `attempts` echoes (the
+    value set arrives a cycle after the command, the echo may have caught the one before)."""
+    out = ""
+    for _ in range(attempts):
+        rc, out = ctl("echo", topic)
+        if rc == 0 and text in out:
+            return True
+    print(f"{topic}: last echo {out.strip()!r}, expected {text!r}")
+    return False
 
 
 def deployment(name, domain):

@@ -1,21 +1,20 @@
 // The teleoperation task against fake devices, on the stepped clock: clutch, ratchet, faults,
 // jerk-limited offsets, run-time settings, delay and prediction.
-#include "saw/teleop/teleoperation.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/teleop_rig.hpp"
 #include "teleop_support.hpp"
 
 namespace {
 
-using saw::testing::TeleopConfig;
 using saw::testing::basic;
 using saw::testing::dist;
 using saw::testing::norm;
 using saw::testing::Rig;
+using saw::testing::TeleopConfig;
 
 TEST(CollaborativeControlForce, EnablingWithDevicesApartMakesNoForce) {
   Rig rig(basic());
@@ -153,6 +152,34 @@ TEST(CollaborativeControlForce, AlignmentPullsTheSlaveAlongAJerkLimitedPath) {
   // A jump would be k·5 cm = 5 N in one cycle; the offset moves at ≤ 5 cm/s: ≤ 0.005 N/cycle.
   EXPECT_LE(max_step, 0.005 + 1e-9);
   EXPECT_NEAR(rig.slave.force[0], 5.0, 1e-6) << "the offset reached its configured value";
+}
+
+// The offset's limits are a run-time setting: faster limits set while it travels bring it there
+// sooner; limits outside their range are refused, counted, and leave those in force.
+TEST(CollaborativeControlForce, OffsetLimitsSetAtRunTimeChangeTheAlignment) {
+  TeleopConfig c = basic();
+  c.limits = {100, 100};
+  c.align = true;
+  c.slave_offset = {0, 0, 0};
+  c.offset_limits = {0.01, 0.1, 1};  // 5 cm at 1 cm/s: more than 5 s
+  Rig rig(c);
+  rig.master.position = {0.05, 0, 0};
+  rig.step(100);
+  ASSERT_LT(rig.slave.force[0], 1.0) << "still travelling at the slow limits";
+  ASSERT_EQ(rig.op.set_offset_limits({50, 20, 1000}), saw::Status::ok);  // 50 m/s: out of range
+  rig.step(2);
+  EXPECT_EQ(rig.teleop.rejected_commands(), 1u);
+  saw::teleop::OffsetLimits in_force;
+  const auto* read = rig.teleop.provided("teleop")->find_command("offset_limits");
+  ASSERT_NE(read, nullptr);
+  ASSERT_EQ(read->read(nullptr, &in_force), saw::Status::ok);
+  EXPECT_EQ(in_force.velocity, 0.01);
+  ASSERT_EQ(rig.op.set_offset_limits({0.5, 20, 1000}), saw::Status::ok);
+  rig.step(900);  // 1 s in all: the slow limits would have carried it 1 cm at most
+  ASSERT_EQ(read->read(nullptr, &in_force), saw::Status::ok);
+  EXPECT_EQ(in_force.velocity, 0.5);
+  EXPECT_NEAR(rig.slave.force[0], 5.0, 1e-6) << "the offset reached its configured value";
+  EXPECT_EQ(rig.teleop.offset_errors(), 0u);
 }
 
 TEST(CollaborativeControlForce, StaleMasterFaultsWithZeroForceUntilReEnabled) {

@@ -26,6 +26,7 @@ class Operator : public saw::Component {
     r.add_function("set_prediction", set_prediction);
     r.add_function("set_force_limits", set_force_limits);
     r.add_function("set_slave_offset", set_slave_offset);
+    r.add_function("set_offset_limits", set_offset_limits);
     r.add_function("operating_state", operating_state);
     r.add_function("fault", fault);
     r.add_event_handler_write<saw::teleop::FaultInfo>(
@@ -37,6 +38,7 @@ class Operator : public saw::Component {
   saw::FunctionWrite<saw::teleop::Prediction> set_prediction;
   saw::FunctionWrite<saw::teleop::ForceLimits> set_force_limits;
   saw::FunctionWrite<saw::Vec3> set_slave_offset;
+  saw::FunctionWrite<saw::teleop::OffsetLimits> set_offset_limits;
   saw::FunctionRead<saw::OperatingState> operating_state;
   saw::FunctionRead<saw::teleop::FaultInfo> fault;
   std::vector<saw::teleop::FaultInfo> fault_events;

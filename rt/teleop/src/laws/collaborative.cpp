@@ -24,11 +24,6 @@ std::string SettingCodec<Prediction>::text(const Prediction& v) {
          "}";
 }
 
-bool SettingCodec<OffsetLimits>::within(const OffsetLimits& v, double, double) noexcept {
-  const auto in = [](double x, double hi) { return SettingCodec<double>::within(x, min, hi); };
-  return in(v.velocity, max_velocity) && in(v.acceleration, max_acceleration) && in(v.jerk, max_jerk);
-}
-
 OffsetLimits SettingCodec<OffsetLimits>::parse(const deploy::Params& p, const std::string& key, double,
                                                double, const OffsetLimits& fallback) {
   const deploy::Params c = p.child(key);

@@ -28,7 +28,8 @@ namespace saw::gateway {
 //   @final struct Spring { std_msgs::msg::Header header; double stiffness; double max_force; };
 // The members are carried through their CDR form (the same bytes both ways), so no conversion is
 // written by hand; a sample from a peer is checked with saw::check_value (every number finite, a
-// bool 0 or 1, the type's `valid`). Text is the numbers in order ("300 1.5"). Registered with
+// bool 0 or 1, the type's `valid`; a refusal quotes the type's optional `range`, a text saying
+// what `valid` wants). Text is the numbers in order ("300 1.5"). Registered with
 // MappingRegistry::add_fields<Rt, PubSub>(), which refuses a message whose members do not carry
 // the fields (another count or type); two members of one type swapped it cannot see.
 template <class Rt, class Msg>
@@ -61,6 +62,19 @@ struct FieldsConv {
 
   static bool from_msg(const Msg& m, Rt& v, std::string& why) {
     Rt read{};
+    if (!unpack(m, read, why)) return false;
+    if (!saw::check_value(read)) {
+      why = "a number is not finite, or a value is outside its type's range";
+      if constexpr (requires { Rt::range; }) why += " (" + std::string(Rt::range) + ")";
+      return false;
+    }
+    v = read;
+    return true;
+  }
+
+  // The message's members into `read`, unchecked (add_fields' probe of the layout; a peer's
+  // sample goes through from_msg).
+  static bool unpack(const Msg& m, Rt& read, std::string& why) {
     try {
       eprosima::fastcdr::FastBuffer out;
       eprosima::fastcdr::Cdr w(out, eprosima::fastcdr::Cdr::DEFAULT_ENDIAN, eprosima::fastcdr::Cdr::DDS_CDR);
@@ -77,11 +91,6 @@ struct FieldsConv {
           std::string("the message does not carry ") + std::string(type_info_of<Rt>().name) + ": " + e.what();
       return false;
     }
-    if (!saw::check_value(read)) {
-      why = "a number is not finite, or a value is outside its type's range";
-      return false;
-    }
-    v = read;
     return true;
   }
 
@@ -139,7 +148,8 @@ void MappingRegistry::add_fields() {
   using Msg = typename PubSub::type;
   using Conv = FieldsConv<Rt, Msg>;
   // A probe of distinct numbers through the message and back: a message with other members (a
-  // count, a type) loses or garbles them, or runs out of bytes.
+  // count, a type) loses or garbles them, or runs out of bytes. Unchecked: the probe's numbers
+  // need not be within the type's range (its `valid`).
   Rt probe{};
   double next = 1;
   Conv::each_scalar(
@@ -155,7 +165,7 @@ void MappingRegistry::add_fields() {
   try {
     Msg m;
     Conv::to_msg(probe, m);
-    if (Conv::from_msg(m, back, why)) {
+    if (Conv::unpack(m, back, why)) {
       std::vector<double> a, b;
       Conv::each(probe, a);
       Conv::each(back, b);

@@ -165,6 +165,7 @@ class TypedMapping final : public Mapping {
   }
 
   bool from_text(std::string_view text, void* value, std::string& why) const override {
+    why.clear();  // (a parser may read a non-empty `why` as its own failure)
     Rt v{};
     if (!Conv::parse(text, v, why)) return false;
     // Through the message and back: the same validation as a sample arriving from DDS.

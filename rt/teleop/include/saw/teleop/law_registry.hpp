@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -186,6 +187,10 @@ class LawRegistry {
   // of the task's own keys (`reserved`). The same law again is no change.
   template <Law L>
   void add() {
+    static_assert(std::tuple_size_v<std::remove_cvref_t<decltype(L::declared_settings)>> <=
+                      ComponentDescription::max_settings,
+                  "a law declares at most ComponentDescription::max_settings settings: its description "
+                  "(and a GUI's panel made from it) carries no more");
     Entry e;
     e.identity = &L::name;
     e.description = std::string(L::description);

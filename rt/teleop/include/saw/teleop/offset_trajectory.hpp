@@ -10,7 +10,7 @@
 namespace saw::teleop {
 
 struct OffsetLimits {
-  // Crosses processes as the collaborative law's read-back `offset_limits`.
+  // Crosses processes as the collaborative law's set_offset_limits and its read-back `offset_limits`.
   static constexpr std::string_view type_name = "saw::teleop::OffsetLimits";
   static constexpr std::uint32_t layout_version = 1;
   double velocity = 0.05;     // m/s
@@ -18,6 +18,14 @@ struct OffsetLimits {
   double jerk = 10.0;         // m/s³
   static constexpr auto fields =
       std::tuple{&OffsetLimits::velocity, &OffsetLimits::acceleration, &OffsetLimits::jerk};
+  // Each limit within [smallest, its max]: beyond them Ruckig's plans degenerate or the offset
+  // jumps. Checked where a value enters from another process (saw::check_value) and by the task.
+  static constexpr double smallest = 1e-6, max_velocity = 10, max_acceleration = 1e3, max_jerk = 1e5;
+  static constexpr std::string_view range = "each ≥ 1e-6; velocity ≤ 10, acceleration ≤ 1e3, jerk ≤ 1e5";
+  static bool valid(const OffsetLimits& v) noexcept {
+    const auto in = [](double x, double hi) { return x >= smallest && x <= hi; };  // false for NaN
+    return in(v.velocity, max_velocity) && in(v.acceleration, max_acceleration) && in(v.jerk, max_jerk);
+  }
 };
 
 // Fixed 3 DoF: Ruckig's update() then allocates nothing. The offset moves only through

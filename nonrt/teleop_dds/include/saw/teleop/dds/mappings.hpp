@@ -5,8 +5,8 @@
 
 namespace saw::teleop::dds {
 
-// One line per type: Gains and ForceLimits (set_gains, set_force_limits, their read-backs) as
-// saw_msgs/MasterSlave.
+// One line per type, each with its set_<name> command and read-back: Gains and ForceLimits as
+// saw_msgs/MasterSlave, OffsetLimits as saw_msgs/OffsetLimits, Prediction as saw_msgs/Prediction.
 void register_mappings(gateway::MappingRegistry& registry);
 
 }  // namespace saw::teleop::dds

@@ -23,8 +23,17 @@ struct Prediction {
   bool enabled = false;
   double master_horizon = 0.0;  // s
   double slave_horizon = 0.0;   // s
+  static constexpr auto fields =
+      std::tuple{&Prediction::enabled, &Prediction::master_horizon, &Prediction::slave_horizon};
+  // Each horizon within [0, max_horizon] (false for NaN): what the setting's bounds say.
+  static constexpr std::string_view range = "each horizon within [0, 1] s";
+  static bool valid(const Prediction& v) noexcept {
+    return v.master_horizon >= 0 && v.master_horizon <= max_horizon && v.slave_horizon >= 0 &&
+           v.slave_horizon <= max_horizon;
+  }
 };
-// Crosses processes byte for byte (set_prediction).
+// Crosses processes byte for byte (set_prediction; saw_msgs/Prediction over DDS).
+static_assert(max_horizon == 1.0, "Prediction::range says 1 s");
 static_assert(sizeof(Prediction) == 24 && offsetof(Prediction, master_horizon) == 8 &&
               offsetof(Prediction, slave_horizon) == 16);
 
@@ -49,8 +58,10 @@ struct SettingCodec<OffsetLimits> {
   static constexpr std::string_view shape = "{velocity, acceleration, jerk}";
   static constexpr std::uint32_t count = 3;
   static constexpr bool declares_limits = false;
-  static constexpr double min = 1e-6, max_velocity = 10, max_acceleration = 1e3, max_jerk = 1e5;
-  static bool within(const OffsetLimits& v, double, double) noexcept;
+  static constexpr double min = OffsetLimits::smallest, max_velocity = OffsetLimits::max_velocity,
+                          max_acceleration = OffsetLimits::max_acceleration,
+                          max_jerk = OffsetLimits::max_jerk;
+  static bool within(const OffsetLimits& v, double, double) noexcept { return OffsetLimits::valid(v); }
   static OffsetLimits parse(const deploy::Params& p, const std::string& key, double lo, double hi,
                             const OffsetLimits& fallback);
   static std::string text(const OffsetLimits& v);
@@ -95,8 +106,7 @@ class CollaborativeLaw {
                               "at a force limit the slave offset slips instead of the force growing", false},
       Setting<Settings, OffsetLimits>{"offset_limits", "m/s, m/s², m/s³", SettingCodec<OffsetLimits>::min,
                                       SettingCodec<OffsetLimits>::max_jerk, &Settings::offset_limits,
-                                      "the offset trajectory's limits (velocity ≤ 10, acceleration ≤ 1e3)",
-                                      false},
+                                      "the offset trajectory's limits (velocity ≤ 10, acceleration ≤ 1e3)"},
       Setting<Settings, Prediction>{"prediction", "s", 0, max_horizon, &Settings::prediction,
                                     "Euler prediction over each side's horizon (eq. 7)"},
       Setting<Settings, bool>{"align", "", 0, 1, &Settings::align,
