@@ -7,6 +7,12 @@ count written "10full" is ten subscribers reading every row instead (`sawgui --f
 the window read before the gateway had display streams). One run, the configurations one after
 the other; prints a Markdown table and writes JSON (figures, no assertion).
 
+Every subscriber counts the same window, which starts once all of them read (ten python processes
+starting at once on one CPU take seconds to import) and ends while saw-rt still runs (it is stopped
+after): a subscriber counts the state samples the gateway wrote in the window (by their source
+time), and what it did not take is split into what Cyclone DDS counted lost on the way (or
+rejected), reader histories that filled (samples overwritten), and the rest (not written).
+
 The configurations alternate (0, 1, 10, 10full, 0, 1, ...) for --rounds rounds, so that what the
 machine's other load does to the RT CPU falls on each alike; the table gives each one's median.
 
@@ -54,6 +60,7 @@ exports:
   - {{component: slave_{tag}, provided: arm}}
   - {{component: teleop_{tag}, provided: teleop}}
 """
+GATEWAY = re.compile(r"published (\d+) state samples \(and (\d+) on display streams; (\d+) rows skipped\)")
 ROW = re.compile(r"^\s+(\S+)\s+1\.00ms\s+(\d+)\s+(\d+)\s+(\d+)\s+([\d.]+)us\s+([\d.]+)us\s+([\d.]+)us\s+([\d.]+)us",
                  re.M)
 
@@ -88,8 +95,10 @@ def one(args, conf: str, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> 
     with os.fdopen(fd, "w") as f:
         f.write(DEPLOYMENT.format(tag=tag, cpu=rt_cpu))
     names = [f"{c}_{tag}" for c in ("master", "slave", "teleop")]
-    warmup = 3.0
-    rt = subprocess.Popen([args.saw_rt, yaml, "--duration", str(args.seconds + warmup + 1)],
+    settle = 3.0  # s after the last subscriber is ready: discovery, its readers opened and matched
+    # saw-rt runs until the window has ended (SIGTERM then: an orderly stop with its summary), so
+    # that every subscriber's window falls while the RT tasks and the gateway run.
+    rt = subprocess.Popen([args.saw_rt, yaml, "--duration", str(args.seconds + 120)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     on_other = ["taskset", "-c", str(other_cpu)]
     attach = [a for c in names for a in ("--attach", c)]
@@ -97,18 +106,33 @@ def one(args, conf: str, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> 
                                       "--display-rate", str(args.display_rate)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "nonrt", "python"), PYTHONDONTWRITEBYTECODE="1")
-    sawgui = [sys.executable, "-m", "sawgui", "--domain", str(domain), "--headless", str(args.seconds + warmup),
-              "--settle", str(warmup)] + (["--full-rate"] if full else [])
-    subs = [subprocess.Popen(on_other + sawgui, stdout=subprocess.PIPE, text=True, env=env) for _ in range(n)]
+    sawgui = [sys.executable, "-m", "sawgui", "--domain", str(domain), "--headless", str(args.seconds + 110),
+              "--window-stdin"] + (["--full-rate"] if full else [])
+    launched = time.time()
+    subs = [subprocess.Popen(on_other + sawgui, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+            for _ in range(n)]
+    rt_covered = True
     try:
-        time.sleep(warmup)  # the gateway attaches, subscribers discover it (their reports say if they did)
+        # Each subscriber says "ready" once its DDS participant reads (python and Cyclone DDS
+        # imported: seconds when ten start at once on one CPU); then all count the same window.
+        for s in subs:
+            s.stdout.readline()
+        ready_s = time.time() - launched
+        start = max(time.time() + settle, launched + 3.0)
+        end = start + args.seconds
+        for s in subs:
+            s.stdin.write(f"{start!r} {end!r}\n")
+            s.stdin.flush()
+        time.sleep(max(0.0, start - time.time()))
         gw_cpu0 = cpu_seconds(gw.pid)
-        time.sleep(args.seconds)
+        time.sleep(max(0.0, end - time.time()))
         gw_cpu = cpu_seconds(gw.pid) - gw_cpu0
         reports = []
         for s in subs:
             out, _ = s.communicate(timeout=60)
             reports.append(json.loads(out.strip().splitlines()[-1]) if out.strip() else {})
+        rt_covered = rt.poll() is None  # still running after every subscriber's window
+        rt.send_signal(signal.SIGTERM)
         rt_out, _ = rt.communicate(timeout=60)
     finally:
         for p in [*subs, rt]:
@@ -117,20 +141,46 @@ def one(args, conf: str, tag: str, domain: int, rt_cpu: int, other_cpu: int) -> 
         gw.send_signal(signal.SIGTERM)
         gw_out, _ = gw.communicate(timeout=20)
         os.unlink(yaml)
+    if not rt_covered:
+        raise SystemExit(f"gui_scale: saw-rt stopped before the subscribers' window ended ({conf} subscribers)")
     tasks = {m.group(1): {"cycles": int(m.group(2)), "overruns": int(m.group(3)), "missed": int(m.group(4)),
                           "p99_us": float(m.group(7)), "max_us": float(m.group(8))}
              for m in ROW.finditer(rt_out) if m.group(1) in names}
-    published = re.search(r"published (\d+) state samples", gw_out)
-    samples = [sum(r.get("settled", {}).get("samples", {}).values()) for r in reports]
+    gwsum = GATEWAY.search(gw_out)
+    expected = state_rate_hz(full, args.display_rate) * args.seconds
+    shares = [share(r.get("window", {}), expected, names) for r in reports]
     return {"subscribers": n, "full_rate": full, "configuration": conf, "tasks": tasks, "overruns": sum(t["overruns"] for t in tasks.values()),
             "p99_us": max((t["p99_us"] for t in tasks.values()), default=None),
             "gateway_cpu_percent": 100 * gw_cpu / args.seconds,
-            "gateway_published": int(published.group(1)) if published else None,
-            "samples_per_subscriber": samples, "topics_per_subscriber": [len(r.get("samples", {})) for r in reports],
-            "subscriber_cpu_percent": [100 * r.get("settled", {}).get("cpu_s", 0) / args.seconds for r in reports],
+            "gateway_published": int(gwsum.group(1)) if gwsum else None,
+            "gateway_displayed": int(gwsum.group(2)) if gwsum else None,
+            "gateway_rows_skipped": int(gwsum.group(3)) if gwsum else None,
+            "ready_seconds": ready_s,
+            "samples_per_subscriber": [x["samples"] for x in shares],
+            "lost_per_subscriber": [x["lost"] for x in shares],
+            "unaccounted_per_subscriber": [x["unaccounted"] for x in shares],
+            "full_takes_per_subscriber": [x["full_takes"] for x in shares],
+            "topics_per_subscriber": [len(r.get("samples", {})) for r in reports],
+            "subscriber_cpu_percent": [100 * (r.get("window", {}).get("cpu_s") or 0) / args.seconds for r in reports],
             # What the subscribers' state topics carry per second (the others are events and states on change).
             "state_rate_hz": state_rate_hz(full, args.display_rate), "display_rate_hz": args.display_rate,
             "seconds": args.seconds, "rt_summary": [l for l in rt_out.splitlines() if "1.00ms" in l]}
+
+
+def share(window: dict, expected: float, names) -> dict:
+    """One subscriber's state samples in the common window (sawgui --window-stdin's report): those
+    taken; those Cyclone DDS counted lost on the way (best effort: a gap in the gateway's sequence
+    numbers) or rejected; takes that emptied a full reader history (its oldest samples overwritten);
+    and the rest of `expected` (the streams' rates times the window): not written by the gateway in
+    the window, or overwritten unseen."""
+    # This run's components' state streams (not the latched states): the domain is picked from the
+    # pid, and another deployment on this machine may share it.
+    topics = [t for name, t in window.get("topics", {}).items()
+              if t["samples"] > 2 and any(f"/{c}/" in name for c in names)]
+    taken = sum(t["samples"] for t in topics)
+    lost = sum(t["lost"] + t["rejected"] for t in topics)
+    return {"samples": taken, "lost": lost, "unaccounted": round(expected) - taken - lost,
+            "full_takes": sum(t["full_takes"] for t in topics)}
 
 
 def main():
@@ -153,8 +203,9 @@ def main():
           f"{args.seconds:g} s measured per configuration, {args.rounds} round(s) alternating; "
           "RT figures over the whole run of each")
     print("| subscribers | RT overruns, each round | wake-up p99 median (range), worst task (µs) | × none | "
-          "gateway CPU | samples each subscriber took (min–max) | subscriber CPU |")
-    print("|---|---|---|---|---|---|---|")
+          "gateway CPU | samples each subscriber took (min–max) | not taken, all subscribers: lost by DDS / "
+          "not written or not seen; full reader histories | subscribers ready after | subscriber CPU |")
+    print("|---|---|---|---|---|---|---|---|---|")
     summary = []
     for conf in counts:
         n, full = parse_count(conf)
@@ -162,12 +213,17 @@ def main():
         mine = [r for r in runs if r["configuration"] == conf]
         p99 = sorted(r["p99_us"] for r in mine if r["p99_us"] is not None)
         samples = [x for r in mine for x in r["samples_per_subscriber"]]
+        split = {k: [x for r in mine for x in r[f"{k}_per_subscriber"]] for k in ("lost", "unaccounted", "full_takes")}
         cpu = [x for r in mine for x in r["subscriber_cpu_percent"]]
         summary.append({"subscribers": n, "full_rate": full, "configuration": conf,
                         "overruns": [r["overruns"] for r in mine],
                         "p99_median_us": p99[len(p99) // 2] if p99 else None, "p99_us": p99,
                         "gateway_cpu_percent": sum(r["gateway_cpu_percent"] for r in mine) / len(mine),
                         "samples_per_subscriber": samples, "subscriber_cpu_percent": cpu,
+                        "lost_per_subscriber": split["lost"], "unaccounted_per_subscriber": split["unaccounted"],
+                        "full_takes_per_subscriber": split["full_takes"],
+                        "ready_seconds": max((r["ready_seconds"] for r in mine), default=0.0),
+                        "gateway_rows_skipped": [r["gateway_rows_skipped"] for r in mine],
                         "state_rate_hz": rate, "display_rate_hz": args.display_rate, "seconds": args.seconds})
     base = summary[0]["p99_median_us"] or 0
     for x in summary:
@@ -178,7 +234,9 @@ def main():
               f"{x['p99_median_us']} ({x['p99_us'][0]}–{x['p99_us'][-1]}) | {ratio} | {x['gateway_cpu_percent']:.1f} % | "
               + (f"{min(s_)}–{max(s_)} in {args.seconds:g} s, {min(s_) / (rate * args.seconds):.1%}–"
                  f"{max(s_) / (rate * args.seconds):.1%} of {rate:g} samples/s" if s_ else "–")
-              + " | " + (f"{sum(x['subscriber_cpu_percent']) / len(x['subscriber_cpu_percent']):.1f} % each"
+              + " | " + (f"{sum(x['lost_per_subscriber'])} / {sum(x['unaccounted_per_subscriber'])}; "
+                         f"{sum(x['full_takes_per_subscriber'])}" if s_ else "–")
+              + f" | {x['ready_seconds']:.1f} s | " + (f"{sum(x['subscriber_cpu_percent']) / len(x['subscriber_cpu_percent']):.1f} % each"
                          if x["subscriber_cpu_percent"] else "–") + " |")
     if args.json:
         with open(args.json, "w") as f:

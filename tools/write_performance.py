@@ -1,9 +1,10 @@
 """Writes docs/performance.md from the outputs tools/performance.sh collected.
 
-usage: write_performance.py DIR OUT.md [--only can|gui]
+usage: write_performance.py DIR OUT.md [--only can|gui|gui-scale]
 Every figure in the file comes from DIR (this run); the prose says how to read them. With
---only can (gui), only the CANopen (remote GUIs) section of an existing OUT.md is replaced
-(tools/performance.sh --can, --gui).
+--only can (gui), only the CANopen (remote GUIs and window) sections of an existing OUT.md are
+replaced (tools/performance.sh --can, --gui); --only gui-scale, only the subscribers' section
+(DIR holding tools/gui_scale.py's gui.json alone).
 """
 import datetime
 import json
@@ -233,6 +234,45 @@ def gui_section(r):
     base = confs[0]["p99_median_us"]
     ten = next((x for x in confs if x["subscribers"] == 10 and not x.get("full_rate")), confs[-1])
     full = next((x for x in confs if x.get("full_rate")), None)
+    one_sub = next((x for x in confs if x["subscribers"] == 1), ten)
+
+    def ready(x):
+        return x.get("ready_seconds", float("nan"))
+
+    def took(x):  # "a–b %" of what each subscriber of configuration x took
+        s, expect = x["samples_per_subscriber"], x.get("state_rate_hz", 0) * x["seconds"]
+        return f"{min(s) / expect:.1%}–{max(s) / expect:.1%}" if s and expect else "–"
+
+    def not_taken(x):
+        return (sum(x.get("lost_per_subscriber", [])), sum(x.get("full_takes_per_subscriber", [])),
+                sum(x.get("unaccounted_per_subscriber", [])))
+    counted = "lost_per_subscriber" in ten  # the common window's count (an older gui.json has not)
+    same_unwritten = all(len(set(r.get("unaccounted_per_subscriber", []))) <= 1 for r in j.get("runs", []))
+    window_text = [
+        "Each subscriber counts the state samples the gateway wrote (their source time) in one window",
+        "common to all: it opens 3 s after the last subscriber reads (ten python processes importing",
+        f"Cyclone DDS at once on one CPU took up to {ready(ten):.1f} s to start, one alone {ready(one_sub):.1f} s) and ends",
+        "while `saw-rt` still runs (it is stopped after). What a subscriber did not take is split:",
+        "*lost* — what Cyclone DDS counted lost (best effort: a gap in the gateway's sequence numbers)",
+        "or rejected on its readers; *full* — takes that found a reader's 1,024-deep history full (its",
+        "oldest samples overwritten); *not written* — the rest of the streams' rates times the window,",
+        "which the gateway did not write (a row the RT task did not run is no sample).",
+    ]
+    took_block = [
+        f"ten took {took(ten)} of the samples (one alone {took(one_sub)}; ten reading every row "
+        f"{took(full) if full else '–'}): DDS counted {not_taken(ten)[0]} lost, {not_taken(ten)[1]} reader histories",
+        f"filled, and {not_taken(ten)[2]} samples of the window's rates were not written by the gateway"
+        + (f" ({not_taken(full)[0]} lost, {not_taken(full)[1]} full and {not_taken(full)[2]} not written reading every row)"
+           if full else "") + "."
+        + (" What was not written is the same for every subscriber of a run, so it is upstream of the readers: "
+           "cycles the RT tasks missed (no row), and display samples the gateway did not write while its CPU "
+           "was busy." if same_unwritten else
+           " What was not written differs between the subscribers of a run: part of it went missing at the "
+           "readers unseen by these counters."),
+        "(The \"87–89 %\" an earlier count showed with ten was that count's: each subscriber counted",
+        "15 s from its own start while `saw-rt` ran 19 s from before them, and ten that took about 3 s",
+        "to start counted past the end of the teleoperation; no sample had been lost.) Remote GUIs run",
+    ]
     display_hz = j.get("display_rate_hz")
     ratio = ten["p99_median_us"] / base if base and ten["p99_median_us"] else float("nan")
     added = sum(ten["overruns"]) - sum(confs[0]["overruns"])
@@ -263,12 +303,17 @@ def gui_section(r):
            if display_hz else " The subscribers read the full-rate topics (the statistics at a tenth of the rows).")
         + " One run: the configurations alternate for "
         f"{j['rounds']} rounds, {j['seconds']:g} s",
-        "measured each (after 3 s for discovery); the RT figures are each run's `saw-rt` summary (worst",
+        "measured each (the window below); the RT figures are each run's `saw-rt` summary (worst",
         "of the three tasks), the p99 the median over the rounds.",
         "",
+        *(window_text if counted else [
+            "These figures come from a count before the common window (each subscriber counted from its own",
+            "start): their shares are not what the subscribers took; run `tools/gui_scale.py` again."]),
+        "",
         "| subscribers | RT overruns, each round | wake-up p99 µs, median (range) | × none | gateway CPU | "
-        "samples each subscriber took | subscriber CPU, each |",
-        "|---|---|---|---|---|---|---|",
+        "samples each subscriber took | not taken, all subscribers: lost / not written; full | "
+        "subscriber CPU, each |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for x in confs:
         s = x["samples_per_subscriber"]
@@ -282,6 +327,8 @@ def gui_section(r):
             f"{x['gateway_cpu_percent']:.1f} % | "
             + (f"{min(s)}–{max(s)} ({min(s) / expect:.1%}–{max(s) / expect:.1%} of {rate:g} samples/s)"
                if s else "–")
+            + " | " + (f"{sum(x['lost_per_subscriber'])} / {sum(x['unaccounted_per_subscriber'])}; "
+                       f"{sum(x['full_takes_per_subscriber'])}" if s and "lost_per_subscriber" in x else "–")
             + " | " + (f"{sum(cpu) / len(cpu):.1f} %" if cpu else "–") + " |")
     busy = ten["gateway_cpu_percent"] + sum(ten["subscriber_cpu_percent"]) / max(1, len(ten["overruns"]))
     lines += [
@@ -298,10 +345,10 @@ def gui_section(r):
         "The subscribers run, like the gateway, on the other CPU: the RT tasks share only the machine",
         "with them (memory, caches, the kernel); the gateway copies rows out of the shared-memory",
         "segment and DDS sends them from its own threads. With ten subscribers on this",
-        f"machine's other CPU, the gateway and the subscribers kept it {busy:.0f} % busy: a subscriber that",
-        "is not scheduled in time loses samples (state topics are best effort, newest first), which is",
-        "what the per-subscriber share shows; remote GUIs run on their own machines, where each takes",
-        "what the one-subscriber row takes. A saturated other CPU can also push kernel work (loopback",
+        f"machine's other CPU, the gateway and the subscribers kept it {busy:.0f} % busy"
+        + (", and each of the" if counted else ". Remote GUIs run"),
+        *(took_block if counted else []),
+        "on their own machines. A saturated other CPU can also push kernel work (loopback",
         "UDP to ten readers) onto the RT CPU, which `isolcpus`/`nohz_full` and IRQ affinity keep off on",
         "a lab PC (`docs/deploy.md`). On a shared VM the p99 and the overruns move from run to run",
         "with no subscriber at all (other processes' kernel work on the RT CPU): compare runs, not one",
@@ -547,11 +594,13 @@ def main(directory, out):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) == 5 and sys.argv[3] == "--only" and sys.argv[4] in ("can", "gui"):
+    if len(sys.argv) == 5 and sys.argv[3] == "--only" and sys.argv[4] in ("can", "gui", "gui-scale"):
         text = open(sys.argv[2]).read()
         r = Run(sys.argv[1])
         if sys.argv[4] == "can":
             text = replace_section(text, CAN_TITLE, can_section(r))
+        elif sys.argv[4] == "gui-scale":  # the subscribers' section only (tools/gui_scale.py alone)
+            text = replace_section(text, GUI_TITLE, gui_section(r))
         else:
             text = replace_section(replace_section(text, GUI_TITLE, gui_section(r)), WINDOW_TITLE, window_section(r))
         open(sys.argv[2], "w").write(text)

@@ -30,6 +30,9 @@ from . import cdr, msgs, values
 ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 
 FAULT = "FAULT"
+# A state reader's history (keep last), and the most one take gets: a take that gets this many
+# emptied a full history, whose oldest samples were overwritten before it.
+READER_DEPTH = 1024
 # What a component says it is (kind, variant, roles and the servers playing them, declared
 # settings): every component's is read, as its operating state is.
 DESCRIPTION = "saw_msgs::msg::dds_::ComponentDescription_"
@@ -58,9 +61,15 @@ class Series:
         self.log = collections.deque(maxlen=500)  # (time, text) for events
         self.logged = 0  # entries ever added to the log (it keeps the last 500)
         self.logs = endpoint.kind.endswith("event") or self.cls in (msgs.StringStamped, msgs.OperatingState)
+        self.tally = None  # sawdds.tally.Tally when a window is counted (Live.tally)
 
     def add(self, sample, t: float):
         """One decoded sample (events, latched states, and what the fast path cannot lay out)."""
+        if self.tally is not None:
+            self.tally.add([t])
+        self._add(sample, t)
+
+    def _add(self, sample, t: float):
         self.count += 1
         self.last, self.last_time, self.received_at = sample, t, time.monotonic()
         if self.logs:
@@ -73,8 +82,11 @@ class Series:
             self.names = list(nums)
         self._append(np.array([t]), np.array([[nums.get(n, np.nan) for n in self.names]]))
 
-    def add_raw(self, batch):
-        """A batch of (bytes, source time in s) of one topic, oldest first."""
+    def add_raw(self, batch, history_full: bool = False):
+        """A batch of (bytes, source time in s) of one topic, oldest first; `history_full`: the take
+        that got it emptied a full reader history (older samples may have been overwritten)."""
+        if self.tally is not None:
+            self.tally.add([t for _, t in batch], history_full)
         datas = [d for d, _ in batch]
         if self.names is None:
             first = self.cls.deserialize(datas[0])
@@ -86,7 +98,7 @@ class Series:
         decoded = self.layout.decode(datas) if self.layout is not None else None
         if decoded is None:  # laid out otherwise (or not numeric): one by one
             for d, t in batch:
-                self.add(self.cls.deserialize(d), t)
+                self._add(self.cls.deserialize(d), t)
             return
         self.count += len(batch)
         self.last = self.cls.deserialize(datas[-1])
@@ -140,6 +152,11 @@ class Series:
         return t, r
 
 
+def _lost_rejected(reader):
+    """(samples lost, samples rejected) that Cyclone DDS counted on `reader` so far."""
+    return reader.get_sample_lost_status().total_count, reader.get_sample_rejected_status().total_count
+
+
 class Live:
     """The system as the registry and the watched topics show it, kept up to date off the caller's thread."""
 
@@ -154,6 +171,7 @@ class Live:
         self._stop = threading.Event()
         self._wanted = set()  # topics to watch once the registry names them
         self._readers = {}  # topic -> (reader, Series)
+        self._tally_window = None  # (start, end) that tally() set, for readers opened later
         self._errors = {}  # component -> (reader, deque of (time, text))
         self._gateways = {}  # name -> dict
         self._components = {}  # name -> dict
@@ -205,6 +223,21 @@ class Live:
         """Starts taking `topic`'s samples (now, or when a gateway serves it)."""
         with self._lock:
             self._wanted.add(topic)
+
+    def tally(self, start: float, end: float):
+        """From now on, counts each watched topic's samples written in [start, end) (wall clock, s)
+        and those missing between them (sawdds.tally); tallies() gives the counts."""
+        from .tally import Tally
+        with self._lock:
+            self._tally_window = (start, end)
+            for reader, series in self._readers.values():
+                series.tally = Tally(start, end, *_lost_rejected(reader))
+
+    def tallies(self) -> dict:
+        """{topic: Tally.summary()} of the window tally() set (empty before)."""
+        with self._lock:
+            return {t: s.tally.summary(*_lost_rejected(r)) for t, (r, s) in self._readers.items()
+                    if s.tally is not None}
 
     def watched(self) -> list:
         with self._lock:
@@ -415,9 +448,13 @@ class Live:
             if e is None or not e.topic or e.dds_type not in msgs.BY_DDS_NAME:
                 continue
             # Deep enough that nothing is lost between two passes of the loop at 1 kHz.
-            reader = self.client.reader_for(e, depth=1 if latched(e) else 1024, display=not self.full_rate)
+            reader = self.client.reader_for(e, depth=1 if latched(e) else READER_DEPTH, display=not self.full_rate)
+            series = Series(e, self.window)
             with self._lock:
-                self._readers[t] = (reader, Series(e, self.window))
+                if self._tally_window is not None:
+                    from .tally import Tally
+                    series.tally = Tally(*self._tally_window)
+                self._readers[t] = (reader, series)
 
     def _take(self):
         with self._lock:
@@ -434,13 +471,13 @@ class Live:
                         if isinstance(s, msgs.OperatingState):
                             self._state_changed(series.endpoint.component_name, s)
                 continue
-            got = ddspy_take(reader._ref, ANY, 1024)
+            got = ddspy_take(reader._ref, ANY, READER_DEPTH)
             if isinstance(got, int) or not got:
                 continue
             batch = [(d, i.source_timestamp * 1e-9) for d, i in got if i.valid_data]
             if batch:
                 with self._lock:
-                    series.add_raw(batch)
+                    series.add_raw(batch, history_full=len(got) >= READER_DEPTH)
         for comp, (reader, log, taken) in errs:
             got = [s for s in reader.take(N=64) if isinstance(s, msgs.StringStamped)]
             if got:

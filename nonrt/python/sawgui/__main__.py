@@ -8,6 +8,7 @@ import json
 import os
 import signal
 import sys
+import threading
 import time
 
 
@@ -36,6 +37,10 @@ def parse(argv):
                         "display streams (50 samples/s by default)")
     p.add_argument("--settle", type=float, default=0.0, metavar="SECONDS",
                    help="with --headless: also count what arrives after the first SECONDS (discovery done)")
+    p.add_argument("--window-stdin", action="store_true",
+                   help="with --headless: print 'ready' once reading, then read 'START END' (wall clock, s) from "
+                        "stdin and count each topic's samples written in that window (and those DDS counted lost); "
+                        "stop after END (the scale benchmark: every subscriber counts the same window)")
     return p.parse_args(argv)
 
 
@@ -70,6 +75,44 @@ def open_live(args):
         return None
 
 
+class Window:
+    """The scale benchmark's common window: says "ready" on stdout, takes "START END" (wall clock,
+    s) from stdin (a thread of its own: the readers keep being opened meanwhile), counts each
+    topic's samples written in it (Live.tally) and the CPU this process spent in it."""
+
+    GRACE = 0.5  # s after END for samples written before END to arrive
+
+    def __init__(self, live):
+        self.live, self.bounds, self.cpu = live, None, [None, None]
+        print("ready", flush=True)
+        threading.Thread(target=self._read, name="sawgui-window", daemon=True).start()
+
+    def _read(self):
+        line = sys.stdin.readline().split()
+        if len(line) == 2:
+            start, end = float(line[0]), float(line[1])
+            self.live.tally(start, end)
+            self.bounds = (start, end)
+
+    def poll(self):
+        if self.bounds:
+            now = time.time()
+            if self.cpu[0] is None and now >= self.bounds[0]:
+                self.cpu[0] = time.process_time()
+            if self.cpu[1] is None and now >= self.bounds[1]:
+                self.cpu[1] = time.process_time()
+
+    def done(self) -> bool:
+        return self.bounds is not None and time.time() >= self.bounds[1] + self.GRACE
+
+    def report(self) -> dict:
+        if not self.bounds:
+            return {"error": "no window was given on stdin"}
+        start, end = self.bounds
+        cpu = self.cpu[1] - self.cpu[0] if None not in self.cpu else None
+        return {"start": start, "end": end, "topics": self.live.tallies(), "cpu_s": cpu}
+
+
 def headless(args) -> int:
     """The window's DDS readers without a window (the smoke test and the scale benchmark)."""
     from . import model
@@ -79,7 +122,10 @@ def headless(args) -> int:
     deadline = time.monotonic() + args.headless
     cpu0 = time.process_time()
     settle_at, settled = time.monotonic() + args.settle, None
-    while time.monotonic() < deadline:
+    window = Window(live) if args.window_stdin else None
+    while time.monotonic() < deadline and not (window and window.done()):
+        if window:
+            window.poll()
         if settled is None and args.settle and time.monotonic() >= settle_at:
             settled = {t: live.count(t) for t in live.watched()}
             cpu_settled = time.process_time()
@@ -97,6 +143,8 @@ def headless(args) -> int:
         out["settled"] = {"seconds": round(args.headless - args.settle, 3),
                           "samples": {t: live.count(t) - settled.get(t, 0) for t in live.watched()},
                           "cpu_s": round(time.process_time() - cpu_settled, 3)}
+    if window:
+        out["window"] = window.report()
     live.close()
     print(json.dumps(out, sort_keys=True))
     return 0
