@@ -23,9 +23,12 @@
 #include "reply_filter.cpp"
 #include "saw/gateway/fields_conversion.hpp"
 #include "saw/teleop/dds/mappings.hpp"
+#include "saw/teleop/laws/collaborative.hpp"
 #include "saw/teleop/teleop_law.hpp"
 #include "saw_msgs/msg/ComponentDescriptionPubSubTypes.h"
 #include "saw_msgs/msg/MasterSlavePubSubTypes.h"
+#include "saw_msgs/msg/OffsetLimitsPubSubTypes.h"
+#include "saw_msgs/msg/PredictionPubSubTypes.h"
 #include "saw_msgs/msg/QueryPubSubTypes.h"
 #include "saw_msgs/msg/TaskStatisticsPubSubTypes.h"
 #include "sensor_msgs/msg/JointStatePubSubTypes.h"
@@ -101,6 +104,13 @@ void check(const teleop::Gains& g) {
 void check(const teleop::ForceLimits& l) {
   if (!std::isfinite(l.master) || !std::isfinite(l.slave)) defect("force limits not finite");
 }
+// Each carries its own range (valid), checked where a value enters from another process.
+void check(const teleop::OffsetLimits& l) {
+  if (!teleop::OffsetLimits::valid(l)) defect("offset limits out of their range");
+}
+void check(const teleop::Prediction& p) {
+  if (!teleop::Prediction::valid(p)) defect("prediction out of its range");
+}
 void check(const ComponentDescription& d) {
   if (d.setting_count > ComponentDescription::max_settings) defect("too many settings");
   for (std::size_t i = 0; i < d.setting_count; ++i)
@@ -165,7 +175,12 @@ using Samples = std::tuple<
     Entry<TaskStatistics, saw_msgs::msg::TaskStatistics, saw_msgs::msg::TaskStatisticsPubSubType,
           TaskStatisticsConv>,
     Entry<ComponentDescription, saw_msgs::msg::ComponentDescription,
-          saw_msgs::msg::ComponentDescriptionPubSubType, DescriptionConv>>;
+          saw_msgs::msg::ComponentDescriptionPubSubType, DescriptionConv>,
+    // Appended, so that the corpus's earlier kinds keep their first byte.
+    Entry<teleop::OffsetLimits, saw_msgs::msg::OffsetLimits, saw_msgs::msg::OffsetLimitsPubSubType,
+          FieldsConv<teleop::OffsetLimits, saw_msgs::msg::OffsetLimits>>,
+    Entry<teleop::Prediction, saw_msgs::msg::Prediction, saw_msgs::msg::PredictionPubSubType,
+          FieldsConv<teleop::Prediction, saw_msgs::msg::Prediction>>>;
 constexpr std::size_t sample_kinds = std::tuple_size_v<Samples>;
 
 void run_sample(std::size_t kind, const std::uint8_t* d, std::size_t n) {
