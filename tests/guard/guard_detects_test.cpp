@@ -145,33 +145,36 @@ TEST(RtGuard, CatchesAFutexWaitOnARealThread) {
   std::uint32_t word = 0;
   const auto c = run_offender(
       [&](std::uint64_t) {
-        const timespec timeout{0, 200'000};
+        const timespec timeout{0, 500'000};
         syscall(SYS_futex, &word, FUTEX_WAIT_PRIVATE, 0u, &timeout, nullptr, 0);
       },
-      5);
-  EXPECT_GE(c.waits, 5u) << saw::testing::describe(c);
+      10);
+  EXPECT_GE(c.waits, 10u) << saw::testing::describe(c);
+  // As for a sleep: a wait whose timeout expired before the thread slept does not switch.
   EXPECT_GE(c.voluntary_switches, 5u) << saw::testing::describe(c);
 }
 
 // libstdc++'s atomic wait (here through std::counting_semaphore) calls the futex from inline code.
 TEST(RtGuard, CatchesAStdSemaphoreThatBlocks) {
   std::binary_semaphore sem(0);
-  const auto c = run_offender([&](std::uint64_t) { (void)sem.try_acquire_for(200us); }, 5);
-  EXPECT_GE(c.waits, 5u) << saw::testing::describe(c);
+  const auto c = run_offender([&](std::uint64_t) { (void)sem.try_acquire_for(500us); }, 10);
+  EXPECT_GE(c.waits, 10u) << saw::testing::describe(c);
   EXPECT_GE(c.voluntary_switches, 5u) << saw::testing::describe(c);
 }
 
 // A blocking call no interposition sees (a sleep here; a blocking read or write alike) is seen
-// by the thread's voluntary context switches.
+// by the thread's voluntary context switches. Not every sleep switches: one whose timer expired
+// before the thread got to sleep returns without (seen under emulation, 9 of 10 at 100 µs), so
+// the sleeps are longer and half of them must be seen.
 TEST(RtGuard, CatchesBlockingThatNoInterpositionSees) {
   const auto c = run_offender(
       [](std::uint64_t) {
-        const timespec pause{0, 100'000};
+        const timespec pause{0, 500'000};
         nanosleep(&pause, nullptr);
       },
       10);
   EXPECT_EQ(c.waits + c.locks + c.stdio + c.allocations, 0u) << saw::testing::describe(c);
-  EXPECT_GE(c.voluntary_switches, 10u) << saw::testing::describe(c);
+  EXPECT_GE(c.voluntary_switches, 5u) << saw::testing::describe(c);
   EXPECT_EQ(c.first_violation, "voluntary switch in task 'offender'");
 }
 
