@@ -312,14 +312,17 @@ std::uint32_t reclaim_stale_slots(const SegmentView& v, std::int64_t now, std::i
   return n;
 }
 
-bool segment_owner_alive(const void* mapping, std::size_t size) noexcept {
-  if (size < sizeof(SegmentHeader)) return false;  // a creation that died before sizing it
-  const auto* h = static_cast<const SegmentHeader*>(mapping);
+bool segment_owner_alive(const ShmSegment& old) noexcept {
+  if (old.size() < sizeof(SegmentHeader)) return false;  // a creation that died before sizing it
+  const auto* h = static_cast<const SegmentHeader*>(old.data());
   // A zero magic is a creation that died before writing its header, or a live owner's header
   // that a peer scribbled over: the owner's pid and heartbeat below tell which.
   if (h->magic != 0 && h->magic != segment_magic) return true;  // not ours to remove
-  if (process_alive(h->owner_pid.load(std::memory_order_acquire))) return true;
-  // Its pid is gone here, but the owner may live in another pid namespace: it does if its
+  // Pids wrap (32768 by default): a process that began after the segment was made holds a
+  // reused pid and says nothing about the owner.
+  const auto pid = h->owner_pid.load(std::memory_order_acquire);
+  if (process_alive(pid) && !process_started_after(pid, old.modified_ns())) return true;
+  // Its pid is gone (or reused) here, but the owner may live in another pid namespace: it does if its
   // heartbeat still moves (a killed owner's last beat stays as it was).
   const auto beat = h->heartbeat.load(std::memory_order_acquire);
   if (const auto age = elapsed(monotonic_now(), beat); age > 1'000'000'000 || age < -1'000'000'000)

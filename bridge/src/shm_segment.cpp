@@ -7,7 +7,10 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <ctime>
 
 namespace saw::bridge {
 namespace {
@@ -16,13 +19,44 @@ std::string errno_text(const std::string& what) { return what + ": " + std::stre
 
 bool process_alive(int pid) noexcept { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
 
+bool process_started_after(int pid, std::int64_t realtime_ns) noexcept {
+  if (pid <= 0) return false;
+  char path[32];
+  std::snprintf(path, sizeof path, "/proc/%d/stat", pid);
+  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  char buf[1024];
+  const ssize_t n = ::read(fd, buf, sizeof buf - 1);
+  ::close(fd);
+  if (n <= 0) return false;
+  buf[n] = '\0';
+  // The command name may hold spaces and parentheses: fields are counted from the last ')'.
+  const char* p = std::strrchr(buf, ')');
+  if (p == nullptr) return false;
+  for (int field = 2; field < 22 && p != nullptr; ++field) p = std::strchr(p + 1, ' ');
+  if (p == nullptr) return false;
+  char* end = nullptr;
+  const unsigned long long ticks = std::strtoull(p + 1, &end, 10);  // field 22: start, in ticks after boot
+  const long hz = ::sysconf(_SC_CLK_TCK);
+  if (end == p + 1 || hz <= 0) return false;
+  timespec boot{}, wall{};
+  if (::clock_gettime(CLOCK_BOOTTIME, &boot) != 0 || ::clock_gettime(CLOCK_REALTIME, &wall) != 0)
+    return false;
+  const auto ns = [](const timespec& t) { return std::int64_t{t.tv_sec} * 1'000'000'000 + t.tv_nsec; };
+  const std::int64_t started_after_boot = static_cast<std::int64_t>(ticks / hz) * 1'000'000'000 +
+                                          static_cast<std::int64_t>(ticks % hz) * 1'000'000'000 / hz;
+  // A tick's truncation dates the start early, never late; the second absorbs a clock step.
+  const std::int64_t started = ns(wall) - (ns(boot) - started_after_boot);
+  return started > realtime_ns + 1'000'000'000;
+}
+
 ShmSegment ShmSegment::create(const std::string& name, std::size_t size,
-                              bool (*owner_alive)(const void* mapping, std::size_t size)) {
+                              bool (*owner_alive)(const ShmSegment& old)) {
   int fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL, 0600);
   if (fd < 0 && errno == EEXIST) {
     // Someone left this name: take it over only if its owner is gone.
     ShmSegment old = attach(name);
-    if (owner_alive != nullptr && owner_alive(old.data(), old.size()))
+    if (owner_alive != nullptr && owner_alive(old))
       throw BridgeError("shared-memory segment " + name +
                         " is in use by a live process, or is not a sawrt segment: left as it is");
     old.owner_ = true;  // unlinked when `old` goes
@@ -62,7 +96,9 @@ ShmSegment ShmSegment::attach(const std::string& name, bool writable) {
   void* p = ::mmap(nullptr, size, writable ? PROT_READ | PROT_WRITE : PROT_READ, MAP_SHARED, fd, 0);
   ::close(fd);
   if (p == MAP_FAILED) throw BridgeError(errno_text("mmap " + name));
-  return ShmSegment(name, p, size, false);
+  ShmSegment s(name, p, size, false);
+  s.modified_ns_ = std::int64_t{st.st_mtim.tv_sec} * 1'000'000'000 + st.st_mtim.tv_nsec;
+  return s;
 }
 
 void ShmSegment::make_writable(std::size_t offset, std::size_t length) {
@@ -72,7 +108,11 @@ void ShmSegment::make_writable(std::size_t offset, std::size_t length) {
 }
 
 ShmSegment::ShmSegment(ShmSegment&& o) noexcept
-    : name_(std::move(o.name_)), data_(o.data_), size_(o.size_), owner_(o.owner_) {
+    : name_(std::move(o.name_)),
+      data_(o.data_),
+      size_(o.size_),
+      owner_(o.owner_),
+      modified_ns_(o.modified_ns_) {
   o.data_ = nullptr;
   o.owner_ = false;
 }
@@ -84,6 +124,7 @@ ShmSegment& ShmSegment::operator=(ShmSegment&& o) noexcept {
     data_ = o.data_;
     size_ = o.size_;
     owner_ = o.owner_;
+    modified_ns_ = o.modified_ns_;
     o.data_ = nullptr;
     o.owner_ = false;
   }

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <string_view>
 #include <thread>
 
 #include "saw/bridge/exporter.hpp"
@@ -54,11 +55,22 @@ class Client : public saw::Task {
   saw::FunctionVoid reset_;
 };
 
-// The bridge_peer program: exports `name`, or in `mode` acts on it.
+// The bridge_peer program: exports `name` (also in mode v2), or in `mode` acts on it. An exporter killed with
+// -9 leaves its segment: removed when the handle goes, so that runs do not litter /dev/shm.
 struct Peer : saw::testing::ChildProcess {
   explicit Peer(const std::string& name, const char* mode = nullptr)
       : ChildProcess(mode == nullptr ? std::vector<std::string>{SAW_BRIDGE_PEER, name}
-                                     : std::vector<std::string>{SAW_BRIDGE_PEER, mode, name}) {}
+                                     : std::vector<std::string>{SAW_BRIDGE_PEER, mode, name}),
+        segment_(mode == nullptr || std::string_view(mode) == "v2" ? "/saw." + name : std::string()) {}
+  ~Peer() {
+    kill9();
+    if (!segment_.empty()) ::shm_unlink(segment_.c_str());
+  }
+  Peer(const Peer&) = delete;
+  Peer& operator=(const Peer&) = delete;
+
+ private:
+  std::string segment_;
 };
 
 bool segment_ready(const std::string& name) {
@@ -132,10 +144,9 @@ TEST(BridgeConnect, TypeMismatchAcrossProcessesFailsAtConnectNamingBothTypes) {
 
 TEST(BridgeConnect, AStaleSegmentIsRefusedAtConnect) {
   const std::string name = unique_name("bdevs");
-  {
-    Peer peer(name);
-    ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
-  }                                    // SIGKILL: the segment stays, its heartbeat stops
+  Peer peer(name);
+  ASSERT_TRUE(wait_for([&] { return segment_ready(name); }));
+  peer.kill9();                        // the segment stays (until `peer` goes), its heartbeat stops
   std::this_thread::sleep_for(150ms);  // let the heartbeat age past the 100 ms limit (not a race: a bound)
   Client client;
   saw::Manager m;
@@ -147,7 +158,6 @@ TEST(BridgeConnect, AStaleSegmentIsRefusedAtConnect) {
   } catch (const saw::ConnectError& e) {
     EXPECT_NE(std::string(e.what()).find("is not running"), std::string::npos) << e.what();
   }
-  shm_unlink(("/saw." + name).c_str());
 }
 
 }  // namespace

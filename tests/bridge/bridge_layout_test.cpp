@@ -2,11 +2,13 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
 #include <cstring>
+#include <ctime>
 
 #include "saw/bridge/exporter.hpp"
 #include "saw/bridge/layout.hpp"
@@ -366,6 +368,41 @@ TEST(BridgeLayout, ASegmentLeftByADeadOwnerIsTakenOverALiveOneIsNot) {
     v.header().layout_version = layout_version;
   }
   EXPECT_THROW(ShmSegment::attach(name), BridgeError) << "the owner unlinks the name when it goes";
+}
+
+// Pids wrap: a segment left by a killed owner whose pid a later process now holds is taken over;
+// one whose owner's pid belongs to a process older than the segment is not.
+TEST(BridgeLayout, ASegmentWhoseOwnersPidWasReusedIsTakenOver) {
+  const auto name = unique_name("reused");
+  const Layout l = layout_of(make(8, 1, 8, 16));
+  ASSERT_EQ(in_child([&] {
+              ShmSegment s = ShmSegment::create(name, l.total_size, segment_owner_alive);
+              initialize(SegmentView(s.data(), l), "server", "p", 1, getpid());
+              std::_Exit(0);  // the name stays behind, its owner's pid now free
+              return 0;
+            }),
+            0);
+  // Names `pid` as the owner and dates the segment ten seconds back, as if made before the
+  // processes below began (a store's first write to a tmpfs page dates it now).
+  const auto leave_owner = [&](int pid) {
+    static_cast<SegmentHeader*>(ShmSegment::attach(name).data())->owner_pid.store(pid);
+    const int fd = ::shm_open(name.c_str(), O_RDWR, 0);
+    ASSERT_GE(fd, 0);
+    timespec now{};
+    clock_gettime(CLOCK_REALTIME, &now);
+    const timespec times[2] = {{now.tv_sec - 10, 0}, {now.tv_sec - 10, 0}};
+    EXPECT_EQ(::futimens(fd, times), 0);
+    ::close(fd);
+  };
+  leave_owner(1);  // init: alive, and older than the segment
+  EXPECT_TRUE(segment_owner_alive(ShmSegment::attach(name)));
+  EXPECT_THROW(ShmSegment::create(name, l.total_size, segment_owner_alive), BridgeError);
+  saw::testing::ChildProcess later({"/bin/sleep", "30"});  // alive, and younger than the segment
+  ASSERT_GT(later.pid(), 0);
+  leave_owner(later.pid());
+  EXPECT_FALSE(segment_owner_alive(ShmSegment::attach(name))) << "pid " << later.pid() << " began after it";
+  EXPECT_TRUE(ShmSegment::create(name, l.total_size, segment_owner_alive).owner());
+  EXPECT_THROW(ShmSegment::attach(name), BridgeError);
 }
 
 // A manifest's type name field holds 95 characters and a NUL. A longer name is refused at

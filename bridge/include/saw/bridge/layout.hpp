@@ -228,11 +228,13 @@ void release_slot(const SegmentView& v, std::uint32_t index, std::uint64_t token
 // Frees the slots whose heartbeat is older than `timeout` at `now`; returns how many.
 std::uint32_t reclaim_stale_slots(const SegmentView& v, std::int64_t now, std::int64_t timeout) noexcept;
 
-// Whether a segment found under a name still has a live owner: its pid alive, or (an owner in
-// another pid namespace) its heartbeat moving within 200 ms. Reads only the header's first four fields, which
-// never move between layout versions; a file that is not a bridge segment counts as owned (it is not ours to
-// remove), one whose header was never written as not.
-bool segment_owner_alive(const void* mapping, std::size_t size) noexcept;
+// Whether a segment found under a name still has a live owner: its pid alive and started before
+// the segment was made (a pid reused by a later process is not its owner), or (an owner in
+// another pid namespace) its heartbeat moving within 200 ms. Reads only the header's first four
+// fields, which never move between layout versions; a file that is not a bridge segment counts
+// as owned (it is not ours to remove), one whose header was never written as not.
+class ShmSegment;
+bool segment_owner_alive(const ShmSegment& old) noexcept;
 
 // A token no other claim on this host will use (pid, time and randomness).
 std::uint64_t new_claim_token() noexcept;
