@@ -39,6 +39,11 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
       if (i == 1200) rig.io_node->silent = true;  // the gripper's: the arm goes on
       if (i == 1300) rig.io_node->silent = false;
       if (i == 1400) client.command(StateCommand::enable);
+      if (i == 1450) {  // a warning of node 10 (CAN error passive): logged, no FAULT
+        const std::uint8_t emcy[] = {0x20, 0x81, 0x11, 0, 0, 0, 0, 0};
+        const saw::can::Frame f = saw::can::classic(0x8A, emcy);
+        (void)rig.io_node->port.send(std::span(&f, 1));
+      }
       if (i == 1500) {
         const std::uint8_t emcy[] = {0x00, 0x50, 0x81, 0, 0, 0, 0, 0};  // an error EMCY of node 10
         const saw::can::Frame f = saw::can::classic(0x8A, emcy);
@@ -67,7 +72,8 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
     }
   }
   const auto counts = window.counts();
-  EXPECT_EQ(gripper_faults, 3) << "the silent node, its EMCY, its reboot";
+  EXPECT_EQ(gripper_faults, 3) << "the silent node, its error EMCY, its reboot";
+  EXPECT_EQ(gripper->status().warnings, 1u) << "its warning EMCY";
   EXPECT_TRUE(rebooted_enabling);
   EXPECT_TRUE(rig.io_node->configured) << "configured again after its reboot";
   EXPECT_EQ(gripper->operating_state().state, OperatingStateValue::enabled);

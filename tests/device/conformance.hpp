@@ -16,8 +16,9 @@
 
 namespace saw::conformance {
 
-// The commands the suite sends, as each driver spells them (servo_cf, servo_jf, ...).
-enum class Command : std::uint8_t { good, not_finite, infinite, over_limit };
+// The commands the suite sends, as each driver spells them (servo_cf, servo_jf, ...): `other` is
+// a second good command whose output differs from good's (for a device that holds its output).
+enum class Command : std::uint8_t { good, not_finite, infinite, over_limit, other };
 
 // A driver and its simulator, stepped deterministically one 1 ms cycle at a time. What the
 // suite observes of the hardware comes from the simulator's side (the firmware's motor torque,
@@ -43,6 +44,18 @@ class Rig {
   virtual bool fail_start() { return false; }
   // Cycles enough for the simulator to see what the device sent last (a drive's PDO).
   virtual void settle() { cycle(2); }
+  // The controller dies as a process does (its cycles stop: no PDOs, no SYNC, no heartbeat) and
+  // the hardware runs alone for `alone`; false: this simulated hardware watches nothing (skips).
+  virtual bool kill_controller(TimeNs alone) {
+    (void)alone;
+    return false;
+  }
+
+  // What the hardware keeps when a command is refused or commands stop, as the device's contract
+  // declares: a device that holds (SafeState::hold: an I/O node's outputs, a position-controlled
+  // joint) keeps its last applied output, the others take the safe output 0. Disable, pause, a
+  // fault and a stop are the safe output 0 for every device.
+  bool holds() { return device().contract().safe_state == SafeState::hold; }
 
   // The manager's part, done by hand.
   void start() {
@@ -87,9 +100,10 @@ class Rig {
   std::map<std::string, std::uint32_t> targets_;
 };
 
-// The suite's command as a value: `good` itself, NaN, infinity, or twice `limit`.
+// The suite's command as a value: `good` itself, half of it, NaN, infinity, or twice `limit`.
 inline double value_of(Command c, double good, double limit) {
   return c == Command::good         ? good
+         : c == Command::other      ? good / 2
          : c == Command::not_finite ? NAN
          : c == Command::infinite   ? INFINITY
                                     : 2 * limit;

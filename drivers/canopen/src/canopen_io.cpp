@@ -145,12 +145,7 @@ Outcome CanopenIo::check_node() noexcept {
                node);
     return failure("node rebooted", FaultCode::device_lost);
   }
-  if (h.emcy_count != emcy_seen_) {
-    emcy_seen_ = h.emcy_count;
-    saw::log(LogLevel::error, name().c_str(), "node {}: EMCY {:x} ({}), error register {:x}", node,
-             unsigned{h.last_emcy}, emcy_name(h.last_emcy).data(), unsigned{h.error_register});
-    return failure("emergency message", FaultCode::device_error, h.last_emcy);
-  }
+  if (const Outcome o = check_emcy(); o.is_failed()) return o;
   if (h.heartbeat_lost) return failure("heartbeat lost", FaultCode::device_lost, 0, h.silent_for);
   if (h.heartbeat_seen && h.nmt_state != NmtState::operational && h.nmt_state != NmtState::initialising) {
     if (says)
@@ -161,6 +156,29 @@ Outcome CanopenIo::check_node() noexcept {
   const TimeNs age = now() - (io_->valid() ? io_->last_received() : std::max(start_time_, watch_from_));
   if (age > config_.feedback_timeout) return failure("feedback stale", FaultCode::input_stale, 0, age);
   return Outcome::done();
+}
+
+// An I/O node has no statusword that says whether it faulted: the EMCY's code and error register
+// decide (emcy_severity). A warning is logged once and shown in status; a fault is a FAULT.
+Outcome CanopenIo::check_emcy() noexcept {
+  const IoEmcys& e = io_->emcys();
+  const unsigned node = config_.node.node;
+  if (e.warnings != emcy_warnings_seen_) {
+    const std::uint64_t n = e.warnings - emcy_warnings_seen_;
+    emcy_warnings_seen_ = e.warnings;
+    status_.warnings = e.warnings;
+    status_.last_warning = e.last_warning.code;
+    status_.last_warning_register = e.last_warning.error_register;
+    saw::log(LogLevel::warning, name().c_str(), "node {}: EMCY {:x} ({}), error register {:x}: a warning{}",
+             node, unsigned{e.last_warning.code}, emcy_name(e.last_warning.code).data(),
+             unsigned{e.last_warning.error_register}, n > 1 ? " (the newest of several)" : "");
+  }
+  if (e.faults == emcy_faults_seen_) return Outcome::done();
+  emcy_faults_seen_ = e.faults;
+  saw::log(LogLevel::error, name().c_str(), "node {}: EMCY {:x} ({}), error register {:x}", node,
+           unsigned{e.last_fault.code}, emcy_name(e.last_fault.code).data(),
+           unsigned{e.last_fault.error_register});
+  return failure("emergency message", FaultCode::device_error, e.last_fault.code);
 }
 
 // A node that rebooted lost its PDO maps and heartbeats: the enable runs its configuration again

@@ -252,6 +252,24 @@ std::string_view emcy_name(std::uint16_t code) noexcept {
   return emcy_class_name(code);
 }
 
+EmcySeverity emcy_severity(const Emcy& e) noexcept {
+  if (e.is_reset()) return EmcySeverity::reset;
+  if (e.error_register == 0 || e.code == 0x8110 || e.code == 0x8120) return EmcySeverity::warning;
+  return EmcySeverity::fault;
+}
+
+const char* to_string(EmcySeverity s) noexcept {
+  switch (s) {
+    case EmcySeverity::reset:
+      return "reset";
+    case EmcySeverity::warning:
+      return "warning";
+    case EmcySeverity::fault:
+      return "fault";
+  }
+  return "?";
+}
+
 std::string describe_error_register(std::uint8_t reg) {
   static constexpr std::pair<std::uint8_t, std::string_view> bits[] = {
       {error_register::generic, "generic"},

@@ -101,6 +101,7 @@ struct IoNode::Impl {
   HeartbeatConsumer heartbeats;
   SyncProducer sync{1'000'000};  // shut_down()'s one SYNC
   AxisHealth health;
+  IoEmcys emcys;
   std::uint32_t tpdo_seen = 0;
   bool fresh = false;
   TimeNs last_received = 0, first_cycle = -1;
@@ -163,6 +164,7 @@ bool IoNode::fresh() const noexcept { return impl_->fresh; }
 TimeNs IoNode::last_received() const noexcept { return impl_->last_received; }
 const AxisHealth& IoNode::health() const noexcept { return impl_->health; }
 std::uint64_t IoNode::foreign_frames() const noexcept { return impl_->foreign; }
+const IoEmcys& IoNode::emcys() const noexcept { return impl_->emcys; }
 bool IoNode::valid() const noexcept {
   const std::size_t n = impl_->tpdos.size();
   return impl_->tpdo_seen == (n >= 32 ? ~0u : (1u << n) - 1);
@@ -183,7 +185,19 @@ void IoNode::Impl::on_frame(const can::Frame& f, TimeNs now) noexcept {
       return;
     }
     health.error_register = e->error_register;
-    if (e->is_reset()) return;
+    switch (emcy_severity(*e)) {
+      case EmcySeverity::reset:
+        ++emcys.resets;
+        return;
+      case EmcySeverity::warning:
+        ++emcys.warnings;
+        emcys.last_warning = *e;
+        break;
+      case EmcySeverity::fault:
+        ++emcys.faults;
+        emcys.last_fault = *e;
+        break;
+    }
     ++health.emcy_count;
     health.last_emcy = e->code;
     return;

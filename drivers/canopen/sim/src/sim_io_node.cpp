@@ -187,6 +187,12 @@ void SimIoNode::inject(const Fault& f) noexcept {
   }
 }
 
+void SimIoNode::raise_emcy(std::uint16_t code, std::uint8_t error_register) noexcept {
+  (void)dictionary_.set(ObjectAddress{0x1001, 0}, error_register);
+  ++emcys_;
+  (void)(code == 0 ? emcy_.clear(error_register) : emcy_.raise(code, error_register));
+}
+
 void SimIoNode::send(const can::Frame& f) noexcept { (void)bus_.send(std::span(&f, 1)); }
 
 void SimIoNode::dispatch(const can::Frame& f) noexcept {

@@ -29,14 +29,18 @@ struct IoChannel {
 // An I/O component's node as the last cycle saw it: a summary column (printed when a run ends).
 struct CanopenIoStatus {
   static constexpr std::string_view type_name = "saw::canopen::CanopenIoStatus";
-  static constexpr std::uint32_t layout_version = 1;
+  static constexpr std::uint32_t layout_version = 2;  // 2: warnings
   OperatingStateValue state = OperatingStateValue::disabled;
   std::uint8_t node = 0;
   std::uint8_t nmt_state = 0;  // NmtState, from its heartbeat
   std::uint8_t bus_state = 0;  // can::BusState
-  std::uint64_t emcy = 0;      // EMCYs with an error code
+  std::uint64_t emcy = 0;      // EMCYs with an error code (warnings and faults)
   std::uint16_t last_emcy = 0;
   std::uint8_t error_register = 0;
+  // EMCYs that were warnings (emcy_severity: the component stayed out of FAULT), and the newest
+  std::uint64_t warnings = 0;
+  std::uint16_t last_warning = 0;
+  std::uint8_t last_warning_register = 0;
   std::uint32_t heartbeat_losses = 0, boot_ups = 0;
   std::uint64_t bad_pdos = 0, reconfigurations = 0;
   static constexpr auto fields = std::tuple{&CanopenIoStatus::state,
@@ -46,6 +50,9 @@ struct CanopenIoStatus {
                                             &CanopenIoStatus::emcy,
                                             &CanopenIoStatus::last_emcy,
                                             &CanopenIoStatus::error_register,
+                                            &CanopenIoStatus::warnings,
+                                            &CanopenIoStatus::last_warning,
+                                            &CanopenIoStatus::last_warning_register,
                                             &CanopenIoStatus::heartbeat_losses,
                                             &CanopenIoStatus::boot_ups,
                                             &CanopenIoStatus::bad_pdos,
@@ -73,8 +80,9 @@ struct CanopenIoConfig {
 // qualified read: SdoRequest → SdoReply for this node, waiting up to 1 s: non-RT callers only). Start-up: NMT
 // reset, identity, PDOs, 0x1017, 0x1016, the deployment's writes, NMT start (StartupSequence). Each cycle:
 // the TPDOs into measured_js; a FAULT (this component's only) on a lost heartbeat, a heartbeat not
-// operational, a boot-up, an EMCY with an error code (logged in hex with its name), TPDOs older than
-// feedback_timeout, bus off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs
+// operational, a boot-up, an EMCY that emcy_severity() calls a fault (logged in hex with its name;
+// a warning is logged so and counted in status, no FAULT), TPDOs older than feedback_timeout, bus
+// off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs
 // are the channels' safe values; at exit also one SYNC and NMT enter pre-operational.
 class CanopenIo : public Device {
  public:
@@ -95,6 +103,7 @@ class CanopenIo : public Device {
 
  private:
   Outcome check_node() noexcept;
+  Outcome check_emcy() noexcept;
   Outcome failure(const char* why, FaultCode code, std::uint32_t detail = 0, TimeNs age = 0) noexcept;
   void set_safe_outputs() noexcept;
 
@@ -105,7 +114,7 @@ class CanopenIo : public Device {
   std::array<double, JointState::max_joints> target_{};
   TimeNs start_time_ = -1;
   TimeNs watch_from_ = 0;  // not valid: stale counts from here (a re-configuration's end), or the start
-  std::uint64_t emcy_seen_ = 0;
+  std::uint64_t emcy_faults_seen_ = 0, emcy_warnings_seen_ = 0;
   std::uint32_t boot_ups_seen_ = 0;
   bool rebooted_ = false;
   bool reconfiguring_ = false;  // this enable re-runs its configuration

@@ -30,6 +30,22 @@ std::string_view emcy_class_name(std::uint16_t code) noexcept;
 // side)", 0x8611 "following error"; a code not in the tables gets its class's name.
 std::string_view emcy_name(std::uint16_t code) noexcept;
 
+// What an EMCY means for a component that has nothing else to judge it by (an I/O node has no
+// CiA 402 statusword that says whether the node faulted).
+enum class EmcySeverity : std::uint8_t {
+  reset,    // code 0x0000: error reset or no error (CiA 301 7.2.7.1)
+  warning,  // the node goes on: its error register is 0, or a CAN error-passive or overrun
+  fault,    // any other code with a non-zero error register
+};
+// Code 0x0000 is the reset. A non-zero error register is a fault except for 0x8110 (CAN overrun:
+// frames lost, the node still communicates; a lasting loss shows as stale TPDOs or a lost
+// heartbeat) and 0x8120 (CAN error passive: still on the bus). 0x8130 (heartbeat or life guard
+// error: the node lost the master and took its error values), 0x8140 (recovered from bus off:
+// it was off the bus), 0x8150 (CAN-ID collision) and 0x8100 (generic) mean lost communication:
+// faults.
+EmcySeverity emcy_severity(const Emcy& e) noexcept;
+const char* to_string(EmcySeverity s) noexcept;  // "reset", "warning", "fault"
+
 // Bits of the error register (0x1001).
 namespace error_register {
 inline constexpr std::uint8_t generic = 0x01;

@@ -11,6 +11,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
 #include "saw/canopen/bus_master.hpp"
+#include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/canopen/startup.hpp"
@@ -37,6 +38,14 @@ struct IoNodeConfig {
 // Set-up: throws std::invalid_argument naming the node and what is wrong (node-ID, heartbeat
 // times, a PDO check() refuses, an output or input no enabled PDO of its kind maps).
 void check(const IoNodeConfig& c);
+
+// An I/O node's EMCYs by what they mean (emcy_severity): counters only grow, a reader compares
+// them with the values it saw last (several in one cycle: the newest of each kind is kept).
+struct IoEmcys {
+  std::uint64_t warnings = 0, faults = 0, resets = 0;
+  Emcy last_warning{}, last_fault{};
+};
+
 // Its start-up: PDOs, 0x1017, 0x1016:01, the deployment's writes (no CiA 402 objects).
 NodeSetup setup_of(const IoNodeConfig& c);
 
@@ -63,6 +72,7 @@ class IoNode {
   TimeNs last_received() const noexcept;      // when (the cycle's time)
   const AxisHealth& health() const noexcept;  // heartbeat, NMT state, EMCY, boot-ups, bad PDOs
   std::uint64_t foreign_frames() const noexcept;
+  const IoEmcys& emcys() const noexcept;
   void transmit(TimeNs now) noexcept;
   // Starts running the node's configuration again (a node that rebooted: its PDOs, heartbeat and
   // consumer are gone): the start-up's SDO writes, NMT start, an operational heartbeat, stepped by

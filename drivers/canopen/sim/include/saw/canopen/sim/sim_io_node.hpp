@@ -50,6 +50,9 @@ class SimIoNode {
 
   void step(TimeNs now) noexcept;
   void inject(const Fault& fault) noexcept;
+  // An EMCY as the node's application raises one (CiA 301 7.2.7): the error register (0x1001)
+  // set to `error_register`, then the message; code 0x0000 is the error reset.
+  void raise_emcy(std::uint16_t code, std::uint8_t error_register) noexcept;
 
   std::uint8_t node() const noexcept { return node_; }
   NmtState nmt_state() const noexcept { return nmt_.state(); }
