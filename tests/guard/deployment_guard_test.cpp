@@ -194,7 +194,8 @@ TEST(BilateralGuard, AWavePortsImpedanceChangingMidRunFaultsRtClean) {
     saw::testing::FakeDevice slave{"slave"};
     saw::teleop::WaveVariableLaw::Settings ls;
     ls.impedance = 2;
-    saw::teleop::Teleoperation teleop("teleop", saw::TaskConfig::periodic(1ms, 0), saw::teleop::TeleopConfig{},
+    saw::teleop::Teleoperation teleop("teleop", saw::TaskConfig::periodic(1ms, 0),
+                                      saw::teleop::TeleopConfig{},
                                       saw::teleop::law_spec<saw::teleop::WaveVariableLaw>(ls));
     saw::Manager m;
     m.add(port);
@@ -213,8 +214,8 @@ TEST(BilateralGuard, AWavePortsImpedanceChangingMidRunFaultsRtClean) {
     }
     const auto counts = window.counts();
     EXPECT_EQ(teleop.operating_state(), saw::OperatingStateValue::fault);
-    EXPECT_EQ(teleop.fault().code, answer == saw::Status::ok ? saw::FaultCode::config_mismatch
-                                                             : saw::FaultCode::input_stale);
+    EXPECT_EQ(teleop.fault().code,
+              answer == saw::Status::ok ? saw::FaultCode::config_mismatch : saw::FaultCode::input_stale);
     EXPECT_FALSE(teleop.fault_reason().empty());
     m.stop();
     EXPECT_EQ(counts.cycles, 200u);

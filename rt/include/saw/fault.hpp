@@ -66,7 +66,7 @@ struct FaultInfo {
   static constexpr std::string_view type_name = "saw::FaultInfo";
   // 2: FaultCode::device_fault; 3: device_disabled; 4: config_mismatch
   static constexpr std::uint32_t layout_version = 4;
-  static constexpr std::size_t max_source = 23;       // characters, then at least one NUL
+  static constexpr std::size_t max_source = 23;  // characters, then at least one NUL
 
   FaultCode code = FaultCode::none;
   Status last_read = Status::ok;  // the input's last read result (disconnected: its peer is gone)

@@ -173,7 +173,8 @@ void Teleoperation::raise_fault(FaultInfo why) noexcept {
            to_string(side_of(why)).data(), to_string(why.code).data(), why.age_ns,
            saw::to_string(why.last_read).data());
   // The words outlive the record: fault_reason_ changes only at the next fault, after an enable.
-  if (fault_reason_.size != 0) saw::log(LogLevel::error, name().c_str(), "FAULT: {}", fault_reason_.text.data());
+  if (fault_reason_.size != 0)
+    saw::log(LogLevel::error, name().c_str(), "FAULT: {}", fault_reason_.text.data());
   (void)(*fault_event_)(fault_);
   set_operating_state(OperatingStateValue::fault);
 }
@@ -184,11 +185,13 @@ void Teleoperation::explain(const FaultInfo& why) noexcept {
   if (why.code == FaultCode::config_mismatch) {
     fault_reason_.append(wave_port_text_);
     if (master_.port_b == 0)
-      fault_reason_.append(" now runs time-domain passivity (wave_impedance 0): the law's waves mean nothing to it");
+      fault_reason_.append(
+          " now runs time-domain passivity (wave_impedance 0): the law's waves mean nothing to it");
     else
       fault_reason_.append(" now has wave_impedance ")
           .append(master_.port_b)
-          .append(" N·s/m: the two ends of a wave channel must share b (was the port restarted with another?)");
+          .append(
+              " N·s/m: the two ends of a wave channel must share b (was the port restarted with another?)");
   } else if ((why.code == FaultCode::input_stale || why.code == FaultCode::input_missing) &&
              master_.impedance_status != Status::ok) {
     fault_reason_.append(wave_port_text_)

@@ -38,7 +38,7 @@ struct TeleopSummary {
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultInfo fault{};
   std::array<char, FaultReason::max + 1> reason{};  // the fault's reason in words (fault_reason())
-  double tracking_rms = 0, tracking_max = 0;  // m
+  double tracking_rms = 0, tracking_max = 0;        // m
   std::uint64_t enabled_cycles = 0;
   std::uint64_t rejected_commands = 0, refused_sends = 0, rejected_inputs = 0, offset_errors = 0;
   double master_age_mean = 0;  // ns
@@ -133,8 +133,8 @@ class Teleoperation : public Task {
     double energy = 0;        // the port's input energy, last good read
     FunctionRead<Vec3> wave;  // bound when the device has a wave port
     FunctionWrite<Vec3> remote_wave;
-    FunctionRead<double> wave_impedance;  // the wave port's b, checked against the law's every cycle
-    double port_b = 0;                    // its last answer
+    FunctionRead<double> wave_impedance;   // the wave port's b, checked against the law's every cycle
+    double port_b = 0;                     // its last answer
     Status impedance_status = Status::ok;  // of this cycle's read of it (ok: not read, or answered)
     FunctionRead<ComponentDescription> description;  // a delay task's: the component behind it
     Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();

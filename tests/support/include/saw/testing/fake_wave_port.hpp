@@ -29,9 +29,9 @@ class FakeWavePort : public FakeDevice {
   // Published with the next row (publish()), as a port's outgoing wave is.
   void set_wave(const Vec3& u) { wave_ = u; }
 
-  double impedance;              // N·s/m: what port_wave_impedance answers
-  Status answer = Status::ok;    // anything else: what it answers instead
-  int waves = 0;                 // port_remote_wave calls received
+  double impedance;            // N·s/m: what port_wave_impedance answers
+  Status answer = Status::ok;  // anything else: what it answers instead
+  int waves = 0;               // port_remote_wave calls received
 
  private:
   Vec3 wave_{};
