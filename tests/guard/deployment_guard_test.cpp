@@ -188,7 +188,7 @@ INSTANTIATE_TEST_SUITE_P(RtGuard, BilateralGuard, ::testing::Values(false, true)
 // The wave law's every-cycle check of its port's impedance, through to the FAULT it raises when
 // the port answers with another b (its reason written, logged) and when the port stops answering:
 // RT-clean from the first cycle. The port is a fake whose b the test changes between cycles.
-TEST(BilateralGuard, AWavePortsImpedanceChangingMidRunFaultsRtClean) {
+TEST(RtGuard, AWavePortsImpedanceChangingMidRunFaultsRtClean) {
   for (const saw::Status answer : {saw::Status::ok, saw::Status::disconnected}) {
     saw::testing::FakeWavePort port{"port", 2};
     saw::testing::FakeDevice slave{"slave"};

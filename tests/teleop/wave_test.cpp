@@ -134,6 +134,44 @@ TEST(DelayTask, AWaveIsDeliveredOnceInTheCycleItArrivesNeverRepeated) {
   for (std::size_t i = 1; i < forces.size(); ++i) EXPECT_EQ(forces[i], 0) << "then a zero wave: " << i;
 }
 
+TEST(DelayTask, AWaveInFlightIsNotDeliveredToAPortThatNowAnswersAnotherImpedance) {
+  saw::testing::FakeWavePort source{"port", 3};
+  saw::teleop::DelayConfig dc;
+  dc.measured = {0, 0, 0, 1};
+  dc.commands = {5'000'000, 0, 0, 2};
+  saw::teleop::DelayTask link("link", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), dc);
+  WaveFarSide far;
+  saw::Manager manager;
+  manager.add(source);
+  manager.add(link);
+  manager.add(far);
+  manager.connect("link", "source", "port", "arm");
+  manager.connect("far", "arm", "link", "arm");
+  manager.start_stepped();
+  saw::testing::Stepper stepper{manager};
+  // A wave each cycle, sent while the port says b = 3; 3 cycles in, the port restarts with b = 2.
+  for (int k = 0; k < 12; ++k) {
+    if (k < 3) {
+      ASSERT_EQ(far.remote_wave(saw::Vec3{0.5, 0, 0}), Status::ok);
+      ASSERT_EQ(far.servo_cf(saw::Wrench{}), Status::ok);
+    }
+    if (k == 3) source.impedance = 2;
+    stepper({&source});
+  }
+  EXPECT_EQ(source.waves, 0) << "the waves made for b = 3 reached the port with b = 2";
+  EXPECT_EQ(link.waves_dropped(), 3u);
+  // Sent and delivered with the same b: delivered.
+  for (int k = 0; k < 12; ++k) {
+    if (k < 3) {
+      ASSERT_EQ(far.remote_wave(saw::Vec3{0.5, 0, 0}), Status::ok);
+      ASSERT_EQ(far.servo_cf(saw::Wrench{}), Status::ok);
+    }
+    stepper({&source});
+  }
+  EXPECT_EQ(source.waves, 3);
+  EXPECT_EQ(link.waves_dropped(), 3u);
+}
+
 // A wave law between a master behind its port (and a link) and a slave: how the task starts.
 struct WaveTeleop {
   // port_b: the port's wave_impedance (scheme wave), or 0 for a port in the passivity scheme, or
