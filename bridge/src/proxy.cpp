@@ -123,6 +123,9 @@ void Proxy::build_interface(const Link& l) {
       stamped = [this, offset, size](void* out, RowStamp& stamp) {
         Link& lk = link();
         if (!alive(lk)) return Status::disconnected;
+        // Before the server's first row the mirror holds zeros, which no server said: no data, as
+        // a state table in this process says (a restarted server's reads say nothing until it runs).
+        if (lk.view.header().rows_written.load(std::memory_order_acquire) == 0) return Status::no_data;
         alignas(16) std::byte block[max_mirror_bytes + 8];
         if (!mirror_read(lk.view, block, mirror_bytes_)) return Status::busy;
         std::memcpy(&stamp.time, block, sizeof stamp.time);  // the server's row time

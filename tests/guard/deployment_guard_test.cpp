@@ -13,6 +13,8 @@
 #include "saw/teleop/laws/wave_variables.hpp"
 #include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
+#include "saw/testing/fake_wave_port.hpp"
+#include "saw/testing/stepper.hpp"
 #include "saw/testing/teleop_rig.hpp"
 
 namespace {
@@ -182,5 +184,43 @@ TEST_P(BilateralGuard, OnThreadsIsRtClean) {
 
 INSTANTIATE_TEST_SUITE_P(RtGuard, BilateralGuard, ::testing::Values(false, true),
                          [](const auto& p) { return p.param ? "WaveVariables" : "TimeDomainPassivity"; });
+
+// The wave law's every-cycle check of its port's impedance, through to the FAULT it raises when
+// the port answers with another b (its reason written, logged) and when the port stops answering:
+// RT-clean from the first cycle. The port is a fake whose b the test changes between cycles.
+TEST(RtGuard, AWavePortsImpedanceChangingMidRunFaultsRtClean) {
+  for (const saw::Status answer : {saw::Status::ok, saw::Status::disconnected}) {
+    saw::testing::FakeWavePort port{"port", 2};
+    saw::testing::FakeDevice slave{"slave"};
+    saw::teleop::WaveVariableLaw::Settings ls;
+    ls.impedance = 2;
+    saw::teleop::Teleoperation teleop("teleop", saw::TaskConfig::periodic(1ms, 0),
+                                      saw::teleop::TeleopConfig{},
+                                      saw::teleop::law_spec<saw::teleop::WaveVariableLaw>(ls));
+    saw::Manager m;
+    m.add(port);
+    m.add(slave);
+    m.add(teleop);
+    m.connect("teleop", "master", "port", "arm");
+    m.connect("teleop", "slave", "slave", "arm");
+    m.start_stepped();
+    saw::testing::Stepper step{m};
+    saw::testing::GuardWindow window;
+    for (int i = 0; i < 200; ++i) {
+      port.velocity = {0.01, 0, 0};
+      port.set_wave({0.1, 0, 0});
+      if (i == 100) answer == saw::Status::ok ? void(port.impedance = 3) : void(port.answer = answer);
+      step({&port, &slave});
+    }
+    const auto counts = window.counts();
+    EXPECT_EQ(teleop.operating_state(), saw::OperatingStateValue::fault);
+    EXPECT_EQ(teleop.fault().code,
+              answer == saw::Status::ok ? saw::FaultCode::config_mismatch : saw::FaultCode::input_stale);
+    EXPECT_FALSE(teleop.fault_reason().empty());
+    m.stop();
+    EXPECT_EQ(counts.cycles, 200u);
+    EXPECT_RT_CLEAN(counts);
+  }
+}
 
 }  // namespace

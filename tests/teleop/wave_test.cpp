@@ -1,5 +1,6 @@
 // Wave variables: the transform's power identity at both ends, a lost wave brings nothing, the
-// master port makes its force from the returning wave, and the delay task delivers a wave once.
+// master port makes its force from the returning wave, the delay task delivers a wave once, and
+// the task checks the port's impedance at start-up and every cycle.
 #include "saw/teleop/wave.hpp"
 
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/fake_device.hpp"
+#include "saw/testing/fake_wave_port.hpp"
 #include "saw/testing/stepper.hpp"
 
 namespace {
@@ -132,6 +134,44 @@ TEST(DelayTask, AWaveIsDeliveredOnceInTheCycleItArrivesNeverRepeated) {
   for (std::size_t i = 1; i < forces.size(); ++i) EXPECT_EQ(forces[i], 0) << "then a zero wave: " << i;
 }
 
+TEST(DelayTask, AWaveInFlightIsNotDeliveredToAPortThatNowAnswersAnotherImpedance) {
+  saw::testing::FakeWavePort source{"port", 3};
+  saw::teleop::DelayConfig dc;
+  dc.measured = {0, 0, 0, 1};
+  dc.commands = {5'000'000, 0, 0, 2};
+  saw::teleop::DelayTask link("link", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), dc);
+  WaveFarSide far;
+  saw::Manager manager;
+  manager.add(source);
+  manager.add(link);
+  manager.add(far);
+  manager.connect("link", "source", "port", "arm");
+  manager.connect("far", "arm", "link", "arm");
+  manager.start_stepped();
+  saw::testing::Stepper stepper{manager};
+  // A wave each cycle, sent while the port says b = 3; 3 cycles in, the port restarts with b = 2.
+  for (int k = 0; k < 12; ++k) {
+    if (k < 3) {
+      ASSERT_EQ(far.remote_wave(saw::Vec3{0.5, 0, 0}), Status::ok);
+      ASSERT_EQ(far.servo_cf(saw::Wrench{}), Status::ok);
+    }
+    if (k == 3) source.impedance = 2;
+    stepper({&source});
+  }
+  EXPECT_EQ(source.waves, 0) << "the waves made for b = 3 reached the port with b = 2";
+  EXPECT_EQ(link.waves_dropped(), 3u);
+  // Sent and delivered with the same b: delivered.
+  for (int k = 0; k < 12; ++k) {
+    if (k < 3) {
+      ASSERT_EQ(far.remote_wave(saw::Vec3{0.5, 0, 0}), Status::ok);
+      ASSERT_EQ(far.servo_cf(saw::Wrench{}), Status::ok);
+    }
+    stepper({&source});
+  }
+  EXPECT_EQ(source.waves, 3);
+  EXPECT_EQ(link.waves_dropped(), 3u);
+}
+
 // A wave law between a master behind its port (and a link) and a slave: how the task starts.
 struct WaveTeleop {
   // port_b: the port's wave_impedance (scheme wave), or 0 for a port in the passivity scheme, or
@@ -235,6 +275,128 @@ TEST(WaveVariableLaw, ItsImpedanceIsFixedByTheDeploymentNotSetAtRunTime) {
   stepper({&rig.master, &rig.slave});
   ASSERT_EQ(p.find_command("impedance")->read(nullptr, &b), Status::ok);
   EXPECT_EQ(b, 2);
+}
+
+double norm3(const saw::Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// A wave law driving a slave from a master port whose impedance the test changes mid-run (what a
+// port restarted with another b looks like through the bridge), on the stepped clock.
+struct RunningWaveTeleop {
+  // Sends the task its state commands (enable after a fault).
+  struct Operator : saw::Component {
+    Operator() : Component("operator") { require("teleop").add_function("state_command", state_command); }
+    saw::FunctionWrite<saw::StateCommand> state_command;
+  };
+  explicit RunningWaveTeleop(double stale_timeout = 0.01) {
+    WaveVariableLaw::Settings ls;
+    ls.impedance = 3;
+    saw::teleop::TeleopConfig tc;
+    tc.stale_timeout = stale_timeout;
+    teleop.emplace("teleop", WaveTeleop::period(), tc, saw::teleop::law_spec<WaveVariableLaw>(ls));
+    manager.add(port);
+    manager.add(slave);
+    manager.add(*teleop);
+    manager.add(op);
+    manager.connect("teleop", "master", "port", "arm");
+    manager.connect("teleop", "slave", "slave", "arm");
+    manager.connect("operator", "teleop", "teleop", "teleop");
+    manager.start_stepped();
+  }
+  // n cycles, the master moving and its port sending a wave each row.
+  void step(int n = 1) {
+    for (int i = 0; i < n; ++i) {
+      port.velocity = {0.01, 0, 0};
+      port.set_wave({0.2, 0, 0});
+      stepper({&port, &slave});
+    }
+  }
+
+  saw::testing::FakeWavePort port{"port", 3};
+  saw::testing::FakeDevice slave{"slave"};
+  std::optional<saw::teleop::Teleoperation> teleop;
+  Operator op;
+  saw::Manager manager;
+  saw::testing::Stepper stepper{manager};
+};
+
+TEST(WaveVariableLaw, APortWhoseImpedanceChangesMidRunFaultsTheTaskBeforeItsWaveIsUsed) {
+  RunningWaveTeleop rig;
+  rig.step(20);
+  ASSERT_EQ(rig.teleop->operating_state(), saw::OperatingStateValue::enabled);
+  ASSERT_GT(rig.port.waves, 0) << "the law sends its waves to the port";
+  ASSERT_GT(norm3(rig.slave.force), 0) << "and drives the slave from the port's";
+  const int waves = rig.port.waves, slave_commands = rig.slave.commands;
+
+  // The port restarted with b = 2: its very first wave (made with b = 2) is not used.
+  rig.port.impedance = 2;
+  rig.step();
+  EXPECT_EQ(rig.teleop->operating_state(), saw::OperatingStateValue::fault);
+  const saw::teleop::FaultInfo& f = rig.teleop->fault();
+  EXPECT_EQ(f.code, saw::FaultCode::config_mismatch);
+  EXPECT_EQ(f.source_name(), "master");
+  const std::string why(rig.teleop->fault_reason());
+  EXPECT_NE(why.find("law 'wave_variables' has impedance 3 N·s/m"), std::string::npos) << why;
+  EXPECT_NE(why.find("master's port ('port.arm')"), std::string::npos) << why;
+  EXPECT_NE(why.find("now has wave_impedance 2 N·s/m"), std::string::npos) << why;
+  EXPECT_EQ(why.find('\n'), std::string::npos) << "one line: " << why;
+  // The devices as for any fault: zero force to both, no wave to the port, from that cycle on.
+  EXPECT_EQ(rig.port.waves, waves) << "no wave was sent to the port with the other b";
+  EXPECT_GT(rig.slave.commands, slave_commands);
+  EXPECT_EQ(norm3(rig.slave.force), 0) << "the slave got no force made from that wave";
+  EXPECT_EQ(norm3(rig.port.force), 0);
+  rig.step(10);
+  EXPECT_EQ(rig.port.waves, waves);
+  EXPECT_EQ(norm3(rig.slave.force), 0);
+  saw::teleop::TeleopSummary summary;
+  ASSERT_EQ(rig.teleop->state_table().read_latest(rig.teleop->columns().summary, summary), Status::ok);
+  const std::string said = saw::teleop::to_string(summary);
+  EXPECT_NE(said.find("master configuration mismatch"), std::string::npos) << said;
+  EXPECT_NE(said.find("now has wave_impedance 2 N·s/m"), std::string::npos) << said;
+
+  // Re-enabled with the other b still there: FAULT again at once. With the law's b back: it runs.
+  ASSERT_EQ(rig.op.state_command(saw::StateCommand::enable), Status::ok);
+  rig.step();
+  EXPECT_EQ(rig.teleop->operating_state(), saw::OperatingStateValue::fault);
+  EXPECT_EQ(rig.port.waves, waves);
+  rig.port.impedance = 3;
+  ASSERT_EQ(rig.op.state_command(saw::StateCommand::enable), Status::ok);
+  rig.step(5);
+  EXPECT_EQ(rig.teleop->operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_EQ(rig.teleop->fault_reason(), "");
+  EXPECT_GT(rig.port.waves, waves);
+}
+
+TEST(WaveVariableLaw, APortNowInThePassivitySchemeOrSilentFaultsTheTaskSayingSo) {
+  {
+    RunningWaveTeleop rig;
+    rig.step(20);
+    ASSERT_EQ(rig.teleop->operating_state(), saw::OperatingStateValue::enabled);
+    rig.port.impedance = 0;  // restarted with scheme: passivity
+    rig.step();
+    EXPECT_EQ(rig.teleop->fault().code, saw::FaultCode::config_mismatch);
+    const std::string why(rig.teleop->fault_reason());
+    EXPECT_NE(why.find("now runs time-domain passivity"), std::string::npos) << why;
+    EXPECT_NE(why.find("impedance 3 N·s/m"), std::string::npos) << why;
+  }
+  // A port that stops answering its impedance (its process gone, the bridge disconnected) fails
+  // the input as a silent device does: held for stale_timeout, then FAULT; meanwhile no wave is
+  // sent or used and both forces are zero, as with the clutch.
+  RunningWaveTeleop rig(0.005);
+  rig.step(20);
+  const int waves = rig.port.waves;
+  rig.port.answer = Status::disconnected;
+  rig.step(3);
+  EXPECT_EQ(rig.teleop->operating_state(), saw::OperatingStateValue::enabled) << "within stale_timeout";
+  EXPECT_EQ(rig.port.waves, waves) << "no wave while the port's b is unknown";
+  EXPECT_EQ(norm3(rig.slave.force), 0);
+  rig.step(5);
+  EXPECT_EQ(rig.teleop->operating_state(), saw::OperatingStateValue::fault);
+  EXPECT_EQ(rig.teleop->fault().code, saw::FaultCode::input_stale);
+  EXPECT_EQ(rig.teleop->fault().last_read, Status::disconnected);
+  const std::string why(rig.teleop->fault_reason());
+  EXPECT_NE(why.find("master's port ('port.arm') no longer answers port_wave_impedance (disconnected)"),
+            std::string::npos)
+      << why;
 }
 
 }  // namespace

@@ -26,8 +26,9 @@ enum class FaultCode : std::uint8_t {
   limit_exceeded,     // a measured value left its safe range (a joint limit, a current)
   device_fault,       // a device this one drives reports FAULT (its own fault says why)
   device_disabled,    // a device this one drives stayed disabled: it cannot be driven
+  config_mismatch,    // a peer's configuration no longer matches this one's (a wave port's impedance)
 };
-constexpr std::size_t enum_count(FaultCode) { return 10; }
+constexpr std::size_t enum_count(FaultCode) { return 11; }
 constexpr std::string_view enum_type_name(FaultCode) { return "saw::FaultCode"; }
 
 constexpr std::string_view to_string(FaultCode c) {
@@ -52,6 +53,8 @@ constexpr std::string_view to_string(FaultCode c) {
       return "device in FAULT";
     case FaultCode::device_disabled:
       return "device not enabled";
+    case FaultCode::config_mismatch:
+      return "configuration mismatch";
   }
   return "?";
 }
@@ -61,8 +64,9 @@ constexpr std::string_view to_string(FaultCode c) {
 // bounded: filled in RT code without allocating.
 struct FaultInfo {
   static constexpr std::string_view type_name = "saw::FaultInfo";
-  static constexpr std::uint32_t layout_version = 3;  // 2: FaultCode::device_fault; 3: device_disabled
-  static constexpr std::size_t max_source = 23;       // characters, then at least one NUL
+  // 2: FaultCode::device_fault; 3: device_disabled; 4: config_mismatch
+  static constexpr std::uint32_t layout_version = 4;
+  static constexpr std::size_t max_source = 23;  // characters, then at least one NUL
 
   FaultCode code = FaultCode::none;
   Status last_read = Status::ok;  // the input's last read result (disconnected: its peer is gone)

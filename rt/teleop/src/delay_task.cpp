@@ -1,5 +1,6 @@
 #include "saw/teleop/delay_task.hpp"
 
+#include <limits>
 #include <stdexcept>
 
 namespace saw::teleop {
@@ -92,7 +93,7 @@ DelayTask::DelayTask(std::string name, TaskConfig task, DelayConfig config)
 
 void DelayTask::pass_command(const Wrench& w) noexcept {
   if (commands_direct_) return void(write_cf_(w));
-  commands_.send(now(), DelayedCommand{w, remote_energy_, remote_wave_, has_remote_wave_});
+  commands_.send(now(), DelayedCommand{w, remote_energy_, remote_wave_, has_remote_wave_, remote_wave_b_});
   has_remote_wave_ = false;  // each wave in one packet only
 }
 
@@ -100,6 +101,13 @@ void DelayTask::pass_wave(const Vec3& w) noexcept {
   if (commands_direct_ && write_remote_wave_.is_bound()) return void(write_remote_wave_(w));
   remote_wave_ = w;
   has_remote_wave_ = true;
+  remote_wave_b_ = source_impedance();
+}
+
+double DelayTask::source_impedance() const noexcept {
+  double b = 0;
+  if (!read_impedance_.is_bound()) return 0;  // no port's b to keep: a plain device
+  return read_impedance_(b) == Status::ok ? b : std::numeric_limits<double>::quiet_NaN();
 }
 
 void DelayTask::pass_energy(double e) noexcept {
@@ -144,7 +152,14 @@ void DelayTask::run() {
   if (commands_.receive(t, c)) {
     held_ = c;
     held_since_ = t;
-    if (c.has_wave && write_remote_wave_.is_bound()) (void)write_remote_wave_(c.remote_wave);
+    // A wave made for a port with one b is energy for that b only: a port that answers another
+    // now (restarted while the wave travelled) is not given it. A read-command copy: RT-safe.
+    if (c.has_wave && write_remote_wave_.is_bound()) {
+      if (source_impedance() == c.port_b)
+        (void)write_remote_wave_(c.remote_wave);
+      else
+        ++waves_dropped_;
+    }
   }
   if (held_since_ < 0 || t - held_since_ > command_hold_) return;
   // The energy first: a port never applies a force before the energy that allows it.

@@ -1,4 +1,6 @@
 #include <cstdio>
+#include <cstring>
+#include <string>
 
 #include "saw/teleop/teleoperation.hpp"
 
@@ -7,7 +9,13 @@ namespace saw::teleop {
 std::string to_string(const TeleopSummary& s) {
   // A FAULT says why: "FAULT (master input stale: 23.4 ms old, at t=4.512 s)".
   std::string out(saw::to_string(s.state));
-  if (s.state == OperatingStateValue::fault) out += " (" + to_string(s.fault) + ")";
+  if (s.state == OperatingStateValue::fault) {
+    out += " (" + to_string(s.fault);
+    // Bounded: a summary may come from another process.
+    const std::string reason(s.reason.data(), ::strnlen(s.reason.data(), s.reason.size()));
+    if (!reason.empty()) out += ": " + reason;
+    out += ")";
+  }
   char b[320];
   std::snprintf(b, sizeof b,
                 ", tracking error |e_s| RMS %.3f mm, max %.3f mm over %llu enabled cycles; rejected settings "

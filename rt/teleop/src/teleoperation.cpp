@@ -91,7 +91,7 @@ void Teleoperation::startup() {
   ComponentDescription::set(description_.servers[1], required("slave")->connected_to());
 }
 
-void Teleoperation::check_wave_port() const {
+void Teleoperation::check_wave_port() {
   if (!law_->uses_waves()) return;
   // The port, named as the deployment names it: behind a delay task, the component it carries.
   std::string master = "'" + required("master")->connected_to() + "'";
@@ -102,6 +102,7 @@ void Teleoperation::check_wave_port() const {
   const double law_b = law_->wave_impedance();
   const std::string law = "law '" + std::string(law_->name()) + "' has impedance " + setting_number(law_b) +
                           " N·s/m, but the master's port (" + master + ")";
+  wave_port_text_ = law;  // the RT cycle's check says it in the same words
   if (!master_.wave_impedance.is_bound())
     throw std::runtime_error(
         law + " does not say its " + std::string(port::wave_impedance.name) +
@@ -165,12 +166,41 @@ void Teleoperation::raise_fault(FaultInfo why) noexcept {
   why.time = now();
   why.since_start_ns = now() - start_time_;
   fault_ = why;
+  explain(why);
+  summary_.reason = fault_reason_.text;
   // Once per transition: the log line, the event (the gateway publishes it), then the state.
   saw::log(LogLevel::error, name().c_str(), "FAULT: {} {}: {} ns old, last read {}",
            to_string(side_of(why)).data(), to_string(why.code).data(), why.age_ns,
            saw::to_string(why.last_read).data());
+  // The words outlive the record: fault_reason_ changes only at the next fault, after an enable.
+  if (fault_reason_.size != 0)
+    saw::log(LogLevel::error, name().c_str(), "FAULT: {}", fault_reason_.text.data());
   (void)(*fault_event_)(fault_);
   set_operating_state(OperatingStateValue::fault);
+}
+
+void Teleoperation::explain(const FaultInfo& why) noexcept {
+  fault_reason_.clear();
+  if (side_of(why) != FaultSide::master || !law_->uses_waves()) return;
+  if (why.code == FaultCode::config_mismatch) {
+    fault_reason_.append(wave_port_text_);
+    if (master_.port_b == 0)
+      fault_reason_.append(
+          " now runs time-domain passivity (wave_impedance 0): the law's waves mean nothing to it");
+    else
+      fault_reason_.append(" now has wave_impedance ")
+          .append(master_.port_b)
+          .append(
+              " N·s/m: the two ends of a wave channel must share b (was the port restarted with another?)");
+  } else if ((why.code == FaultCode::input_stale || why.code == FaultCode::input_missing) &&
+             master_.impedance_status != Status::ok) {
+    fault_reason_.append(wave_port_text_)
+        .append(" no longer answers ")
+        .append(port::wave_impedance.name)
+        .append(" (")
+        .append(saw::to_string(master_.impedance_status))
+        .append(")");
+  }
 }
 
 void Teleoperation::handle_state_command(StateCommand c) noexcept {
@@ -180,6 +210,8 @@ void Teleoperation::handle_state_command(StateCommand c) noexcept {
       if (state_.state == OperatingStateValue::enabled) break;
       if (fault_.code != FaultCode::none) {
         fault_ = {};
+        fault_reason_.clear();
+        summary_.reason = fault_reason_.text;
         (void)(*fault_event_)(fault_);
       }
       engage_pending_ = true;
@@ -234,6 +266,21 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   if (st == Status::ok && law_->uses_waves() && s.wave.is_bound()) {
     st = s.wave(wave);
     if (st == Status::ok && !to_eigen(wave).allFinite()) st = Status::invalid;
+  }
+  // The master port's b, every cycle and after its wave: a port restarted with another b (over
+  // the bridge, a new server under the same name) shows its b with its first wave or before it,
+  // so none of its waves is used. A read command's value is a copy (the bridge's mirror): RT-safe.
+  // A port that does not answer fails the read (held, stale after stale_timeout, as any input).
+  s.impedance_status = Status::ok;
+  if (st == Status::ok && law_->uses_waves() && &s == &master_ && s.wave_impedance.is_bound()) {
+    double b = 0;
+    st = s.impedance_status = s.wave_impedance(b);
+    if (st == Status::ok && b != law_->wave_impedance()) {  // to the last bit, as at start-up
+      s.port_b = b;
+      s.status = st;
+      why = fault_on(s.side, FaultCode::config_mismatch);
+      return false;
+    }
   }
   // A row from the future (more than a period ahead) would never go stale: refused.
   if (st == Status::ok && time > now() + config().period.count()) st = Status::invalid;
@@ -334,7 +381,10 @@ void Teleoperation::on_input_failure(const FaultInfo& why) noexcept {
   // At start-up, inputs may simply not be published yet: wait up to startup_timeout for them.
   const double grace = config_.startup_timeout > 0 ? config_.startup_timeout : config_.stale_timeout;
   const bool starting = !inputs_seen_ && now() - start_time_ <= static_cast<TimeNs>(grace * 1e9);
-  if (state_.state == OperatingStateValue::enabled && !starting) raise_fault(why);
+  // A port that answers with another configuration is no late input: FAULT at once, in any state
+  // (re-enabling clears it; the next cycle finds it again if it still holds).
+  if (why.code == FaultCode::config_mismatch || (state_.state == OperatingStateValue::enabled && !starting))
+    raise_fault(why);
   send_forces(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
 }
 
@@ -391,12 +441,16 @@ void Teleoperation::cycle_body() noexcept {
   in.master_wave_fresh = master_.wave_fresh;
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const bool busy = waiting_for_devices();
-  if (state_.state != OperatingStateValue::enabled || clutched_ || busy) {
+  // The master port did not say its b this cycle (its input is held meanwhile): no wave is made
+  // for a port whose b is not known to be the law's, nor a force from its last one.
+  const bool b_unknown = master_.impedance_status != Status::ok;
+  if (state_.state != OperatingStateValue::enabled || clutched_ || busy || b_unknown) {
     // Forces off; the law holds, so that enabling or releasing the clutch cannot jump.
     law_->hold(in);
     // A device's first position after it was busy may jump (a homed Falcon's counts become
-    // absolute in that very row): engage afresh on that cycle, from that position.
-    engage_pending_ = busy;
+    // absolute in that very row): engage afresh on that cycle, from that position. So does the
+    // wave channel after its port was silent.
+    engage_pending_ = busy || b_unknown;
     ratcheting_ = false;
     send_forces(zero, zero);
     return;

@@ -24,6 +24,7 @@ struct DelayedCommand {
   double remote_energy = -1;  // J, for the device's port; -1: none sent
   Vec3 remote_wave{};         // for the device's port, when has_wave
   bool has_wave = false;
+  double port_b = 0;  // N·s/m: the port's wave_impedance when the wave was sent (NaN: not known)
 };
 
 // What a DelayTask adds to the arm interface it re-publishes; Teleoperation reads
@@ -50,7 +51,9 @@ struct DelayConfig {
 // pass through. A source that is a passivity port has its port_energy and port_wave carried with
 // its positions, and port_remote_energy and port_remote_wave travel with the force commands (the
 // same packets); its port_wave_impedance, a setting, is read through undelayed (disconnected when
-// the source has none); `description` (kind "delay") names the source. A wave is delivered once, in the cycle
+// the source has none), and a wave is delivered only if the port still answers the b it answered
+// when the wave was sent (a port restarted with another b meanwhile gets none of the old b's waves:
+// dropped, counted); `description` (kind "delay") names the source. A wave is delivered once, in the cycle
 // its packet arrives: a held (repeated) command carries none, since a repeated wave would bring energy that
 // was never sent. The rows are this task's, stamped with its cycle: "source_time" says when the source wrote
 // the value shown (it stops advancing when the source dies) and "delay" how late it is meant to be, so that a
@@ -64,11 +67,15 @@ class DelayTask : public Task {
   double delay() const noexcept { return static_cast<double>(delay_) * 1e-9; }
   const DelayChannel<DelayedSample>& measured_link() const noexcept { return measured_; }
   const DelayChannel<DelayedCommand>& commands_link() const noexcept { return commands_; }
+  // Waves not delivered because the port's wave_impedance changed (or went unanswered) on the way.
+  std::uint64_t waves_dropped() const noexcept { return waves_dropped_; }
 
  private:
   void pass_command(const Wrench& w) noexcept;
   void pass_energy(double e) noexcept;
   void pass_wave(const Vec3& w) noexcept;
+  // The source's wave_impedance now; NaN when it does not answer (never equal to a sent one).
+  double source_impedance() const noexcept;
 
   TimeNs delay_;
   bool commands_direct_;
@@ -82,6 +89,8 @@ class DelayTask : public Task {
   Vec3 port_wave_{};           // shown, with the row shown
   Vec3 remote_wave_{};         // the newest written, sent with the next command
   bool has_remote_wave_ = false;
+  double remote_wave_b_ = 0;  // the source's b when remote_wave_ was written
+  std::uint64_t waves_dropped_ = 0;
   DelayChannel<DelayedCommand> commands_;
   bool have_output_ = false;
   DelayedCommand held_{};

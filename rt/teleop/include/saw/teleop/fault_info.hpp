@@ -1,6 +1,8 @@
 // FaultSide: which of the teleoperation task's two devices a FaultInfo (saw/fault.hpp) is about.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string_view>
 
@@ -38,5 +40,19 @@ constexpr FaultSide side_of(const FaultInfo& f) noexcept {
 
 // A fault about one side (RT-safe: no allocation).
 FaultInfo fault_on(FaultSide side, FaultCode code, Status last_read = Status::ok, TimeNs age_ns = 0) noexcept;
+
+// Why a FAULT happened, in more words than a FaultInfo holds (a setting's two values, the two
+// components): written in RT code without allocating, truncated at `max` characters.
+struct FaultReason {
+  static constexpr std::size_t max = 255;
+  std::array<char, max + 1> text{};  // NUL-terminated
+  std::size_t size = 0;
+
+  void clear() noexcept { *this = {}; }
+  FaultReason& append(std::string_view s) noexcept;
+  // The shortest decimal that reads back as v (std::to_chars: no locale, no allocation).
+  FaultReason& append(double v) noexcept;
+  std::string_view view() const noexcept { return {text.data(), size}; }
+};
 
 }  // namespace saw::teleop

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -33,10 +34,11 @@ struct TeleopConfig {
 // tracking over the ENABLED cycles, refusals, and the master sample's age at the force command.
 struct TeleopSummary {
   static constexpr std::string_view type_name = "saw::teleop::TeleopSummary";
-  static constexpr std::uint32_t layout_version = 1;
+  static constexpr std::uint32_t layout_version = 2;  // 2: reason
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultInfo fault{};
-  double tracking_rms = 0, tracking_max = 0;  // m
+  std::array<char, FaultReason::max + 1> reason{};  // the fault's reason in words (fault_reason())
+  double tracking_rms = 0, tracking_max = 0;        // m
   std::uint64_t enabled_cycles = 0;
   std::uint64_t rejected_commands = 0, refused_sends = 0, rejected_inputs = 0, offset_errors = 0;
   double master_age_mean = 0;  // ns
@@ -61,8 +63,11 @@ std::string to_string(const TeleopSummary& s);
 // that are busy (homing: their positions mean nothing yet), paused or disabled hold the
 // teleoperation as the clutch does — zero force both sides, the law held, the cycles not
 // counted as ENABLED — and one still disabled after device_timeout faults it; every force is
-// checked finite before it is sent; every FAULT records why (fault(), the "fault" column) and
-// sends zero force both ways until the next enable.
+// checked finite before it is sent; every FAULT records why (fault(), the "fault" column, and
+// fault_reason() when a FaultInfo cannot say it all) and sends zero force both ways until the next
+// enable. A wave law's master port must run with the law's impedance b: checked at start-up (a
+// failed start) and every cycle, before the port's wave is used (a port restarted with another b,
+// or in the passivity scheme: FAULT, config_mismatch, naming both values and both components).
 class Teleoperation : public Task {
  public:
   Teleoperation(std::string name, TaskConfig task, TeleopConfig config, const LawSpec& law);
@@ -76,6 +81,9 @@ class Teleoperation : public Task {
   OperatingStateValue operating_state() const noexcept { return state_.state; }
   const OperatingState& state() const noexcept { return state_; }
   const FaultInfo& fault() const noexcept { return fault_; }
+  // The fault in more words than a FaultInfo holds, when it needs them ("" otherwise): a wave
+  // port whose impedance is no longer the law's names both values and both components.
+  std::string_view fault_reason() const noexcept { return fault_reason_.view(); }
   std::uint64_t rejected_commands() const noexcept { return rejected_; }
   // Input rows refused (not finite, stamped in the future).
   std::uint64_t rejected_inputs() const noexcept { return rejected_inputs_; }
@@ -125,7 +133,9 @@ class Teleoperation : public Task {
     double energy = 0;        // the port's input energy, last good read
     FunctionRead<Vec3> wave;  // bound when the device has a wave port
     FunctionWrite<Vec3> remote_wave;
-    FunctionRead<double> wave_impedance;  // the wave port's b, checked against the law's at start-up
+    FunctionRead<double> wave_impedance;   // the wave port's b, checked against the law's every cycle
+    double port_b = 0;                     // its last answer
+    Status impedance_status = Status::ok;  // of this cycle's read of it (ok: not read, or answered)
     FunctionRead<ComponentDescription> description;  // a delay task's: the component behind it
     Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();
     bool wave_fresh = false;  // a new wave arrived with this cycle's row
@@ -139,8 +149,11 @@ class Teleoperation : public Task {
   };
   void require_side(Side& s, const char* iface);
   // Start-up, a law that uses_waves: the master's port runs the wave scheme with the law's b.
-  void check_wave_port() const;
+  // Also prepares wave_port_text_ for the same check made every cycle (read_side).
+  void check_wave_port();
   bool read_side(Side& s, FaultInfo& why) noexcept;
+  // Fills fault_reason_ for a fault a FaultInfo cannot say all of (clears it otherwise).
+  void explain(const FaultInfo& why) noexcept;
   // True while enabled but a device cannot be driven (busy, paused, disabled): busy, and FAULT
   // once a disabled device has kept it waiting device_timeout.
   bool waiting_for_devices() noexcept;
@@ -163,6 +176,10 @@ class Teleoperation : public Task {
   TimeNs start_time_ = -1;
   TimeNs waiting_since_ = -1;  // enabled, a device not: since when
   FaultInfo fault_{};
+  FaultReason fault_reason_{};
+  // "law 'wave_variables' has impedance 3 N·s/m, but the master's port ('port.arm', through
+  // 'link.arm')": made at start-up, copied into fault_reason_ by the RT cycle.
+  std::string wave_port_text_;
   std::uint64_t rejected_ = 0, refused_sends_ = 0, rejected_inputs_ = 0, offset_errors_ = 0;
   double tracking_sum_sq_ = 0, tracking_max_ = 0;
   std::uint64_t enabled_cycles_ = 0;

@@ -32,11 +32,13 @@ class WaveVariableLaw {
       "positions may drift)";
   static constexpr bool uses_waves = true;
   static constexpr auto declared_settings = std::tuple{
-      // Fixed by the deployment: both ends of the channel must share b (checked at start-up
-      // against the master's port), and changing it at one end mid-run would break passivity.
+      // Fixed by the deployment: both ends of the channel must share b (checked against the
+      // master's port at start-up and every cycle), and changing it at one end mid-run would
+      // break passivity.
       Setting<Settings, double>{"impedance", "N·s/m", 1e-3, 1e3, &Settings::impedance,
                                 "wave impedance b, fixed by the deployment: the master port's wave_impedance "
-                                "must be the same (checked at start)",
+                                "must be the same (checked at start, and every cycle: a port restarted with "
+                                "another b is FAULT)",
                                 /*command=*/false},
       Setting<Settings, double>{"stiffness", "N/m", 0, max_gain, &Settings::stiffness,
                                 "the slave's spring to the wave's integrated velocity"},
