@@ -1,10 +1,15 @@
 """What the CAN system tests share: failing with a message, reading a child's line with a
-deadline, and starting saw-socketcand on a free port of 127.0.0.1."""
+deadline, starting saw-socketcand on a free port of 127.0.0.1, and a DDS domain of the test's own
+(dds_domain: tests/support/python's saw_testing, re-exported here)."""
 
+import os
 import re
 import selectors
 import subprocess
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support", "python"))
+from saw_testing.dds_domain import dds_domain  # noqa: E402, F401
 
 
 def fail(message):

@@ -16,12 +16,12 @@ import sys
 import tempfile
 import threading
 import time
-from harness import check, exit_code  # noqa: E402
+from harness import check, dds_domain, exit_code  # noqa: E402
 
 
 def main(saw_rt, saw_gateway, sawctl):
     name = f"ctl{os.getpid()}"
-    domain = str(100 + (os.getpid() + 71) % 100)
+    domain = str(dds_domain())
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
         f.write(deployment(name, domain))
     rt = subprocess.Popen([saw_rt, f.name], stdout=subprocess.PIPE, text=True)
