@@ -1,5 +1,6 @@
 """What sawgui's window tests share: the source tree's packages, a running teleoperation
-deployment (saw-rt with its gateway) on a DDS domain it holds alone, and where screenshots go."""
+deployment (saw-rt with its gateway) on a DDS domain it holds alone, the window on it, and where
+screenshots go."""
 import os
 import re
 import signal
@@ -138,6 +139,26 @@ def position_position_deployment():
     d = Deployment(saw_rt_path(), law="position_position", names=("right", "left"))
     yield d
     d.close()
+
+
+@pytest.fixture
+def window(qtbot, request):
+    """sawgui's main window (1200x820, shown) with its own Live readers, on the DDS domain of the
+    deployment fixture the test asks for (set up first, so torn down after the window). After the
+    test its refresh timer is stopped and its readers closed; qtbot closes the window."""
+    from sawdds.live import Live
+    from sawgui.app import MainWindow
+
+    asked = "position_position_deployment" if "position_position_deployment" in request.fixturenames else "deployment"
+    d = request.getfixturevalue(asked)
+    live = Live(d.domain)
+    w = MainWindow(live, d.domain, "lo")
+    qtbot.addWidget(w)
+    w.resize(1200, 820)
+    w.show()
+    yield w
+    w.timer.stop()
+    live.close()
 
 
 @pytest.fixture
