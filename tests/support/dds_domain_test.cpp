@@ -1,6 +1,7 @@
 // The DDS domain allocator of the tests and benchmarks (saw/testing/dds_domain.hpp and its Python
 // twin): two claims in two processes never hold the same id, C++ and Python claimers exclude each
-// other, a killed claimer's id is free again at once, a fixed id waits for its holder.
+// other and draw from the same pool, a killed claimer's id is free again at once, a fixed id waits
+// for its holder.
 #include "saw/testing/dds_domain.hpp"
 
 #include <fcntl.h>
@@ -183,6 +184,24 @@ TEST(DdsDomain, CxxAndPythonClaimersExcludeEachOther) {
   python.kill9();
   const DdsDomain again(pool);
   EXPECT_EQ(again.id(), pythons);
+}
+
+TEST(DdsDomain, ThePythonTwinHasTheSamePoolAndDirectory) {
+  if (std::system("python3 -c pass >/dev/null 2>&1") != 0) GTEST_SKIP() << "no python3 on PATH";
+  const std::string module = fs::path(SAW_DDS_DOMAIN_PY).parent_path().parent_path().string();
+  const std::string command = "python3 -c 'import sys; sys.path.insert(0, \"" + module +
+                              "\"); from saw_testing import dds_domain as d; "
+                              "print(d.lock_dir(), *d.POOL)'";
+  FILE* p = ::popen(command.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, p)) out += buffer;
+  ASSERT_EQ(::pclose(p), 0) << out;
+  const DomainPool pool = DomainPool::standard();
+  std::string expected = pool.dir;
+  for (const int id : pool.ids) expected += " " + std::to_string(id);
+  EXPECT_EQ(out, expected + "\n");
 }
 
 TEST(DdsDomain, AFixedIdWaitsForItsHolder) {
