@@ -1,20 +1,16 @@
 """What the CAN system tests share: failing with a message, reading a child's line with a
-deadline, and starting saw-socketcand on a free port of 127.0.0.1."""
+deadline, starting saw-socketcand on a free port of 127.0.0.1, and a DDS domain of the test's own
+(fail, check and dds_domain are tests/support/python's saw_testing, re-exported here)."""
 
+import os
 import re
 import selectors
 import subprocess
 import sys
 
-
-def fail(message):
-    print(f"FAIL: {message}", file=sys.stderr)
-    sys.exit(1)
-
-
-def check(condition, message):
-    if not condition:
-        fail(message)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support", "python"))
+from saw_testing.checks import check, fail  # noqa: E402, F401
+from saw_testing.dds_domain import dds_domain  # noqa: E402, F401
 
 
 def read_line(stream, timeout, what):

@@ -45,7 +45,7 @@ saw::gateway::DdsResolver::Options options(int domain) {
 
 // A served device and a client of it through the DDS resolver, connected as for a local server.
 struct Connected {
-  Connected(const char* prefix, int domain_base) : s(prefix, domain_base) {
+  explicit Connected(const char* prefix) : s(prefix) {
     m.add_resolver(std::make_unique<saw::gateway::DdsResolver>(options(s.domain)));
     m.add(client);
     m.connect("remote_client", "arm", s.name, "arm");
@@ -57,7 +57,7 @@ struct Connected {
 };
 
 TEST(DdsClient, TheSameConnectAndFunctionsReachAComponentThroughItsGateway) {
-  Connected c("dc", 40);
+  Connected c("dc");
   // Named references, not a structured binding: clang 14 cannot capture those in lambdas.
   auto& s = c.s;
   auto& client = c.client;
@@ -86,7 +86,7 @@ TEST(DdsClient, TheSameConnectAndFunctionsReachAComponentThroughItsGateway) {
 }
 
 TEST(DdsClient, ATypeMismatchFailsAtConnectNamingBothTypes) {
-  saw::testing::ServedDevice s("dct", 110);
+  saw::testing::ServedDevice s("dct");
   class Wrong : public saw::Component {
    public:
     Wrong() : Component("wrong") { require("arm").add_function("add", add); }
@@ -108,7 +108,7 @@ TEST(DdsClient, ATypeMismatchFailsAtConnectNamingBothTypes) {
 // A value outside the range the component declares is refused by the gateway before the bridge,
 // counted, and answered on the error topic; a value inside passes.
 TEST(DdsClient, AWriteOutsideTheDeclaredLimitsIsRefusedAtTheGateway) {
-  Connected c("dcl", 120);
+  Connected c("dcl");
   // Named references, not a structured binding: clang 14 cannot capture those in lambdas.
   auto& s = c.s;
   auto& client = c.client;

@@ -66,7 +66,7 @@ class Counts {
 };
 
 TEST(GatewayDisplayStream, AStateGoesOutAtTheTasksRateAndOnItsDisplayTopicAtTheDisplayRate) {
-  saw::testing::ServedDevice s("gd", 170);  // the gateway's default display rate: 50 Hz
+  saw::testing::ServedDevice s("gd");  // the gateway's default display rate: 50 Hz
   const std::string topic = "rt/" + s.name + "/count";
   const auto& eps = s.served->endpoints();
   const auto e = std::find_if(eps.begin(), eps.end(), [&](const auto& x) { return x.topic == topic; });
@@ -98,7 +98,7 @@ TEST(GatewayDisplayStream, AStateGoesOutAtTheTasksRateAndOnItsDisplayTopicAtTheD
 }
 
 TEST(GatewayDisplayStream, ADisplayRateOfZeroPublishesNoDisplayStream) {
-  saw::testing::ServedDevice s("gz", 170, 0.0);
+  saw::testing::ServedDevice s("gz", 0.0);
   for (const auto& x : s.served->endpoints()) EXPECT_EQ(x.display_topic, "") << x.name;
 }
 

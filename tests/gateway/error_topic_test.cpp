@@ -76,7 +76,7 @@ class Tripper : public saw::Component {
 };
 
 TEST(GatewayErrorTopic, AFaultEventAndALostRtProcessAreSaidOnTheErrorTopic) {
-  saw::testing::ServedDevice s("ge", 50);
+  saw::testing::ServedDevice s("ge");
   auto* p = saw::testing::test_participant(s.domain, "error-topic-test");
   {
     ErrorLines errors(p, "rt/" + s.name + "/error");

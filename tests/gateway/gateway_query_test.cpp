@@ -17,7 +17,7 @@
 namespace {
 
 TEST(GatewayQuery, AQualifiedReadCrossesDdsAndTheBridgeAndABadQualifierIsRefused) {
-  saw::testing::ServedDevice s("gq", 30);
+  saw::testing::ServedDevice s("gq");
   auto* p = saw::testing::test_participant(s.domain, "query-test");
   {
     saw::gateway::QueryClient client(p, s.name, "tripled");
@@ -67,7 +67,7 @@ struct ReplyCounter {
 // A reply goes to the client that asked: another client's filtered reader receives none of it,
 // while an unfiltered reader of the same topic sees every reply (so replies did flow).
 TEST(GatewayQuery, RepliesAreFilteredForTheClientThatAsked) {
-  saw::testing::ServedDevice s("gf", 90);
+  saw::testing::ServedDevice s("gf");
   auto* p = saw::testing::test_participant(s.domain, "filter-test");
   {
     saw::gateway::QueryClient client(p, s.name, "tripled");

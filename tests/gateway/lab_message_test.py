@@ -13,6 +13,9 @@ import sys
 import tempfile
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support", "python"))
+from saw_testing.dds_domain import dds_domain  # noqa: E402
+
 failures = []
 
 
@@ -40,7 +43,7 @@ gateway:
 
 def main(saw_rt, sawctl, plugin, mappings, idl_dir):
     name = f"tuning{os.getpid()}"
-    domain = str(100 + (os.getpid() + 37) % 100)
+    domain = str(dds_domain())
     env = dict(os.environ, SAW_MAPPING_PATH=mappings, SAWDDS_IDL_PATH=idl_dir)
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
         f.write(deployment(name, plugin, domain))

@@ -21,6 +21,7 @@
 #include "saw/gateway/gateway.hpp"
 #include "saw/gateway/participant.hpp"
 #include "saw/manager.hpp"
+#include "saw/testing/dds_domain.hpp"
 #include "saw/testing/unique_name.hpp"
 #include "saw/testing/wait_for.hpp"
 #include "std_msgs/msg/Float64PubSubTypes.h"
@@ -66,10 +67,7 @@ class StatefulDevice : public saw::Task {
 
 struct Served {
   Served()
-      : name(saw::testing::unique_name("latch")),
-        domain(110 + getpid() % 60),
-        device(name),
-        exporter(device, "arm") {
+      : name(saw::testing::unique_name("latch")), domain(claim.id()), device(name), exporter(device, "arm") {
     manager.add(device);
     manager.start();
     saw::gateway::GatewayConfig config;
@@ -82,6 +80,7 @@ struct Served {
     manager.stop();
   }
   std::string name;
+  saw::testing::DdsDomain claim;  // held while the device is served
   int domain;
   StatefulDevice device;
   saw::bridge::Exporter exporter;

@@ -26,7 +26,7 @@ class Client : public saw::Component {
 };
 
 TEST(Mirror, AComponentOfAnotherGatewayIsReachedUnderALocalNameWithQualifiedReads) {
-  saw::testing::ServedDevice s("mi", 100);
+  saw::testing::ServedDevice s("mi");
   const std::string local = s.name + "_here";
   saw::gateway::GatewayConfig config;
   config.name = "mirroring-gateway";

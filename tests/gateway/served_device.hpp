@@ -1,8 +1,6 @@
 // ServedDevice: a 1 kHz task exported through the bridge and mapped to DDS by a gateway, all in
-// this process, on a DDS domain of its own (tests side by side do not see each other).
+// this process, on a DDS domain it holds alone (tests side by side do not see each other).
 #pragma once
-
-#include <unistd.h>
 
 #include <chrono>
 #include <memory>
@@ -13,6 +11,7 @@
 #include "saw/gateway/gateway.hpp"
 #include "saw/gateway/participant.hpp"
 #include "saw/manager.hpp"
+#include "saw/testing/dds_domain.hpp"
 #include "saw/testing/unique_name.hpp"
 
 namespace saw::testing {
@@ -53,12 +52,8 @@ class CountingDevice : public Task {
 };
 
 struct ServedDevice {
-  explicit ServedDevice(const std::string& prefix, int domain_base,
-                        double display_rate = gateway::default_display_rate)
-      : name(unique_name(prefix)),
-        domain(domain_base + getpid() % 60),
-        device(name),
-        exporter(device, "arm") {
+  explicit ServedDevice(const std::string& prefix, double display_rate = gateway::default_display_rate)
+      : name(unique_name(prefix)), domain(claim.id()), device(name), exporter(device, "arm") {
     manager.add(device);
     manager.start();
     gateway::GatewayConfig config;
@@ -72,6 +67,7 @@ struct ServedDevice {
     manager.stop();  // (stopping twice is allowed)
   }
   std::string name;
+  DdsDomain claim;  // held while the device is served
   int domain;
   CountingDevice device;
   bridge::Exporter exporter;

@@ -1,5 +1,6 @@
 """What sawgui's window tests share: the source tree's packages, a running teleoperation
-deployment (saw-rt with its gateway) on a DDS domain of its own, and where screenshots go."""
+deployment (saw-rt with its gateway) on a DDS domain it holds alone, the window on it, and where
+screenshots go."""
 import os
 import re
 import signal
@@ -13,7 +14,10 @@ import pytest
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # The source tree's sawdds and sawgui, not installed ones: the venv is shared by every checkout.
 sys.path.insert(0, os.path.join(ROOT, "nonrt", "python"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "support", "python"))
 os.environ.setdefault("PYTHONDONTWRITEBYTECODE", "1")
+
+from saw_testing import dds_domain  # noqa: E402
 
 DEPLOYMENT = """deployment:
   name: gui-{tag}
@@ -66,7 +70,8 @@ class Deployment:
     def __init__(self, saw_rt: str, law: str = "collaborative", names=("master", "slave")):
         """`names`: the master's and the slave's component names (before the tag)."""
         self.tag = f"g{os.getpid()}"
-        self.domain = 200 + os.getpid() % 29  # 229: tests/python's headless sawgui
+        self.claim = dds_domain.claim()  # held until close()
+        self.domain = self.claim.domain
         self.master, self.slave, self.teleop = (f"{n}_{self.tag}" for n in (*names, "teleop"))
         fd, self.yaml = tempfile.mkstemp(suffix=".yaml", prefix="sawgui-")
         with os.fdopen(fd, "w") as f:
@@ -110,6 +115,7 @@ class Deployment:
                 time.sleep(0.05)
         os.unlink(self.yaml)
         self._unlink_segments()
+        self.claim.release()
 
 
 def saw_rt_path():
@@ -133,6 +139,26 @@ def position_position_deployment():
     d = Deployment(saw_rt_path(), law="position_position", names=("right", "left"))
     yield d
     d.close()
+
+
+@pytest.fixture
+def window(qtbot, request):
+    """sawgui's main window (1200x820, shown) with its own Live readers, on the DDS domain of the
+    deployment fixture the test asks for (set up first, so torn down after the window). After the
+    test its refresh timer is stopped and its readers closed; qtbot closes the window."""
+    from sawdds.live import Live
+    from sawgui.app import MainWindow
+
+    asked = "position_position_deployment" if "position_position_deployment" in request.fixturenames else "deployment"
+    d = request.getfixturevalue(asked)
+    live = Live(d.domain)
+    w = MainWindow(live, d.domain, "lo")
+    qtbot.addWidget(w)
+    w.resize(1200, 820)
+    w.show()
+    yield w
+    w.timer.stop()
+    live.close()
 
 
 @pytest.fixture

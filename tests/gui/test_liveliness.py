@@ -12,6 +12,7 @@ import pytest
 
 from conftest import figure
 from sawdds.live import Live
+from saw_testing import dds_domain  # (on the path conftest makes)
 
 YAML = """deployment:
   name: live-{tag}
@@ -42,7 +43,8 @@ def test_a_killed_gateway_is_gone_within_its_lease_and_a_new_one_brings_the_comp
     gateway = os.path.join(os.path.dirname(saw_rt), "saw-gateway")
     tag = f"l{os.getpid()}"
     arm = f"arm_{tag}"
-    domain = 200 + (os.getpid() + 13) % 29
+    claim = dds_domain.claim()  # a domain of this test's own, released at its end
+    domain = claim.domain
     fd, yaml = tempfile.mkstemp(suffix=".yaml", prefix="sawgui-live-")
     with os.fdopen(fd, "w") as f:
         f.write(YAML.format(tag=tag))
@@ -82,3 +84,4 @@ def test_a_killed_gateway_is_gone_within_its_lease_and_a_new_one_brings_the_comp
                 p.send_signal(signal.SIGTERM)
                 p.wait(timeout=20)
         os.unlink(yaml)
+        claim.release()

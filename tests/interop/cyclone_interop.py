@@ -13,14 +13,14 @@ import tempfile
 import time
 
 
-from harness import check, exit_code, wait_for  # noqa: E402
+from harness import check, dds_domain, exit_code, wait_for  # noqa: E402
 from sawdds import Client, msgs  # noqa: E402
 from cyclonedds.internal import InvalidSample  # noqa: E402  (after sawdds: CYCLONEDDS_URI)
 
 
 def main(saw_rt, saw_gateway):
     name = f"arm{os.getpid()}"
-    domain = 100 + os.getpid() % 100  # tests running side by side do not see each other
+    domain = dds_domain()  # tests running side by side do not see each other
     yaml = f"""deployment:
   name: interop-{name}
 components:

@@ -24,7 +24,7 @@ import subprocess
 import sys
 import tempfile
 
-from harness import check, exit_code  # noqa: E402  (puts the tree's sawdds on the path)
+from harness import check, dds_domain, exit_code  # noqa: E402  (puts the tree's sawdds on the path)
 from cyclone_secure_peer import cyclone_uri  # noqa: E402
 import sros2_keystore  # noqa: E402
 from sawdds import security  # noqa: E402
@@ -40,7 +40,7 @@ def main(saw_rt, saw_gateway, sawctl, peer, plugins):
         print(f"SKIP: no Cyclone DDS security plugins in {plugins!r}")
         return 77
     name = f"cyn{os.getpid()}"
-    domain = 1 + os.getpid() % 6  # this test's DDS domains: 1-6
+    domain = dds_domain()  # this test's alone (its keystore's governance is made for it)
     tmp = tempfile.mkdtemp(prefix="saw-cyclone-names-")
     ks = os.path.join(tmp, "keystore")
     sros2_keystore.create_keystore(ks, domain)

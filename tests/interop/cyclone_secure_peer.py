@@ -13,7 +13,7 @@ import sys
 import tempfile
 import time
 
-from harness import check, exit_code  # noqa: E402
+from harness import check, dds_domain, exit_code  # noqa: E402
 
 LOOPBACK = ("<General><Interfaces><NetworkInterface name='lo'/></Interfaces><AllowMulticast>false</AllowMulticast>"
             "</General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
@@ -45,7 +45,7 @@ def main(saw_rt, saw_gateway, sawctl, peer, plugins):
         print(f"SKIP: no Cyclone DDS security plugins in {plugins!r}")
         return 77
     name = f"cys{os.getpid()}"
-    domain = str(190 + os.getpid() % 10)  # this test's DDS domains: 190-199
+    domain = str(dds_domain())  # this test's alone
     tmp = tempfile.mkdtemp(prefix="saw-cyclone-secure-")
     ks = os.path.join(tmp, "keystore")
     enclave = lambda n: os.path.join(ks, "enclaves", n)  # noqa: E731

@@ -17,7 +17,7 @@ import threading
 import time
 
 
-from harness import check, exit_code  # noqa: E402
+from harness import check, dds_domain, exit_code  # noqa: E402
 from sawdds import Client, msgs  # noqa: E402
 from cyclonedds.core import Policy, Qos  # noqa: E402
 from cyclonedds.pub import DataWriter  # noqa: E402
@@ -56,7 +56,7 @@ def main(saw_rt, saw_gateway):
     tag = str(os.getpid())
     arm = "MTML"
     component = f"mtml{tag}"
-    domain = 100 + (os.getpid() + 37) % 100
+    domain = dds_domain()
     client = Client(domain)
     master = SyntheticMaster(client, arm)
     master.start()

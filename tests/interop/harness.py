@@ -1,11 +1,14 @@
 """What the interop tests share: the sawdds import path, a checklist that fails the test at the
-end (every check is printed, met or not), and a bounded wait for a matching DDS sample."""
+end (every check is printed, met or not), a bounded wait for a matching DDS sample, and the DDS
+domain the test holds alone (dds_domain(), from tests/support/python/saw_testing)."""
 import os
 import sys
 import time
 
 # The source tree's sawdds, not an installed one: the venv is shared by every checkout of the repository.
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "nonrt", "python"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support", "python"))
+from saw_testing.dds_domain import dds_domain  # noqa: E402, F401  (for the tests that import harness)
 
 failures = []
 

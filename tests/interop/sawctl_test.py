@@ -16,12 +16,12 @@ import sys
 import tempfile
 import threading
 import time
-from harness import check, exit_code  # noqa: E402
+from harness import check, dds_domain, exit_code  # noqa: E402
 
 
 def main(saw_rt, saw_gateway, sawctl):
     name = f"ctl{os.getpid()}"
-    domain = str(100 + (os.getpid() + 71) % 100)
+    domain = str(dds_domain())
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
         f.write(deployment(name, domain))
     rt = subprocess.Popen([saw_rt, f.name], stdout=subprocess.PIPE, text=True)
@@ -120,22 +120,24 @@ def teleop_settings(saw_rt, sawctl, domain):
         # The collaborative law's offset limits and prediction: read back, set, refused out of range.
         rc, out = ctl("echo", f"rt/{tele}/offset_limits")
         check(rc == 0 and "0.05 0.5 10" in out, f"the offset limits in force are read back: {out.strip()}")
-        rc, out = ctl("call", f"rt/{tele}/set_offset_limits", "50", "0.5", "10")
-        check(rc == 2 and "outside its type's range" in out,
-              f"an offset velocity above 10 m/s is refused before sending: {out.strip()}")
-        rc, out = ctl("call", f"rt/{tele}/set_offset_limits", "0.1", "1", "20")
-        check(rc == 0 and "delivered" in out, f"valid offset limits are delivered: {out.strip()}")
-        check(echoed(ctl, f"rt/{tele}/offset_limits", "0.1 1 20"), "the new offset limits are read back")
-        rc, out = ctl("call", f"rt/{tele}/set_prediction", "1", "2", "0")
-        check(rc == 2 and "outside its type's range" in out,
-              f"a prediction horizon above 1 s is refused before sending: {out.strip()}")
-        rc, out = ctl("call", f"rt/{tele}/set_prediction", "1", "0.02", "0.01")
-        check(rc == 0 and "delivered" in out, f"a prediction is delivered: {out.strip()}")
-        check(echoed(ctl, f"rt/{tele}/prediction", "1 0.02 0.01"), "the new prediction is read back")
+        set_refused_and_read_back(ctl, f"rt/{tele}", "offset_limits", ("50", "0.5", "10"),
+                                  "an offset velocity above 10 m/s", ("0.1", "1", "20"))
+        set_refused_and_read_back(ctl, f"rt/{tele}", "prediction", ("1", "2", "0"),
+                                  "a prediction horizon above 1 s", ("1", "0.02", "0.01"))
     finally:
         rt.terminate()
         rt.wait(timeout=20)
         os.unlink(f.name)
+
+
+def set_refused_and_read_back(ctl, prefix, setting, beyond, beyond_what, valid):
+    """`sawctl call PREFIX/set_SETTING`: `beyond` (outside its type's range) refused before
+    sending; `valid` delivered, and then read back on PREFIX/SETTING."""
+    rc, out = ctl("call", f"{prefix}/set_{setting}", *beyond)
+    check(rc == 2 and "outside its type's range" in out, f"{beyond_what} is refused before sending: {out.strip()}")
+    rc, out = ctl("call", f"{prefix}/set_{setting}", *valid)
+    check(rc == 0 and "delivered" in out, f"set_{setting} {' '.join(valid)} is delivered: {out.strip()}")
+    check(echoed(ctl, f"{prefix}/{setting}", " ".join(valid)), f"the new {setting.replace('_', ' ')} is read back")
 
 
 def echoed(ctl, topic, text, attempts=10):

@@ -15,7 +15,7 @@ import re
 import subprocess
 import sys
 import tempfile
-from harness import check, exit_code  # noqa: E402
+from harness import check, dds_domain, exit_code  # noqa: E402
 
 
 def sh(*args):
@@ -48,7 +48,7 @@ def main(saw_rt, saw_gateway, sawctl=None):
             if r.returncode != 0:
                 print(f"SKIP: cannot build the two-host network ({' '.join(cmd)}): {r.stderr.strip()}")
                 return 77
-        domain = str(7 + os.getpid() % 90)
+        domain = str(dds_domain())
         hosts = {"operator": f"address: {ip_a}", "patient": f"address: {ip_b}"}
         security = "security: none         # the plain variant; the secure one gives each host its enclave"
         if sawctl:

@@ -6,6 +6,11 @@
 # teleoperation task, the lab's type sent and read back through the installed gateway and sawctl
 # — under the installed saw-rt.
 set -euo pipefail
+# The example message's gateway needs a DDS domain no other test holds: the script runs again
+# under the claim of one ($SAW_TEST_DOMAIN; the lock is held while the script and its children run).
+if [[ -z ${SAW_TEST_DOMAIN:-} ]]; then
+  exec python3 "$(dirname "$0")/../support/python/saw_testing/dds_domain.py" --exec "$0" "$@"
+fi
 build=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -60,7 +65,7 @@ if [[ -x "$prefix/bin/saw-gateway" ]]; then
   env -i PATH=/usr/bin:/bin HOME="$tmp" cmake --build "$tmp/msg/build" >"$tmp/build.log" ||
     { cat "$tmp/build.log"; exit 1; }
   # A domain and a component name of this run's own (other tests may run beside it).
-  domain=$((100 + $$ % 100))
+  domain=$SAW_TEST_DOMAIN
   name=tuning$$
   sed -e "s/domain: 42/domain: $domain/" -e "s/name: tuning$/name: $name/" -e "s/component: tuning,/component: $name,/" \
     "$tmp/msg/deployment.yaml" >"$tmp/msg/run.yaml"

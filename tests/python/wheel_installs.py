@@ -21,6 +21,8 @@ import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests" / "support" / "python"))
+from saw_testing.dds_domain import claim_fixed  # noqa: E402
 SOURCE = ROOT / "nonrt" / "python"
 PACKAGES = ("sawdds", "sawgui")
 COMPILED = (".so", ".pyd", ".dylib", ".dll", ".c", ".cpp", ".pyx")
@@ -134,10 +136,14 @@ class TheWheelIsPureAndInstalls(unittest.TestCase):
 
     def test_a_headless_sawgui_runs_from_the_install(self):
         """The window's readers without a window, on a DDS domain no test starts a gateway on (229,
-        loopback): it ends when asked and reports no gateway; the window's modules all import (PySide6
-        and pyqtgraph from the tools venv, as the extra "gui" would install them)."""
+        loopback; kept out of the tests' pool, and claimed as they claim theirs): it ends when asked
+        and reports no gateway; the window's modules all import (PySide6 and pyqtgraph from the tools
+        venv, as the extra "gui" would install them)."""
         self.assertIsNotNone(self.install, "no single wheel to install")
-        r = run(self.python, "-I", "-m", "sawgui", "--domain", "229", "--headless", "1", cwd=self.tmp.name)
+        claim = claim_fixed(229, timeout=30)  # (another run of this test may hold it a moment)
+        self.addCleanup(claim.release)
+        r = run(self.python, "-I", "-m", "sawgui", "--domain", str(claim.domain), "--headless", "1",
+                cwd=self.tmp.name)
         self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
         report = json.loads(r.stdout.strip().splitlines()[-1])
         self.assertEqual(report["gateways"], {})

@@ -20,6 +20,7 @@
 #include "keystore_fixture.hpp"
 #include "saw/gateway/participant.hpp"
 #include "saw/security/enclave.hpp"
+#include "saw/testing/dds_domain.hpp"
 #include "saw/testing/wait_for.hpp"
 #include "std_msgs/msg/Float64PubSubTypes.h"
 
@@ -28,6 +29,7 @@ namespace {
 namespace fs = std::filesystem;
 namespace fdds = eprosima::fastdds::dds;
 using saw::security::Role;
+using saw::testing::DdsDomain;
 using saw::testing::TempKeystore;
 using saw::testing::wait_for;
 using namespace std::chrono_literals;
@@ -117,8 +119,10 @@ bool deliver(fdds::DataWriter* w, double v, fdds::DataReader* r, Tally& t, int n
 }
 
 TEST(SecureDds, AGatewayAndAnOperatorFromOneKeystoreExchangeStateAndCommands) {
+  const DdsDomain domain;  // this test's alone
   TempKeystore ks("pair");
-  Peer gateway(150, ks.enroll("gateway", Role::gateway)), op(150, ks.enroll("op", Role::operator_));
+  Peer gateway(domain.id(), ks.enroll("gateway", Role::gateway)),
+      op(domain.id(), ks.enroll("op", Role::operator_));
   auto* state_out = gateway.writer("rt/arm/measured_cp");
   auto* state_in = op.reader("rt/arm/measured_cp");
   auto* cmd_out = op.writer("rt/arm/servo_cf");
@@ -131,11 +135,13 @@ TEST(SecureDds, AGatewayAndAnOperatorFromOneKeystoreExchangeStateAndCommands) {
 }
 
 TEST(SecureDds, ASignOnlyKeystoreStillAuthenticatesAndControlsAccess) {
+  const DdsDomain domain;  // this test's alone
   saw::security::KeystoreOptions o;
   o.governance.sign_only = true;
   TempKeystore ks("sign-only", o);
-  Peer gateway(155, ks.enroll("gateway", Role::gateway)), op(155, ks.enroll("op", Role::operator_));
-  Peer plain(155, std::nullopt), monitor(155, ks.enroll("monitor", Role::monitor));
+  Peer gateway(domain.id(), ks.enroll("gateway", Role::gateway)),
+      op(domain.id(), ks.enroll("op", Role::operator_));
+  Peer plain(domain.id(), std::nullopt), monitor(domain.id(), ks.enroll("monitor", Role::monitor));
   auto* cmd_in = gateway.reader("rt/arm/servo_cf");
   auto* op_cmd = op.writer("rt/arm/servo_cf");
   auto* plain_cmd = plain.writer("rt/arm/servo_cf");
@@ -147,9 +153,11 @@ TEST(SecureDds, ASignOnlyKeystoreStillAuthenticatesAndControlsAccess) {
 }
 
 TEST(SecureDds, AParticipantWithoutSecurityNeitherReadsStateNorDeliversCommands) {
+  const DdsDomain domain;  // this test's alone
   TempKeystore ks("plain");
-  Peer gateway(151, ks.enroll("gateway", Role::gateway)), op(151, ks.enroll("op", Role::operator_));
-  Peer plain(151, std::nullopt);
+  Peer gateway(domain.id(), ks.enroll("gateway", Role::gateway)),
+      op(domain.id(), ks.enroll("op", Role::operator_));
+  Peer plain(domain.id(), std::nullopt);
   auto* state_out = gateway.writer("rt/arm/measured_cp");
   auto* cmd_in = gateway.reader("rt/arm/servo_cf");
   auto* op_state = op.reader("rt/arm/measured_cp");
@@ -171,9 +179,11 @@ TEST(SecureDds, AParticipantWithoutSecurityNeitherReadsStateNorDeliversCommands)
 }
 
 TEST(SecureDds, AMonitorReadsStateButItsCommandsAreRefusedWhileAnOperatorsArrive) {
+  const DdsDomain domain;  // this test's alone
   TempKeystore ks("roles");
-  Peer gateway(152, ks.enroll("gateway", Role::gateway)), op(152, ks.enroll("op", Role::operator_)),
-      monitor(152, ks.enroll("monitor", Role::monitor));
+  Peer gateway(domain.id(), ks.enroll("gateway", Role::gateway)),
+      op(domain.id(), ks.enroll("op", Role::operator_)),
+      monitor(domain.id(), ks.enroll("monitor", Role::monitor));
   auto* state_out = gateway.writer("rt/arm/measured_cp");
   auto* cmd_in = gateway.reader("rt/arm/servo_cf");
   auto* monitor_state = monitor.reader("rt/arm/measured_cp");
@@ -224,36 +234,38 @@ std::string refusal(int domain, const fs::path& enclave) {
 }
 
 TEST(SecureDds, AnExpiredCertificateIsRefusedWithItsDateAndDdsRefusesItToo) {
+  const DdsDomain domain;  // this test's alone
   TempKeystore ks("expired");
   saw::security::EnrollOptions o;
   o.role = Role::operator_;
   o.not_before = std::chrono::system_clock::now() - std::chrono::days(30);
   o.not_after = std::chrono::system_clock::now() - std::chrono::days(1);
   const fs::path e = saw::security::enroll(ks.dir, "old", o);
-  const std::string why = refusal(153, e);
+  const std::string why = refusal(domain.id(), e);
   EXPECT_NE(why.find("enclave " + e.string() + ": certificate CN=/old expired on "), std::string::npos)
       << why;
-  auto* p = unchecked_participant(153, e);
+  auto* p = unchecked_participant(domain.id(), e);
   EXPECT_EQ(p, nullptr) << "Fast DDS accepted an expired certificate";
   if (p != nullptr) saw::gateway::delete_participant(p);
 }
 
 TEST(SecureDds, ACertificateOfAnotherCaIsRefusedAndAnotherKeystoresPeerHearsNothing) {
+  const DdsDomain domain;  // this test's alone
   TempKeystore a("ca-a", {.common_name = "lab A"}), b("ca-b", {.common_name = "lab B"});
   // Another CA's certificate beside our CAs: refused by our check and by DDS.
   const fs::path mixed = a.enroll("mixed", Role::operator_), foreign = b.enroll("op", Role::operator_);
   fs::copy_file(foreign / "cert.pem", mixed / "cert.pem", fs::copy_options::overwrite_existing);
   fs::copy_file(foreign / "key.pem", mixed / "key.pem", fs::copy_options::overwrite_existing);
-  const std::string why = refusal(154, mixed);
+  const std::string why = refusal(domain.id(), mixed);
   EXPECT_NE(why.find("is not accepted by the enclave's identity CA CN=lab A identity CA 2"),
             std::string::npos)
       << why;
-  auto* p = unchecked_participant(154, mixed);
+  auto* p = unchecked_participant(domain.id(), mixed);
   EXPECT_EQ(p, nullptr) << "Fast DDS accepted a certificate its identity CA did not issue";
   if (p != nullptr) saw::gateway::delete_participant(p);
   // A keystore of its own is consistent, so it runs, but A's participants do not authenticate it.
-  Peer gateway(154, a.enroll("gateway", Role::gateway)), op(154, a.enroll("op", Role::operator_)),
-      stranger(154, foreign);
+  Peer gateway(domain.id(), a.enroll("gateway", Role::gateway)),
+      op(domain.id(), a.enroll("op", Role::operator_)), stranger(domain.id(), foreign);
   auto* state_out = gateway.writer("rt/arm/measured_cp");
   auto* op_state = op.reader("rt/arm/measured_cp");
   auto* stranger_state = stranger.reader("rt/arm/measured_cp");

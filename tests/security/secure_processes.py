@@ -15,7 +15,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "interop"))
-from harness import check, exit_code  # noqa: E402
+from harness import check, dds_domain, exit_code  # noqa: E402
 
 
 def cyclone_outsider(domain, name, seconds):
@@ -43,7 +43,7 @@ def cyclone_outsider(domain, name, seconds):
 
 def main(saw_rt, saw_gateway, sawctl):
     name = f"sec{os.getpid()}"
-    domain = str(160 + os.getpid() % 30)  # this test's DDS domains: 160-189
+    domain = str(dds_domain())  # this test's alone
     tmp = tempfile.mkdtemp(prefix="saw-secure-")
     ks = os.path.join(tmp, "keystore")
 

@@ -16,17 +16,12 @@ import socket
 import subprocess
 import sys
 
-from service_ready import NotifySocket
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support", "python"))
+from saw_testing.checks import fail  # noqa: E402
+from service_ready import NotifySocket  # noqa: E402
 
 SAW_RT, SOURCE = sys.argv[1:3]
 CONFIG = os.path.join(SOURCE, "config", "teleop-sim.yaml")
-
-
-def fail(message, *outputs):
-    print(f"FAIL: {message}", file=sys.stderr)
-    for o in outputs:
-        print(o, file=sys.stderr)
-    sys.exit(1)
 
 
 def run(notify, env):
@@ -50,11 +45,15 @@ def run(notify, env):
         fail(f"no STOPPING=1 (received {notify.received})", out, err)
 
 
-notify = NotifySocket()
-try:
-    run(notify, notify.env())
-finally:
-    notify.close()
+def run_and_close(notify):
+    """run() with `notify` as $NOTIFY_SOCKET; the socket closed whatever happens."""
+    try:
+        run(notify, notify.env())
+    finally:
+        notify.close()
+
+
+run_and_close(NotifySocket())
 print("ok: READY=1, then SIGTERM: exit 0, summary, STOPPING=1 (path socket)")
 
 
@@ -69,9 +68,5 @@ class AbstractSocket(NotifySocket):
         self.sock.close()
 
 
-notify = AbstractSocket()
-try:
-    run(notify, notify.env())
-finally:
-    notify.close()
+run_and_close(AbstractSocket())
 print("ok: the same with a socket in the abstract namespace")

@@ -14,16 +14,11 @@ import subprocess
 import sys
 import tempfile
 
-from service_ready import NotifySocket
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support", "python"))
+from saw_testing.checks import fail  # noqa: E402
+from service_ready import NotifySocket  # noqa: E402
 
 SAW_RT, SOURCE = sys.argv[1:3]
-
-
-def fail(message, *outputs):
-    print(f"FAIL: {message}", file=sys.stderr)
-    for o in outputs:
-        print(o, file=sys.stderr)
-    sys.exit(1)
 
 
 def deployment(name, edit):

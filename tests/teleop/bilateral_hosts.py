@@ -16,6 +16,8 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "tools" / "experiments"))
 import numpy as np  # noqa: E402
 import bilateral_run as br  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "support" / "python"))
+from saw_testing.dds_domain import dds_domain  # noqa: E402
 
 MODE, SAW_RT, WORK = sys.argv[1], sys.argv[2], pathlib.Path(sys.argv[3])
 WORK.mkdir(parents=True, exist_ok=True)
@@ -70,7 +72,7 @@ def run(law, net, delay_ms, loss, jitter_ms):
     cfg = WORK / f"{name}.yaml"
     addresses = net.ip if net else None
     port = f"port{os.getpid()}"  # the segment the operator exports: /dev/shm is shared with other suites
-    cfg.write_text(br.hosts_deployment(law, delay_ms, loss, jitter_ms, addresses, 20 + os.getpid() % 80, port))
+    cfg.write_text(br.hosts_deployment(law, delay_ms, loss, jitter_ms, addresses, dds_domain(), port))
     csv = {h: WORK / f"{name}_{h}.csv" for h in ("operator", "patient")}
     lines = {h: f"{SAW_RT} {cfg} --host {h} --duration {d} --record {csv[h]} > {WORK}/{name}_{h}.log 2>&1"
              for h, d in (("patient", PATIENT_S), ("operator", OPERATOR_S))}

@@ -26,6 +26,7 @@
 #include "saw/gateway/query_client.hpp"
 #include "saw/manager.hpp"
 #include "saw/security/keystore.hpp"
+#include "saw/testing/dds_domain.hpp"
 #include "stats.hpp"
 
 namespace {
@@ -257,15 +258,15 @@ class Suite {
                      }});
     run("Local 1P", paths);
     const Site here{"", "127.0.0.1"};
-    remote("Local 2P", name, here, here, 60, false);
-    if (!enclaves_.empty()) remote("Local 2P secure", name + "s", here, here, 100, true);
+    remote("Local 2P", name, here, here, false);
+    if (!enclaves_.empty()) remote("Local 2P secure", name + "s", here, here, true);
   }
 
   void network(const saw::bench::VethPair& veth) {
     const std::string name = "latn" + std::to_string(getpid());
-    remote("Network 1H", name, {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()}, 90, false);
+    remote("Network 1H", name, {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()}, false);
     if (!enclaves_.empty())
-      remote("Network 1H secure", name + "s", {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()}, 130,
+      remote("Network 1H secure", name + "s", {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()},
              true);
   }
 
@@ -301,14 +302,16 @@ class Suite {
 
   // The server's process and its gateway at `server`; the client's gateway (a mirror) and the
   // client process at `client`; and the baselines between the same two places. `secure`: the DDS
-  // paths only, every participant with an enclave (gateways: gateway; DDS peers: operator).
+  // paths only, every participant with an enclave (gateways: gateway; DDS peers: operator). Each
+  // configuration on a DDS domain it holds alone (saw/testing/dds_domain.hpp).
   void remote(const std::string& config, const std::string& name, const Site& server, const Site& client,
-              int domain_base, bool secure) {
+              bool secure) {
     const Enclave gateway_enclave = secure ? Enclave(enclaves_ / "gateway") : std::nullopt;
     const Enclave peer_enclave = secure ? Enclave(enclaves_ / "operator") : std::nullopt;
     const bool same_host = server.ns == client.ns;
     const std::string dds = same_host ? "DDS loopback" : "DDS veth";
-    const int domain = domain_base + getpid() % 40;
+    const saw::testing::DdsDomain claim;
+    const int domain = claim.id();
     const std::string mirrored = name + "m";
     saw::bench::Children servers;
     servers.spawn(server.ns, 1, [&] { serve(name); });

@@ -291,8 +291,9 @@ def configuration(drive):
 
 
 def reboot():
-    # The deployment's gateway on loopback (DDS domains 230-232: no other test's), as a lab runs it.
-    domain = str(230 + os.getpid() % 3)
+    # The deployment's gateway on loopback (a DDS domain no other test holds), as a lab runs it.
+    from child_tools import dds_domain
+    domain = str(dds_domain())
     top = f"exports:\n  - {{component: axis, provided: drive}}\ngateway:\n  domain: {domain}\n"
     c = Case("reboot", extra="      max_velocity: 10\n", top=top)
 
