@@ -56,8 +56,8 @@ class BusTask;
 
 // A client's bus: a can::Bus whose frames are its own nodes' (their EMCY, heartbeat, SDO
 // responses, TPDOs). While the client cycles (set_cycling(true), from its first RT cycle on) it
-// reads what the bus task routed to it and queues what it sends for the bus task's next cycle
-// (lock-free rings, one writer each). Before (the client's start-up) and after (its last frames
+// reads what the bus task's route phase routed to it and queues what it sends for its send
+// phase (lock-free rings, one writer each). Before (the client's start-up) and after (its last frames
 // at exit, once every task's thread has ended) it reads and writes the bus itself: then no
 // thread cycles, so nobody else touches the bus; a frame it reads then for another client's
 // node goes to that client's in-ring (its first cycle reads it), a full ring counting it dropped.
@@ -206,8 +206,8 @@ bool is_bus_uri(const std::string& bus) noexcept;
 // A URI: opened and claimed for `client` (throws std::runtime_error: cannot open, or claimed);
 // a name: the bus task found and joined with `nodes` and `tpdos` (attach()'s errors). A client
 // whose `period` is not the bus task's is refused (std::runtime_error naming both components
-// and both periods): each SYNC applies the RPDOs queued in the period before it, and the client
-// reads the TPDOs of one SYNC per cycle.
+// and both periods): each SYNC applies the RPDOs queued in its period, and the client reads the
+// TPDOs of one SYNC per cycle. client_task() places the client between the phases.
 BusLink link_bus(const std::string& bus, const std::string& client, TimeNs period,
                  std::span<const std::uint8_t> nodes, std::span<const std::uint32_t> tpdos);
 
