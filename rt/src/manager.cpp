@@ -52,6 +52,7 @@ void Manager::add(Component& c) {
   if (find(c.name()) != nullptr)
     throw ConnectError("add: a component named " + quoted(c.name()) + " exists already");
   components_.push_back(&c);
+  for (Component* k : c.companions()) add(*k);
 }
 
 Component& Manager::add(std::unique_ptr<Component> c) {
@@ -365,9 +366,13 @@ void Manager::start_stepped(TimeNs t0) {
     detail::Access::set_lifecycle(*c, Lifecycle::active);
     if (auto* t = dynamic_cast<Task*>(c)) stepped_.push_back({t, t0});
   }
-  // Shorter periods first; among equals, the order the tasks were added.
+  // Shorter periods first; among equals the earlier phase (offset) first, as the threads wake
+  // on the grid; then the order the tasks were added.
   std::stable_sort(stepped_.begin(), stepped_.end(), [](const Stepped& a, const Stepped& b) {
-    return a.task->config().period < b.task->config().period;
+    const TaskConfig& x = a.task->config();
+    const TaskConfig& y = b.task->config();
+    if (x.period != y.period) return x.period < y.period;
+    return x.offset < y.offset;
   });
   TimeNs fastest = 0;
   for (const auto& s : stepped_)

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include "guard_support.hpp"
+#include "saw/canopen/canopen_bus.hpp"
+#include "saw/manager.hpp"
 #include "saw/rt_context.hpp"
 #include "shared_rig.hpp"
 
@@ -84,6 +86,54 @@ TEST(RtGuard, CanopenBusTaskWithAnArmAndAnIoNodeIsRtClean) {
   EXPECT_EQ(rig.task->counters().syncs, static_cast<std::uint64_t>(cycles));
   EXPECT_EQ(rig.task->counters().dropped, 0u);
   EXPECT_EQ(counts.cycles, 2u * cycles) << "each client's task cycle is one";
+  EXPECT_RT_CLEAN(counts);
+}
+
+// The canopen_bus component's two tasks (route, then its `_sync` task: the clients' frames and
+// SYNC) and an arm between them, stepped by the manager: every task's cycle under the guard.
+TEST(RtGuard, CanopenBusComponentsTwoPhasesAndAClientAreRtClean) {
+  saw::testing::GuardWindow window;
+  RingNetwork network;
+  RingPort& port = network.attach("shared");
+  Drives drives{network, {}};
+  for (const int n : {1, 2}) {
+    TestDriveConfig d;
+    d.node = static_cast<std::uint8_t>(n);
+    drives.list.push_back(std::make_unique<TestDrive>(network, d));
+  }
+  CanopenBusConfig b;
+  b.uri = "test:guard-phases";
+  b.heartbeat_period = 10 * ms;
+  b.heartbeat_timeout = 50 * ms;
+  saw::Manager m;
+  auto& bus = static_cast<CanopenBus&>(m.add(
+      std::make_unique<CanopenBus>("guard-bus", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), b,
+                                   std::make_unique<Borrowed>(port))));
+  CanopenArmConfig c = client("guard-bus", {1, 2});
+  saw::TimeNs now = 0;
+  c.startup_pause = [&] {
+    drives.step(now);
+    now += ms;
+    port.now = now;
+    return now;
+  };
+  auto& arm = static_cast<CanopenArm&>(m.add(
+      std::make_unique<CanopenArm>("arm", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0), c)));
+  saw::TaskConfig late = saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0);
+  late.offset = std::chrono::microseconds(900);
+  saw::testing::BodyTask nodes("nodes", late, [&](std::uint64_t) {
+    drives.step(nodes.now());
+    port.now = nodes.now() + ms;
+  });
+  m.add(nodes);
+  constexpr int periods = 2000;
+  m.start_stepped(1'000'000'000);
+  m.step_until(1'000'000'000 + (periods - 1) * ms);
+  m.stop();
+  const auto counts = window.counts();
+  EXPECT_EQ(arm.operating_state().state, OperatingStateValue::enabled);
+  EXPECT_EQ(bus.bus_task().counters().syncs, static_cast<std::uint64_t>(periods));
+  EXPECT_EQ(counts.cycles, 4u * periods) << "the route task, the arm, the sync task, the nodes";
   EXPECT_RT_CLEAN(counts);
 }
 

@@ -247,6 +247,47 @@ TEST(CanopenDeployment, AClientOfABusTaskAtAnotherPeriodIsRefused) {
              "task 'can0' every 1 ms");
 }
 
+// The send phase's offset: after the route phase, with room for the clients, within the period.
+TEST(CanopenDeployment, ASyncOffsetOutsideThePeriodOrBeforeTheRoutePhaseIsRefused) {
+  for (const char* offset : {"1ms", "1us", "0us"})
+    EXPECT_HAS(
+        io_error_of("{bus: virtual:nowhere}",
+                    std::string("{bus: virtual:nowhere, sync_offset: ") + offset + "}"),
+        "cfg.yaml:6:49: key 'components[0].params.sync_offset': must be at least 2 us after the task's "
+        "offset (0 us: the route phase; the clients run between) and below the period (1000 us)");
+  EXPECT_HAS(
+      io_error_of(
+          "task: {period: 1ms}\n    params: {bus: virtual:nowhere}",
+          "task: {period: 1ms, offset: 400us}\n    params: {bus: virtual:nowhere, sync_offset: 300us}"),
+      "key 'components[0].params.sync_offset': must be at least 2 us after the task's offset (400 us");
+  const auto spec = parse([] {
+    std::string text = io_file;
+    text.replace(text.find("{bus: virtual:nowhere}"), 22, "{bus: virtual:nowhere, sync_offset: 800us}");
+    return text;
+  }());
+  EXPECT_EQ(spec.components.size(), 2u);
+}
+
+// Built, the deployment refuses a client of a canopen_bus whose offset is not between the bus
+// task's two phases, at the client's entry, naming both values.
+TEST(CanopenDeployment, AClientOfABusTaskOutsideItsPhasesIsRefused) {
+  const std::string bus = "cfg-offset-" + std::to_string(::getpid());
+  std::string text = io_file;
+  text.replace(text.find("virtual:nowhere"), 15, "virtual:" + bus);
+  text.replace(text.rfind("period: 1ms"), 11, "period: 1ms, offset: 700us");
+  std::string error;
+  try {
+    (void)saw::deploy::build_deployment(parse(text), registry());
+  } catch (const ConfigError& e) {
+    error = e.what();
+  }
+  (void)saw::can::remove_virtual_bus(bus);
+  EXPECT_HAS(
+      error,
+      "cfg.yaml:7:5: key 'components[1]': 'gripper' (canopen_io): 'gripper' runs at offset 700 us in the "
+      "period, its bus task 'can0' routes the frames received at 0 us and sends SYNC at 500 us");
+}
+
 }  // namespace
 
 namespace {

@@ -186,12 +186,14 @@ struct SharedRig {
     io->state_table().finalize();
     return io;
   }
-  // One period: the bus task, then its clients, then the nodes (their TPDOs for the next).
+  // One period as a canopen_bus runs it: the bus task's route phase, its clients, its send
+  // phase (their RPDOs, then SYNC), then the nodes (their TPDOs for the next).
   void cycle(std::initializer_list<Task*> clients, int n = 1) {
     for (int i = 0; i < n; ++i) {
       bus_port.now = now;
-      task->cycle(now);
+      task->route(now);
       for (Task* a : clients) detail::Access::step(*a, now);
+      task->send(now);
       if (io_node) io_node->step(now);
       drives.step(now);
       now += ms;

@@ -75,6 +75,10 @@ BusTask::BusTask(std::unique_ptr<can::Bus> bus, BusTaskConfig config)
   if (config.heartbeat_period > 0 && !valid_node_id(config.node))
     throw std::invalid_argument("the master's node-ID " + std::to_string(config.node) + " is not 1..127");
   if (config.period <= 0) throw std::invalid_argument("a CANopen bus task must be periodic");
+  if (config.send_offset != 0 && (config.route_offset < 0 || config.route_offset + 1 >= config.send_offset ||
+                                  config.send_offset >= config.period))
+    throw std::invalid_argument(
+        "the send phase must come after the route phase, with room for a client between, within the period");
   inbox_.resize(64);
   state_.store(bus_->state(), std::memory_order_release);
 }
@@ -155,14 +159,31 @@ void BusTask::flush(std::span<const can::Frame> frames) noexcept {
   counters_.send_refused += frames.size() - sent;
 }
 
-void BusTask::cycle(TimeNs now) noexcept {
-  if (!started_) {
-    started_ = true;
-    sync_.start(now);
-    heartbeat_.start(now - config_.heartbeat_period);  // the first one at once
-  }
+BusTaskCounters BusTask::counters() const noexcept {
+  BusTaskCounters c = counters_;
+  c.phase_skips = phase_skips_.load(std::memory_order_relaxed);
+  return c;
+}
+
+// The acquire of the flag pairs with the release of the phase that held it last: what that
+// phase wrote (the bus's own state, the counters, the sync and heartbeat producers) is seen by
+// this one, whichever thread it runs in.
+bool BusTask::enter() noexcept {
+  if (!busy_.exchange(true, std::memory_order_acquire)) return true;
+  phase_skips_.fetch_add(1, std::memory_order_relaxed);
+  return false;
+}
+
+void BusTask::leave(BusTaskCounters* seen) noexcept {
+  state_.store(bus_->state(), std::memory_order_release);
+  if (seen != nullptr) *seen = counters();
+  busy_.store(false, std::memory_order_release);
+}
+
+// Frames in: each to the client whose node sent it.
+bool BusTask::route(TimeNs, BusTaskCounters* seen) noexcept {
+  if (!enter()) return false;
   ++counters_.cycles;
-  // Frames in: each to the client whose node sent it.
   std::size_t total = 0;
   while (total < config_.max_frames) {
     const std::size_t want = std::min(inbox_.size(), config_.max_frames - total);
@@ -185,7 +206,18 @@ void BusTask::cycle(TimeNs now) noexcept {
   }
   if (total >= config_.max_frames) ++counters_.receive_limited;
   counters_.frames_received += total;
-  // Frames out: every client's, in the order it queued them, then SYNC and the heartbeat.
+  leave(seen);
+  return true;
+}
+
+// Frames out: every client's, in the order it queued them, then SYNC and the heartbeat.
+bool BusTask::send(TimeNs now, BusTaskCounters* seen) noexcept {
+  if (!enter()) return false;
+  if (!started_) {
+    started_ = true;
+    sync_.start(now);
+    heartbeat_.start(now - config_.heartbeat_period);  // the first one at once
+  }
   out_count_ = 0;
   for (const auto& p : ports_) {
     can::Frame f;
@@ -207,7 +239,8 @@ void BusTask::cycle(TimeNs now) noexcept {
     ++counters_.heartbeats;
   }
   flush(std::span<const can::Frame>(outbox_.data(), out_count_));
-  state_.store(bus_->state(), std::memory_order_release);
+  leave(seen);
+  return true;
 }
 
 namespace {
@@ -277,7 +310,46 @@ std::string period_text(TimeNs ns) {
   return b;
 }
 
+void check_period(const std::string& bus, const std::string& client, TimeNs period, const BusTask& task) {
+  // A slower client would miss SYNCs' TPDOs and leave SYNCs without its RPDOs, a faster one
+  // would queue two setpoints for one SYNC: one period for the bus and its clients.
+  if (period != task.config().period)
+    throw std::runtime_error("'" + client + "' runs every " + period_text(period) + ", its bus task '" + bus +
+                             "' every " + period_text(task.config().period) +
+                             ": a client of a canopen_bus must have the bus task's period");
+}
+
+// An offset in the period.
+std::string offset_text(TimeNs ns) {
+  char b[32];
+  if (ns % 1'000 == 0)
+    std::snprintf(b, sizeof b, "%lld us", static_cast<long long>(ns / 1'000));
+  else
+    std::snprintf(b, sizeof b, "%lld ns", static_cast<long long>(ns));
+  return b;
+}
+
 }  // namespace
+
+TaskConfig client_task(const std::string& bus, const std::string& client, TaskConfig task) {
+  if (is_bus_uri(bus)) return task;
+  const std::shared_ptr<BusTask> t = find_bus_task(bus);
+  check_period(bus, client, task.period.count(), *t);
+  const BusTaskConfig& k = t->config();
+  if (k.send_offset == 0) return task;  // no phases: the caller cycles the bus task
+  if (task.offset.count() == 0) {
+    task.offset = std::chrono::nanoseconds(k.route_offset + (k.send_offset - k.route_offset) / 2);
+    return task;
+  }
+  if (task.offset.count() <= k.route_offset || task.offset.count() >= k.send_offset)
+    throw std::runtime_error(
+        "'" + client + "' runs at offset " + offset_text(task.offset.count()) +
+        " in the period, its bus task '" + bus + "' routes the frames received at " +
+        offset_text(k.route_offset) + " and sends SYNC at " + offset_text(k.send_offset) +
+        ": a client of a canopen_bus runs between the two (an offset above " + offset_text(k.route_offset) +
+        " and below " + offset_text(k.send_offset) + ", or none: the middle)");
+  return task;
+}
 
 BusLink link_bus(const std::string& bus, const std::string& client, TimeNs period,
                  std::span<const std::uint8_t> nodes, std::span<const std::uint32_t> tpdos) {
@@ -291,12 +363,7 @@ BusLink link_bus(const std::string& bus, const std::string& client, TimeNs perio
     return l;
   }
   l.task = find_bus_task(bus);
-  // A slower client would miss SYNCs' TPDOs and leave SYNCs without its RPDOs, a faster one
-  // would queue two setpoints for one SYNC: one period for the bus and its clients.
-  if (period != l.task->config().period)
-    throw std::runtime_error("'" + client + "' runs every " + period_text(period) + ", its bus task '" + bus +
-                             "' every " + period_text(l.task->config().period) +
-                             ": a client of a canopen_bus must have the bus task's period");
+  check_period(bus, client, period, *l.task);
   try {
     l.port = &l.task->attach(client, nodes, tpdos);
   } catch (const std::invalid_argument& e) {

@@ -135,7 +135,9 @@ CanopenArmConfig with_bus_task(CanopenArmConfig c, const BusLink& l) {
 }  // namespace
 
 CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus* bus)
-    : Device(std::move(name), task, contract_of(checked(config, task))),
+    // A client of a canopen_bus runs between its two phases (its offset given one if none).
+    : Device(name, bus == nullptr ? client_task(config.bus, name, task) : task,
+             contract_of(checked(config, task))),
       config_(checked(std::move(config), task)),
       n_(config_.joints.size()),
       link_(link_of(this->name(), config_, task.period.count(), bus)),

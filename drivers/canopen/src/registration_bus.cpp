@@ -39,6 +39,21 @@ BusSpec parse_bus_task(const ComponentContext& ctx, Params& p) {
     p.fail_at("bus", "'" + s.config.uri + "' is not a bus: virtual:<name> or socketcan:<interface>");
   s.task = deploy::periodic_task(ctx, p, "canopen_bus");
   parse_master(p, s.config.node, s.config.heartbeat_period, s.config.heartbeat_timeout);
+  // The send phase: after the route phase (the task's offset) with room for the clients between
+  // (at least 1 us each side), within the period.
+  const TimeNs period = s.task.period.count(), route = s.task.offset.count();
+  if (p.has("sync_offset")) {
+    s.config.sync_offset = p.get<std::chrono::nanoseconds>("sync_offset").count();
+    if (s.config.sync_offset < route + 2'000 || s.config.sync_offset >= period)
+      p.fail_at("sync_offset", "must be at least 2 us after the task's offset (" +
+                                   std::to_string(route / 1000) +
+                                   " us: the route phase; the clients run between) and below the period (" +
+                                   std::to_string(period / 1000) + " us)");
+  } else if (period - route < 4'000) {
+    p.fail(
+        "task.offset leaves no room for the send phase and the clients before the period's end (give "
+        "sync_offset, or an earlier offset)");
+  }
   return s;
 }
 
@@ -161,16 +176,17 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
 }
 
 std::string bus_line(const CanopenBusStatus& s) {
-  char b[320];
+  char b[400];
   std::snprintf(
       b, sizeof b,
       "bus %s, %u components, master node %u: %llu SYNC, %llu heartbeats, %llu frames received, %llu "
-      "sent (%llu refused), %llu for no component, %llu dropped (a component's queue full)",
+      "sent (%llu refused), %llu for no component, %llu dropped (a component's queue full), %llu phases "
+      "skipped (the other still ran)",
       std::string(can::to_string(static_cast<can::BusState>(s.bus_state))).c_str(), s.clients, s.node,
       static_cast<unsigned long long>(s.syncs), static_cast<unsigned long long>(s.heartbeats),
       static_cast<unsigned long long>(s.frames_received), static_cast<unsigned long long>(s.frames_sent),
       static_cast<unsigned long long>(s.send_refused), static_cast<unsigned long long>(s.foreign_frames),
-      static_cast<unsigned long long>(s.dropped));
+      static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.phase_skips));
   return b;
 }
 
@@ -205,7 +221,7 @@ void register_bus_components(deploy::ComponentRegistry& registry) {
                });
   registry.add("canopen_io", "a generic CANopen I/O node (its PDO-mapped objects) as CRTK joints (servo_jp)",
                parse_io, [](const std::string& name, const IoSpec& s) {
-                 return std::make_unique<CanopenIo>(name, s.task, s.config);
+                 return std::make_unique<CanopenIo>(name, client_task(s.config.bus, name, s.task), s.config);
                });
   registry.add_summary_format<CanopenBusStatus>(bus_line);
   registry.add_summary_format<CanopenIoStatus>(io_line);

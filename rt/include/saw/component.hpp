@@ -63,6 +63,10 @@ class Component {
   // True for a proxy of a component in another process: a call may have to wait for it.
   virtual bool is_remote() const noexcept { return false; }
 
+  // Components this one owns and that run beside it (a second task at another phase of the
+  // period): the manager adds each, by reference, right after this one.
+  virtual std::vector<Component*> companions() { return {}; }
+
  private:
   // The framework's own (tasks, the manager, proxies, the bridge), through detail::Access: a
   // component's author never calls these.

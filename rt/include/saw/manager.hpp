@@ -81,7 +81,8 @@ class Manager {
   void start();
   // Deterministic: all tasks in the calling thread on a simulated clock starting at `t0`.
   void start_stepped(TimeNs t0 = 0);
-  // Stepped mode: runs every task due at the next instant, in period then insertion order.
+  // Stepped mode: runs every task due at the next instant, in period, then offset (phase),
+  // then insertion order.
   TimeNs step();
   // Stepped mode: steps until the simulated clock passes `t`.
   void step_until(TimeNs t);

@@ -14,6 +14,7 @@
 #include "saw/canopen/heartbeat.hpp"
 #include "saw/canopen/sync.hpp"
 #include "saw/clock.hpp"
+#include "saw/task.hpp"
 
 namespace saw::canopen {
 
@@ -26,6 +27,13 @@ struct BusTaskConfig {
   TimeNs heartbeat_timeout = 300'000'000;
   std::size_t max_frames = 256;  // frames read per cycle at most; the rest wait a cycle
   std::size_t ring = 512;        // frames in flight per client and direction
+  // A canopen_bus runs the period in two phases, each its own task on the period's grid: at
+  // route_offset the frames received are routed to the clients, at send_offset the clients'
+  // queued frames go out, then SYNC. Its clients run between the two, so what a client computes
+  // from this period's TPDOs goes out before this period's SYNC. send_offset 0: no phases
+  // (cycle() does both, as a component that runs the task of its own bus in its cycle).
+  TimeNs route_offset = 0;
+  TimeNs send_offset = 0;
 };
 
 // Figures since construction; each only grows.
@@ -39,14 +47,17 @@ struct BusTaskCounters {
   std::uint64_t foreign_frames = 0;  // frames for no client (another master's, unknown nodes)
   std::uint64_t dropped = 0;         // frames for a client whose ring was full
   std::uint64_t receive_limited = 0;
+  // A phase that found the other one still running (a late wake-up, an overrun) and skipped
+  // its turn: its frames wait for its next one.
+  std::uint64_t phase_skips = 0;
 };
 
 class BusTask;
 
 // A client's bus: a can::Bus whose frames are its own nodes' (their EMCY, heartbeat, SDO
 // responses, TPDOs). While the client cycles (set_cycling(true), from its first RT cycle on) it
-// reads what the bus task routed to it and queues what it sends for the bus task's next cycle
-// (lock-free rings, one writer each). Before (the client's start-up) and after (its last frames
+// reads what the bus task's route phase routed to it and queues what it sends for its send
+// phase (lock-free rings, one writer each). Before (the client's start-up) and after (its last frames
 // at exit, once every task's thread has ended) it reads and writes the bus itself: then no
 // thread cycles, so nobody else touches the bus; a frame it reads then for another client's
 // node goes to that client's in-ring (its first cycle reads it), a full ring counting it dropped.
@@ -86,11 +97,15 @@ class BusPort final : public can::Bus {
   bool shut_down_ = false;
 };
 
-// One bus and the clients on it. cycle() is its RT cycle (one thread: the canopen_bus
-// component's): every received frame checked and routed to the client whose node sent it, every
-// client's queued frames sent in the order queued, then SYNC — after the clients' RPDOs, so that
-// each SYNC applies what they queued before it — and the master's heartbeat when due. It neither
-// allocates, locks, blocks, prints nor throws. attach() is set-up.
+// One bus and the clients on it. Its period has two phases: route() checks every received frame
+// and routes it to the client whose node sent it; send() sends every client's queued frames in
+// the order queued, then SYNC — after the clients' RPDOs, so that each SYNC applies what they
+// queued before it — and the master's heartbeat when due. A canopen_bus runs them in two tasks
+// (route at the period's route_offset, send at its send_offset), its clients between them;
+// cycle() runs both back to back (one thread). The phases never touch the bus at the same time:
+// each takes a flag that the other holds while it runs (an atomic exchange, never a wait); a
+// phase that finds it taken skips its turn and counts it (phase_skips). None of them allocates,
+// locks, blocks, prints or throws. attach() is set-up.
 class BusTask {
  public:
   BusTask(std::unique_ptr<can::Bus> bus, BusTaskConfig config);
@@ -106,11 +121,19 @@ class BusTask {
   BusPort& attach(const std::string& client, std::span<const std::uint8_t> nodes,
                   std::span<const std::uint32_t> tpdos);
 
-  void cycle(TimeNs now) noexcept;
+  // Each false when it skipped (the other phase was running). `seen`: the counters as this
+  // phase left them (read under the flag: a copy without a race).
+  bool route(TimeNs now, BusTaskCounters* seen = nullptr) noexcept;
+  bool send(TimeNs now, BusTaskCounters* seen = nullptr) noexcept;
+  void cycle(TimeNs now) noexcept {
+    (void)route(now);
+    (void)send(now);
+  }
 
   can::Bus& bus() noexcept { return *bus_; }
   const BusTaskConfig& config() const noexcept { return config_; }
-  const BusTaskCounters& counters() const noexcept { return counters_; }
+  // From the thread that runs the phases, or once they have stopped (else: route()'s `seen`).
+  BusTaskCounters counters() const noexcept;
   std::size_t clients() const noexcept { return ports_.size(); }
   const BusPort& port(std::size_t i) const noexcept { return *ports_[i]; }
   // The bus's state as the last cycle saw it (read by the clients' threads).
@@ -122,6 +145,8 @@ class BusTask {
   // The bus read for a client that does not cycle: its frames (and those of no client) in
   // `out`, the other clients' to their in-rings.
   std::size_t receive_for(BusPort& port, std::span<can::Received> out) noexcept;
+  bool enter() noexcept;  // the phases' flag: false (and counted) when taken
+  void leave(BusTaskCounters* seen) noexcept;
 
   std::unique_ptr<can::Bus> bus_;
   BusTaskConfig config_;
@@ -134,6 +159,8 @@ class BusTask {
   std::array<can::Frame, 64> outbox_{};
   std::size_t out_count_ = 0;
   bool started_ = false;
+  std::atomic<bool> busy_{false};  // a phase runs
+  std::atomic<std::uint64_t> phase_skips_{0};
   std::atomic<can::BusState> state_{can::BusState::error_active};
 };
 
@@ -158,6 +185,13 @@ class BusClaim {
   std::string bus_;
 };
 
+// The task of a client of bus `bus` (a canopen_bus's name; a URI: `task` as it is). Its period
+// must be the bus task's; its offset strictly after the route phase's and before the send
+// phase's, so that it reads this period's TPDOs and its RPDOs go out before this period's SYNC.
+// An offset of 0 (none given) becomes the middle of the two. Throws std::runtime_error naming
+// the client, the bus and both values.
+TaskConfig client_task(const std::string& bus, const std::string& client, TaskConfig task);
+
 // The bus a component reaches its nodes through.
 struct BusLink {
   std::unique_ptr<can::Bus> owned;  // its own bus (a URI) ...
@@ -172,8 +206,8 @@ bool is_bus_uri(const std::string& bus) noexcept;
 // A URI: opened and claimed for `client` (throws std::runtime_error: cannot open, or claimed);
 // a name: the bus task found and joined with `nodes` and `tpdos` (attach()'s errors). A client
 // whose `period` is not the bus task's is refused (std::runtime_error naming both components
-// and both periods): each SYNC applies the RPDOs queued in the period before it, and the client
-// reads the TPDOs of one SYNC per cycle.
+// and both periods): each SYNC applies the RPDOs queued in its period, and the client reads the
+// TPDOs of one SYNC per cycle. client_task() places the client between the phases.
 BusLink link_bus(const std::string& bus, const std::string& client, TimeNs period,
                  std::span<const std::uint8_t> nodes, std::span<const std::uint32_t> tpdos);
 
