@@ -107,7 +107,7 @@ Outcome CanopenIo::read() {
     start_time_ = t;
     link_.port->set_cycling(true);  // from now on the bus task carries its frames
   }
-  if (own_task_) own_task_->cycle(t);  // frames routed, last cycle's RPDOs sent before SYNC
+  if (own_task_) (void)own_task_->route(t);  // frames in; this cycle's RPDOs and SYNC go in write()
   io_->receive(t);
   JointState& js = measured().js;
   std::size_t in = 0;
@@ -222,6 +222,8 @@ Outcome CanopenIo::write(const Setpoint& s) {
     }
   }  // following without a fresh command: the last outputs stay
   io_->transmit(now());
+  // Its own bus: this cycle's RPDOs, then SYNC, in the same period as the TPDOs they answer.
+  if (own_task_) (void)own_task_->send(now());
   const AxisHealth& h = io_->health();
   status_.state = operating_state().state;
   status_.nmt_state = static_cast<std::uint8_t>(h.nmt_state);

@@ -207,6 +207,12 @@ std::string io_line(const CanopenIoStatus& s) {
                   std::string(emcy_name(s.last_emcy)).c_str(), s.error_register);
     out += b;
   }
+  if (s.warnings != 0) {
+    std::snprintf(b, sizeof b, "; %llu warning EMCY, the last 0x%04X (%s), error register 0x%02X",
+                  static_cast<unsigned long long>(s.warnings), s.last_warning,
+                  std::string(emcy_name(s.last_warning)).c_str(), s.last_warning_register);
+    out += b;
+  }
   return out;
 }
 
