@@ -96,11 +96,7 @@ TEST(RtGuard, CanopenBusComponentsTwoPhasesAndAClientAreRtClean) {
   RingNetwork network;
   RingPort& port = network.attach("shared");
   Drives drives{network, {}};
-  for (const int n : {1, 2}) {
-    TestDriveConfig d;
-    d.node = static_cast<std::uint8_t>(n);
-    drives.list.push_back(std::make_unique<TestDrive>(network, d));
-  }
+  drives.add(network, {1, 2});
   CanopenBusConfig b;
   b.uri = "test:guard-phases";
   b.heartbeat_period = 10 * ms;

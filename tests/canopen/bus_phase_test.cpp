@@ -90,11 +90,7 @@ TEST(CanopenBusPhases, AClientAnswersADrivesTpdoBeforeTheNextSyncAsAnArmOwningIt
     RingNetwork network;
     RingPort& port = network.attach("arm bus");
     Drives drives{network, {}};
-    for (const int n : {1, 2}) {
-      TestDriveConfig d;
-      d.node = static_cast<std::uint8_t>(n);
-      drives.list.push_back(std::make_unique<TestDrive>(network, d));
-    }
+    drives.add(network, {1, 2});
     CanopenArmConfig c = client("test", {1, 2});
     Clock clock;
     c.startup_pause = [&] {
@@ -118,11 +114,7 @@ TEST(CanopenBusPhases, AClientAnswersADrivesTpdoBeforeTheNextSyncAsAnArmOwningIt
     RingNetwork network;
     RingPort& port = network.attach("shared");
     Drives drives{network, {}};
-    for (const int n : {1, 2}) {
-      TestDriveConfig d;
-      d.node = static_cast<std::uint8_t>(n);
-      drives.list.push_back(std::make_unique<TestDrive>(network, d));
-    }
+    drives.add(network, {1, 2});
     CanopenBusConfig b;
     b.uri = "test:phases";
     b.heartbeat_period = 10 * ms;

@@ -1,6 +1,7 @@
 // A bus master and in-process drives on one in-memory network, stepped together by the test.
 #pragma once
 
+#include <initializer_list>
 #include <memory>
 #include <vector>
 
@@ -34,6 +35,13 @@ struct Drives {
       TestDriveConfig c = base;
       c.node = a.node;
       list.push_back(std::make_unique<TestDrive>(network, c));
+    }
+  }
+  // Drives at these node-IDs besides those already there.
+  void add(RingNetwork& network, std::initializer_list<int> nodes, TestDriveConfig base = {}) {
+    for (const int n : nodes) {
+      base.node = static_cast<std::uint8_t>(n);
+      list.push_back(std::make_unique<TestDrive>(network, base));
     }
   }
   void step(TimeNs now) {

@@ -148,11 +148,7 @@ struct SharedRig {
     k.heartbeat_timeout = 50 * ms;
     task = std::make_shared<BusTask>(std::make_unique<Borrowed>(bus_port), k);
     publish_bus_task(name, task);
-    for (const int node : {1, 2, 3}) {
-      TestDriveConfig d;
-      d.node = static_cast<std::uint8_t>(node);
-      drives.list.push_back(std::make_unique<TestDrive>(network, d));
-    }
+    drives.add(network, {1, 2, 3});
   }
   ~SharedRig() { withdraw_bus_task(name); }
   std::unique_ptr<CanopenArm> make(const std::string& who, std::vector<std::uint8_t> nodes,
