@@ -228,13 +228,12 @@ TEST(CanopenDeployment, AnIoNodeOnASharedBusParsesAndItsErrorsNameFileLineAndKey
              "key 'components[0].params.bus': 'can0' is not a bus: virtual:<name> or socketcan:<interface>");
 }
 
-// Built, the deployment refuses a client of a canopen_bus at another period than the bus task's,
-// at the client's entry, naming both components and both periods.
-TEST(CanopenDeployment, AClientOfABusTaskAtAnotherPeriodIsRefused) {
-  const std::string bus = "cfg-period-" + std::to_string(::getpid());
+// The error of building io_file on a fresh virtual bus with its client's task given `task`.
+std::string client_build_error(const std::string& bus_prefix, const std::string& task) {
+  const std::string bus = bus_prefix + std::to_string(::getpid());
   std::string text = io_file;
   text.replace(text.find("virtual:nowhere"), 15, "virtual:" + bus);
-  text.replace(text.rfind("period: 1ms"), 11, "period: 2ms");
+  text.replace(text.rfind("period: 1ms"), 11, task);
   std::string error;
   try {
     (void)saw::deploy::build_deployment(parse(text), registry());
@@ -242,7 +241,13 @@ TEST(CanopenDeployment, AClientOfABusTaskAtAnotherPeriodIsRefused) {
     error = e.what();
   }
   (void)saw::can::remove_virtual_bus(bus);
-  EXPECT_HAS(error,
+  return error;
+}
+
+// Built, the deployment refuses a client of a canopen_bus at another period than the bus task's,
+// at the client's entry, naming both components and both periods.
+TEST(CanopenDeployment, AClientOfABusTaskAtAnotherPeriodIsRefused) {
+  EXPECT_HAS(client_build_error("cfg-period-", "period: 2ms"),
              "cfg.yaml:7:5: key 'components[1]': 'gripper' (canopen_io): 'gripper' runs every 2 ms, its bus "
              "task 'can0' every 1 ms");
 }
@@ -271,19 +276,8 @@ TEST(CanopenDeployment, ASyncOffsetOutsideThePeriodOrBeforeTheRoutePhaseIsRefuse
 // Built, the deployment refuses a client of a canopen_bus whose offset is not between the bus
 // task's two phases, at the client's entry, naming both values.
 TEST(CanopenDeployment, AClientOfABusTaskOutsideItsPhasesIsRefused) {
-  const std::string bus = "cfg-offset-" + std::to_string(::getpid());
-  std::string text = io_file;
-  text.replace(text.find("virtual:nowhere"), 15, "virtual:" + bus);
-  text.replace(text.rfind("period: 1ms"), 11, "period: 1ms, offset: 700us");
-  std::string error;
-  try {
-    (void)saw::deploy::build_deployment(parse(text), registry());
-  } catch (const ConfigError& e) {
-    error = e.what();
-  }
-  (void)saw::can::remove_virtual_bus(bus);
   EXPECT_HAS(
-      error,
+      client_build_error("cfg-offset-", "period: 1ms, offset: 700us"),
       "cfg.yaml:7:5: key 'components[1]': 'gripper' (canopen_io): 'gripper' runs at offset 700 us in the "
       "period, its bus task 'can0' routes the frames received at 0 us and sends SYNC at 500 us");
 }
