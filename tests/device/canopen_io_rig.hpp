@@ -18,9 +18,11 @@ namespace saw::conformance {
 class CanopenIoRig : public Rig {
  public:
   static constexpr std::uint8_t node = 10;
-  // The jaw's SI value is count × 1e-5 m + 0.02 m: count 0 is its safe value (0.02 m), and also
-  // CiA 401's default error value, which the node takes by itself when its consumer fires.
+  // The jaw's SI value is count × 1e-5 m: its safe value 0.02 m is count 2000, not CiA 401's
+  // default error value (0): the node puts it out by itself when its consumer fires only because
+  // the component configured its error value (0x6443:01, 0x6444:01).
   static constexpr double safe_value = 0.02;
+  static constexpr std::int16_t safe_count = 2000;
 
   CanopenIoRig() : bus_port_(network_.attach("bus task")), node_port_(network_.attach("io node")) {
     canopen::BusTaskConfig k;
@@ -33,7 +35,7 @@ class CanopenIoRig : public Rig {
     node_ = std::make_unique<canopen::sim::SimIoNode>(n, node_port_);
     canopen::CanopenIoConfig c = canopen::test::gripper_config(bus_name_, node);
     c.start_enabled = false;
-    c.channels[0].offset = safe_value;
+    c.channels[0].offset = 0;
     c.channels[0].safe = safe_value;
     c.startup_pause = [this] {
       if (powered_) step_node();
@@ -63,7 +65,7 @@ class CanopenIoRig : public Rig {
       step_node();
     }
   }
-  // The jaw: good 0.05 m (count 3000), other 0.025 m (count 500), over limit twice its 0.08 m.
+  // The jaw: good 0.05 m (3000 counts from safe), other 0.025 m (500), over limit twice its 0.08 m.
   void send(Command c) override {
     JointState js;
     js.size = 1;
@@ -71,8 +73,9 @@ class CanopenIoRig : public Rig {
     write("servo_jp", js);
   }
   // How far the node's output is from the safe value, in counts.
-  double output() const override { return std::abs(int{node_->output()}); }
-  bool safe() const override { return node_->output() == 0; }
+  double output() const override { return std::abs(int{node_->output()} - safe_count); }
+  // A node without power puts nothing out (fail_start): safe as it is.
+  bool safe() const override { return !powered_ || node_->output() == safe_count; }
   // The node falls silent (its heartbeat stops; it still takes PDOs and SYNC).
   bool break_hardware() override {
     canopen::sim::Fault f;

@@ -44,6 +44,40 @@ DeviceConfig contract_of(const CanopenIoConfig& c) {
   return d;
 }
 
+// CiA 401's error behaviour for a channel whose output is a CiA 401 output object: what the node
+// puts out by itself on a device failure or a communication loss (its heartbeat consumer fires
+// when the controller dies). Analog 0x6411:n: error mode 0x6443:n = 1 (take the error value),
+// error value 0x6444:n (INTEGER32); digital 8-bit 0x6200:n: error mode mask 0x6206:n = 0xFF (every
+// bit), error value 0x6207:n. The value is the channel's safe value in the output's counts.
+// Other output objects have no standard error value: in `unsupported`.
+std::vector<SdoWrite> error_value_writes(const std::vector<IoChannel>& channels,
+                                         std::vector<const IoChannel*>& unsupported) {
+  std::vector<SdoWrite> out;
+  for (const IoChannel& ch : channels) {
+    const ObjectAddress a = ch.output->address;
+    const bool analog = a.index == 0x6411, digital = a.index == 0x6200;
+    if ((!analog && !digital) || a.subindex == 0) {
+      unsupported.push_back(&ch);
+      continue;
+    }
+    const double count = std::round((ch.safe - ch.offset) / ch.scale);
+    const double low = analog ? -2147483648.0 : 0, high = analog ? 2147483647.0 : 255;
+    if (!(count >= low && count <= high))
+      throw std::invalid_argument("channel '" + ch.name + "': its safe value is " + std::to_string(count) +
+                                  " counts, which " + to_string(a) + "'s error value cannot hold");
+    if (analog) {
+      out.push_back({{0x6443, a.subindex}, DataType::unsigned8, 1});
+      out.push_back({{0x6444, a.subindex},
+                     DataType::integer32,
+                     static_cast<std::uint32_t>(static_cast<std::int32_t>(count))});
+    } else {
+      out.push_back({{0x6206, a.subindex}, DataType::unsigned8, 0xFF});
+      out.push_back({{0x6207, a.subindex}, DataType::unsigned8, static_cast<std::uint32_t>(count)});
+    }
+  }
+  return out;
+}
+
 std::vector<std::uint32_t> tpdo_ids(const IoNodeConfig& n) {
   std::vector<std::uint32_t> ids;
   for (const PdoMapping& m : n.pdos)
@@ -56,6 +90,17 @@ std::vector<std::uint32_t> tpdo_ids(const IoNodeConfig& n) {
 CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
     : Device(std::move(name), task, contract_of(checked(config, task))),
       config_(checked(std::move(config), task)) {
+  // The node's own safe state when the controller dies: before the deployment's writes (which may
+  // set them otherwise), so the start-up and every re-configuration after a reboot write them.
+  // The log keeps the name's pointer until it is drained: the channel's own, in config_.
+  std::vector<const IoChannel*> unsupported;
+  auto errors = error_value_writes(config_.channels, unsupported);
+  config_.node.writes.insert(config_.node.writes.begin(), errors.begin(), errors.end());
+  for (const IoChannel* ch : unsupported)
+    saw::log(LogLevel::warning, this->name().c_str(),
+             "channel '{}': its output is no CiA 401 output object (0x6411 or 0x6200): the node has no "
+             "standard error value, so its output when the controller dies is the device's own",
+             ch->name.c_str());
   check(config_.node);
   const std::uint8_t nodes[] = {config_.node.node};
   const auto tpdos = tpdo_ids(config_.node);

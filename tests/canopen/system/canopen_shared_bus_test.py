@@ -236,6 +236,12 @@ def kill9():
     finally:
         drives = r.close()
     check(events and events[0][0] == 127, f"the I/O node's consumer did not fire for node 127: {events}")
+    # Its output went to the error value canopen_io configured from the jaw's safe value (CiA 401's
+    # default would be 0 counts).
+    error_value, output = r.io._get(0x6444, 1), r.io._get(0x6411, 1)
+    check(error_value == SAFE_COUNTS and output == SAFE_COUNTS,
+          f"the I/O node's output after its consumer fired: {output} (error value {error_value}), "
+          f"not the jaw's safe {SAFE_COUNTS}")
     # saw-can-sim's drives watched the same master (0x1016 from the arm, 0x6007 quick stop).
     for node in DRIVES:
         check(any(ident == 0x80 + node and data[:2] == b"\x30\x81" for _, ident, data in emcys),

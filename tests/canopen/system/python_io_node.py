@@ -3,15 +3,18 @@
 Its object dictionary is built here from CiA 301 and CiA 401 (no EDS, nothing of sawrt's):
 device type 0x1000 (401, analog in and out), 0x1016/0x1017 heartbeats, identity 0x1018, RPDO1 and
 TPDO1 (communication and mapping, both remappable by SDO), 0x6411:01 "write analog output 16-bit"
-(the jaw's commanded opening, counts) and 0x6401:01 "read analog input 16-bit" (its measured
-opening). What python canopen's LocalNode leaves to the application is PythonDrive's (NMT, PDOs
+(the jaw's commanded opening, counts), 0x6401:01 "read analog input 16-bit" (its measured
+opening), and the output's error behaviour: 0x6443:01 "analog output error mode" (1, the default:
+take the error value on a device failure or communication loss; 0: keep the output) and 0x6444:01
+"analog output error value" (INTEGER32, default 0), which the output takes when its heartbeat
+consumer fires. What python canopen's LocalNode leaves to the application is PythonDrive's (NMT, PDOs
 at SYNC, the heartbeat consumer); the application here is a jaw that moves towards the command
 by at most `rate` counts per SYNC.
 """
 
 import canopen
-from canopen.objectdictionary import (ODArray, ODRecord, ODVariable, INTEGER16, UNSIGNED8, UNSIGNED16,
-                                      UNSIGNED32)
+from canopen.objectdictionary import (ODArray, ODRecord, ODVariable, INTEGER16, INTEGER32, UNSIGNED8,
+                                      UNSIGNED16, UNSIGNED32)
 
 from python_drive import PythonDrive
 
@@ -47,6 +50,8 @@ def io_dictionary(node_id):
         od.add_object(_record(ODRecord, name, index, [(f"Entry {k}", UNSIGNED32, 0) for k in range(1, 9)], "rw"))
     od.add_object(_record(ODArray, "Read analog input 16-bit", 0x6401, [("Input 1", INTEGER16, 0)]))
     od.add_object(_record(ODArray, "Write analog output 16-bit", 0x6411, [("Output 1", INTEGER16, 0)]))
+    od.add_object(_record(ODArray, "Analog output error mode", 0x6443, [("Output 1", UNSIGNED8, 1)]))
+    od.add_object(_record(ODArray, "Analog output error value integer", 0x6444, [("Output 1", INTEGER32, 0)]))
     return od
 
 
@@ -61,6 +66,14 @@ class PythonIoNode(PythonDrive):
         now = self._get(0x6401, 1)
         self.outputs.append(out)
         self._set(0x6401, 1, now + max(-self.rate, min(self.rate, out - now)))
+
+    def _abort_connection(self):
+        """The heartbeat event: EMCY 0x8130, and the output at its error value if its mode says so."""
+        self.node.emcy.send(0x8130, 0x11)
+        if self._get(0x6443, 1) == 1:
+            value = max(-0x8000, min(0x7FFF, self._get(0x6444, 1)))
+            self._set(0x6411, 1, value)
+            self._note(f"output at its error value {value}")
 
     def nmt_state(self):
         return self.node.nmt.state

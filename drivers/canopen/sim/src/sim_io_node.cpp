@@ -18,6 +18,7 @@ constexpr ObjectAddress heartbeat_time{0x1017, 0};
 constexpr ObjectAddress consumer{0x1016, 1};
 constexpr ObjectAddress analog_input{0x6401, 1};
 constexpr ObjectAddress analog_output{0x6411, 1};
+constexpr ObjectAddress error_mode{0x6443, 1}, error_value{0x6444, 1};
 constexpr std::uint16_t emcy_heartbeat = 0x8130, emcy_over_current = 0x2310;
 
 void add_count(LocalDictionary& d, std::uint16_t index, std::string name, std::uint8_t n,
@@ -69,6 +70,13 @@ LocalDictionary make_io_dictionary(std::uint8_t node) {
   add_count(d, 0x6411, "Write analog output 16-bit", 1);
   Entry out{"Analog output 1", DataType::integer16, Access::rww, {0, 0}, {}, {}, 0, true};
   d.add(analog_output, out);
+  // CiA 401's error behaviour of the analog output: mode 1 takes the error value on a device
+  // failure or a communication loss (0: the output keeps its value); the error value is an
+  // INTEGER32 in the output's counts. Both default as CiA 401 says (1, 0).
+  add_count(d, 0x6443, "Analog output error mode", 1);
+  d.add_value(error_mode, "Analog output 1 error mode", DataType::unsigned8, Access::rw, std::uint8_t{1});
+  add_count(d, 0x6444, "Analog output error value integer", 1);
+  d.add_value(error_value, "Analog output 1 error value", DataType::integer32, Access::rw, std::int32_t{0});
   return d;
 }
 
@@ -193,6 +201,17 @@ void SimIoNode::raise_emcy(std::uint16_t code, std::uint8_t error_register) noex
   (void)(code == 0 ? emcy_.clear(error_register) : emcy_.raise(code, error_register));
 }
 
+void SimIoNode::apply_error_value() noexcept {
+  std::uint8_t mode = 0;
+  std::int32_t value = 0;
+  if (dictionary_.get(error_mode, mode) != Codec::ok || mode != 1 ||
+      dictionary_.get(error_value, value) != Codec::ok)
+    return;
+  const std::int32_t held = std::clamp<std::int32_t>(value, std::numeric_limits<std::int16_t>::min(),
+                                                     std::numeric_limits<std::int16_t>::max());
+  (void)dictionary_.set(analog_output, static_cast<std::int16_t>(held));
+}
+
 void SimIoNode::send(const can::Frame& f) noexcept { (void)bus_.send(std::span(&f, 1)); }
 
 void SimIoNode::dispatch(const can::Frame& f) noexcept {
@@ -252,8 +271,8 @@ void SimIoNode::step(TimeNs now) noexcept {
     consumer_fired_ = true;
     ++heartbeat_events_;
     ++emcys_;
-    (void)emcy_.raise(emcy_heartbeat, 0x11);                // generic, communication
-    (void)dictionary_.set(analog_output, std::int16_t{0});  // CiA 401's error value
+    (void)emcy_.raise(emcy_heartbeat, 0x11);  // generic, communication
+    apply_error_value();
   }
   if (silent_until_ && now >= *silent_until_) silent_until_.reset();
   if (over_current_ && now >= over_current_until_) {  // the cause gone: error reset, outputs again

@@ -78,7 +78,10 @@ struct CanopenIoConfig {
 // Provided `<interface_name>` (CRTK, by the device base): measured_js (the channels), servo_jp,
 // state_command, operating_state, fault. Provided "canopen": status (CanopenIoStatus), sdo (a
 // qualified read: SdoRequest → SdoReply for this node, waiting up to 1 s: non-RT callers only). Start-up: NMT
-// reset, identity, PDOs, 0x1017, 0x1016, the deployment's writes, NMT start (StartupSequence). Each cycle:
+// reset, identity, PDOs, 0x1017, 0x1016, each channel's CiA 401 error behaviour (a 0x6411:n output:
+// 0x6443:n = 1 and 0x6444:n = its safe value in counts; a 0x6200:n output: 0x6206:n = 0xFF and 0x6207:n;
+// any other output: a warning at construction, it has no standard error value), the deployment's
+// writes, NMT start (StartupSequence; a re-configuration after a reboot writes the same). Each cycle:
 // the TPDOs into measured_js; a FAULT (this component's only) on a lost heartbeat, a heartbeat not
 // operational, a boot-up, an EMCY that emcy_severity() calls a fault (logged in hex with its name;
 // a warning is logged so and counted in status, no FAULT), TPDOs older than feedback_timeout, bus

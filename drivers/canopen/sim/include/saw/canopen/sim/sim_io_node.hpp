@@ -28,7 +28,8 @@ struct SimIoNodeConfig {
 // Its dictionary, built here from CiA 301 and CiA 401: device type 0x1000 (401, analog in and
 // out), 0x1001, 0x1016:01 (one consumer), 0x1017, identity 0x1018, RPDO1..4 and TPDO1..4
 // (0x1400.., 0x1600.., 0x1800.., 0x1A00..; RPDO1 maps 0x6411:01, TPDO1 0x6401:01, both on SYNC;
-// 2..4 not valid), 0x6401:01 "read analog input 16-bit", 0x6411:01 "write analog output 16-bit".
+// 2..4 not valid), 0x6401:01 "read analog input 16-bit", 0x6411:01 "write analog output 16-bit",
+// 0x6443:01 "analog output error mode", 0x6444:01 "analog output error value integer".
 LocalDictionary make_io_dictionary(std::uint8_t node);
 
 // The node's cycle is step(now): every frame the bus has (each one checked with
@@ -36,11 +37,11 @@ LocalDictionary make_io_dictionary(std::uint8_t node);
 // operational the RPDOs take effect, the application runs — the input (a jaw's measured
 // opening) moves towards the output (its commanded opening) by at most `rate` counts — and the
 // TPDOs go out; the heartbeat when due. The heartbeat consumer (0x1016:01, from the watched
-// node's first heartbeat) fires EMCY 0x8130 and the outputs take their error value 0 (CiA 401's
-// default error mode). Faults: over-current (EMCY 0x2310, the error register's current bit, the
-// output held at 0 for 0.5 s, then the error reset EMCY) and heartbeat-loss (its heartbeat stops
-// for the duration).
-// step() neither allocates, locks nor throws (remapping a PDO rebuilds it, as on SimDrive).
+// node's first heartbeat) fires EMCY 0x8130 and, with the error mode 0x6443:01 at 1 (its default),
+// the output takes the error value 0x6444:01 (default 0; clamped to the 16-bit output). Faults: over-current
+// (EMCY 0x2310, the error register's current bit, the output held at 0 for 0.5 s, then the error reset EMCY)
+// and heartbeat-loss (its heartbeat stops for the duration). step() neither allocates, locks nor throws
+// (remapping a PDO rebuilds it, as on SimDrive).
 class SimIoNode {
  public:
   SimIoNode(const SimIoNodeConfig& config, can::Bus& bus);
@@ -69,6 +70,7 @@ class SimIoNode {
   void reset(NmtReset what) noexcept;
   void written(ObjectAddress a) noexcept;
   void refresh() noexcept;
+  void apply_error_value() noexcept;
   void send(const can::Frame& f) noexcept;
 
   std::uint8_t node_;
