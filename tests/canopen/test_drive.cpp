@@ -5,6 +5,7 @@
 #include <variant>
 
 #include "saw/canopen/cia402.hpp"
+#include "saw/canopen/cob.hpp"
 #include "saw/canopen/sync.hpp"
 #include "saw/rt_context.hpp"
 
@@ -208,12 +209,55 @@ void TestDrive::on_sync(TimeNs now) noexcept {
   }
 }
 
+// The heartbeat consumer (CiA 301 0x1016:01: bits 16..23 the watched node, 0..15 its time in ms;
+// 0 or node 0: not used). A new value starts over: monitoring begins with the watched node's
+// next heartbeat. On expiry the heartbeat event: EMCY 0x8130, CiA 402's abort connection option
+// 0x6007 (1 fault, 2 disable voltage, 3 quick stop; 0 and others: nothing) taken at once, without
+// waiting for a SYNC, then CiA 301's error behaviour for a communication error (0x1029's default:
+// operational to pre-operational).
+void TestDrive::watch_master(TimeNs now) noexcept {
+  std::uint32_t c = 0;
+  (void)dictionary_.get({0x1016, 1}, c);
+  if (c != consumer_entry_) {
+    consumer_entry_ = c;
+    consumer_time_ = static_cast<TimeNs>(c & 0xFFFF) * 1'000'000;
+    consumer_node_ = consumer_time_ > 0 ? static_cast<std::uint8_t>((c >> 16) & 0x7F) : 0;
+    consumer_seen_.reset();
+    consumer_fired_ = false;
+  }
+  if (consumer_node_ == 0 || !consumer_seen_ || consumer_fired_ || now - *consumer_seen_ <= consumer_time_)
+    return;
+  consumer_fired_ = true;
+  ++heartbeat_events_;
+  (void)emcy_.raise(0x8130, error_register::generic | error_register::communication);
+  std::int16_t option = 0;
+  (void)dictionary_.get(object::abort_connection_option_code, option);
+  const bool moving =
+      drive_.state() == State::operation_enabled || drive_.state() == State::quick_stop_active;
+  if (moving && (option == 1 || option == 2 || option == 3)) {
+    // The drive acts as if its controlword had said so (disable voltage, quick stop) or as at a
+    // fault condition; a quick stop or fault reaction ends at standstill (no motion without SYNC).
+    const std::uint16_t local = option == 2 ? 0x0000 : option == 3 ? 0x0002 : controlword_;
+    velocity_ = 0;
+    drive_.update({local, option == 1, true, true});
+    drive_.update({local, false, true, true});
+    if (option == 1) (void)dictionary_.set(object::error_code, std::uint16_t{0x8130});
+    (void)dictionary_.set(object::statusword, drive_.statusword());
+  }
+  if (nmt_.state() == NmtState::operational) set_nmt(NmtCommand::enter_pre_operational);
+}
+
 void TestDrive::step(TimeNs now) noexcept {
   port_.now = now;
   can::Received in[64];
   for (std::size_t n; (n = port_.receive(in)) > 0;) {
     for (std::size_t i = 0; i < n; ++i) {
       const can::Frame& f = in[i].frame;
+      if (consumer_node_ != 0 && f.can_id() == cob::heartbeat + consumer_node_ && parse_heartbeat(f)) {
+        consumer_seen_ = now;  // CiA 301: monitoring starts with the first heartbeat
+        consumer_fired_ = false;
+        continue;
+      }
       switch (nmt_.on_frame(f)) {
         case NmtReset::communication:
         case NmtReset::application:
@@ -264,6 +308,7 @@ void TestDrive::step(TimeNs now) noexcept {
     heartbeat_ms_ = hb;
     heartbeat_.set_period(static_cast<TimeNs>(hb) * 1'000'000, now);
   }
+  watch_master(now);
   if (auto f = nmt_.poll()) send(*f);
   if (auto f = server_->poll(now)) send(*f);
   if (auto f = emcy_.poll(now)) send(*f);

@@ -1,6 +1,7 @@
 // A minimal in-process CiA 402 drive for the master's tests: a LocalDictionary served by an
 // SdoServer, an NmtNode, the drive-side state machine, PDOs built from its own mapping objects,
-// heartbeat and EMCY producers, and a first-order motion. Stepped by the test; allocation-free
+// heartbeat and EMCY producers, a heartbeat consumer (0x1016:01, with CiA 402's abort connection
+// option 0x6007 on expiry), and a first-order motion. Stepped by the test; allocation-free
 // once operational (so it may run inside a guarded cycle).
 #pragma once
 
@@ -64,6 +65,7 @@ class TestDrive {
   std::int16_t target_torque() const noexcept;
   std::int32_t target_velocity() const noexcept;
   std::uint64_t syncs() const noexcept { return syncs_; }
+  std::uint64_t heartbeat_events() const noexcept { return heartbeat_events_; }
   // Every SDO write the dictionary accepted, in order (for the start-up test).
   struct Write {
     ObjectAddress address;
@@ -77,6 +79,7 @@ class TestDrive {
  private:
   void build_pdos();
   void on_sync(TimeNs now) noexcept;
+  void watch_master(TimeNs now) noexcept;
   void send(const can::Frame& f) noexcept;
 
   TestDriveConfig config_;
@@ -97,7 +100,13 @@ class TestDrive {
   std::uint16_t controlword_ = 0;
   double position_ = 0, velocity_ = 0;
   TimeNs last_sync_ = 0;
-  std::uint64_t syncs_ = 0, rpdo_frames_ = 0;
+  std::uint64_t syncs_ = 0, rpdo_frames_ = 0, heartbeat_events_ = 0;
+  // The heartbeat consumer, from 0x1016:01.
+  std::uint32_t consumer_entry_ = 0;
+  std::uint8_t consumer_node_ = 0;
+  TimeNs consumer_time_ = 0;
+  std::optional<TimeNs> consumer_seen_;
+  bool consumer_fired_ = false;
 };
 
 }  // namespace saw::canopen::test

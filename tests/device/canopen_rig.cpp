@@ -52,7 +52,10 @@ class CanopenRig : public Rig {
   }
   double output() const override {
     int most = 0;
-    for (const auto& d : drives_.list) most = std::max(most, std::abs(int{d->target_torque()}));
+    // What the motors get: a drive applies its target torque only in operation enabled.
+    for (const auto& d : drives_.list)
+      if (d->state() == cia402::State::operation_enabled)
+        most = std::max(most, std::abs(int{d->target_torque()}));
     return most;
   }
   // Drives: the power stage is off (or quick-stopping), not merely at zero torque.
@@ -75,6 +78,15 @@ class CanopenRig : public Rig {
   void settle_after_stop() override {
     port_.now = now_;
     drives_.step(now_);
+  }
+  // No SYNC, RPDO or master heartbeat from now on: the drives alone (their consumers watch the
+  // arm's heartbeat, 0x1016:01, and do what 0x6007 says).
+  bool kill_controller(TimeNs alone) override {
+    for (TimeNs t = 0; t < alone; t += ms, now_ += ms) {
+      port_.now = now_;
+      drives_.step(now_);
+    }
+    return true;
   }
 
  private:

@@ -36,7 +36,10 @@ class CanopenSharedRig : public Rig {
   }
   double output() const override {
     int most = 0;
-    for (const auto& d : bus_.drives.list) most = std::max(most, std::abs(int{d->target_torque()}));
+    // What the motors get: a drive applies its target torque only in operation enabled.
+    for (const auto& d : bus_.drives.list)
+      if (d->state() == cia402::State::operation_enabled)
+        most = std::max(most, std::abs(int{d->target_torque()}));
     return most;
   }
   bool safe() const override {
@@ -56,6 +59,15 @@ class CanopenSharedRig : public Rig {
   void settle_after_stop() override {
     bus_.bus_port.now = bus_.now;
     bus_.drives.step(bus_.now);
+  }
+  // No SYNC, RPDO or master heartbeat from now on: the drives alone (their consumers watch the
+  // bus task's heartbeat, 0x1016:01, and do what 0x6007 says).
+  bool kill_controller(TimeNs alone) override {
+    for (TimeNs t = 0; t < alone; t += ms, bus_.now += ms) {
+      bus_.bus_port.now = bus_.now;
+      bus_.drives.step(bus_.now);
+    }
+    return true;
   }
 
  private:
