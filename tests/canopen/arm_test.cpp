@@ -474,3 +474,35 @@ TEST(CanopenArm, SecondMasterOnABusIsRefused) {
 }
 
 }  // namespace
+
+// The in-test drive's heartbeat consumer (0x1016:01, written by the arm) when the arm dies: EMCY
+// 0x8130, then what 0x6007 says, then pre-operational; the test drive is the arm rigs' hardware.
+TEST(CanopenArm, WhenTheArmDiesEachDriveDoesWhatItsAbortConnectionOptionSays) {
+  const std::pair<AbortConnection, saw::canopen::cia402::State> cases[] = {
+      {AbortConnection::fault, saw::canopen::cia402::State::fault},
+      {AbortConnection::disable_voltage, saw::canopen::cia402::State::switch_on_disabled},
+      {AbortConnection::quick_stop, saw::canopen::cia402::State::switch_on_disabled},  // 0x605A: 2
+      {AbortConnection::none, saw::canopen::cia402::State::operation_enabled}};
+  for (const auto& [option, expected] : cases) {
+    auto c = arm_config(saw::canopen::cia402::csp);
+    c.abort_connection = option;
+    ArmRig rig(c);
+    rig.enable();
+    ASSERT_EQ(rig.state(), OperatingStateValue::enabled);
+    RingPort& spy = rig.network.attach("spy");
+    for (int i = 0; i < 1000; ++i, rig.now += saw::canopen::test::ms)
+      rig.drives.step(rig.now);  // the arm is dead
+    int emcy_8130 = 0;
+    can::Received rx[64];
+    for (std::size_t n; (n = spy.receive(rx)) > 0;)
+      for (std::size_t k = 0; k < n; ++k) {
+        const can::Frame& f = rx[k].frame;
+        emcy_8130 += f.can_id() == 0x81 && f.len == 8 && f.data[0] == 0x30 && f.data[1] == 0x81;
+      }
+    const auto n = static_cast<int>(option);
+    EXPECT_EQ(emcy_8130, 1) << "option " << n;
+    EXPECT_EQ(rig.drives[0].heartbeat_events(), 1u) << "option " << n;
+    EXPECT_EQ(rig.drives[0].state(), expected) << "option " << n;
+    EXPECT_EQ(rig.drives[0].nmt_state(), NmtState::pre_operational) << "option " << n;
+  }
+}
