@@ -228,6 +228,14 @@ TEST(CanopenDeployment, AnIoNodeOnASharedBusParsesAndItsErrorsNameFileLineAndKey
              "key 'components[0].params.bus': 'can0' is not a bus: virtual:<name> or socketcan:<interface>");
 }
 
+TEST(CanopenDeployment, AChannelsErrorValueKeyIsABooleanNamingFileLineAndKeyOtherwise) {
+  std::string off = io_file;
+  off.replace(off.find("safe: 0.02}"), 11, "safe: 0.02, error_value: false}");
+  EXPECT_EQ(parse(off).components.size(), 2u);
+  EXPECT_HAS(io_error_of("safe: 0.02}", "safe: 0.02, error_value: maybe}"),
+             "key 'components[1].params.joints.jaw.error_value'");
+}
+
 // The error of building io_file on a fresh virtual bus with its client's task given `task`.
 std::string client_build_error(const std::string& bus_prefix, const std::string& task) {
   const std::string bus = bus_prefix + std::to_string(::getpid());

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
+#include <variant>
 
 #include "saw/canopen/emcy.hpp"
 #include "saw/log.hpp"
@@ -49,30 +51,63 @@ DeviceConfig contract_of(const CanopenIoConfig& c) {
 // when the controller dies). Analog 0x6411:n: error mode 0x6443:n = 1 (take the error value),
 // error value 0x6444:n (INTEGER32); digital 8-bit 0x6200:n: error mode mask 0x6206:n = 0xFF (every
 // bit), error value 0x6207:n. The value is the channel's safe value in the output's counts.
-// Other output objects have no standard error value: in `unsupported`.
-std::vector<SdoWrite> error_value_writes(const std::vector<IoChannel>& channels,
-                                         std::vector<const IoChannel*>& unsupported) {
-  std::vector<SdoWrite> out;
+// Vendors type these objects differently (a strict node aborts a write of another length): with an
+// EDS each object's type is the EDS's, and an object the EDS does not list is not written.
+struct ErrorWrites {
+  std::vector<SdoWrite> writes;
+  std::vector<const IoChannel*> unsupported;  // no CiA 401 output object: no standard error value
+  std::vector<std::pair<const IoChannel*, ObjectAddress>> unlisted;  // the EDS lacks the object
+};
+
+// `value` as a write of `a`, typed by the EDS when there is one; a type that cannot hold it (or is
+// no integer of up to 32 bits) is refused naming the channel.
+void add_error_write(ErrorWrites& out, const IoChannel& ch, const Eds* eds, ObjectAddress a,
+                     DataType standard, double value) {
+  DataType type = standard;
+  if (eds) {
+    const EdsEntry* e = eds->find(a);
+    if (!e) {
+      out.unlisted.emplace_back(&ch, a);
+      return;
+    }
+    type = e->type;
+  }
+  const TypeClass k = type_class(type);
+  const bool integral =
+      (k == TypeClass::boolean || k == TypeClass::signed_integer || k == TypeClass::unsigned_integer) &&
+      size_of(type) <= 4;
+  const auto as_double = [](const Number& n) { return std::visit([](auto v) { return double(v); }, n); };
+  if (!integral)
+    throw std::invalid_argument("channel '" + ch.name + "': " + to_string(a) + " is " +
+                                std::string(to_string(type)) + (eds ? " in " + eds->file : std::string()) +
+                                ", not an integer of up to 32 bits: set error_value: false");
+  if (!(value >= as_double(type_min(type)) && value <= as_double(type_max(type))))
+    throw std::invalid_argument("channel '" + ch.name + "': its safe value is " + std::to_string(value) +
+                                " counts, which " + to_string(a) + " (" + std::string(to_string(type)) +
+                                ") cannot hold");
+  const auto bits = k == TypeClass::signed_integer
+                        ? static_cast<std::uint32_t>(static_cast<std::int32_t>(value))
+                        : static_cast<std::uint32_t>(value);
+  out.writes.push_back({a, type, bits});
+}
+
+ErrorWrites error_value_writes(const std::vector<IoChannel>& channels, const Eds* eds) {
+  ErrorWrites out;
   for (const IoChannel& ch : channels) {
+    if (!ch.error_value) continue;  // the deployment opted out: the device's own behaviour
     const ObjectAddress a = ch.output->address;
     const bool analog = a.index == 0x6411, digital = a.index == 0x6200;
     if ((!analog && !digital) || a.subindex == 0) {
-      unsupported.push_back(&ch);
+      out.unsupported.push_back(&ch);
       continue;
     }
     const double count = std::round((ch.safe - ch.offset) / ch.scale);
-    const double low = analog ? -2147483648.0 : 0, high = analog ? 2147483647.0 : 255;
-    if (!(count >= low && count <= high))
-      throw std::invalid_argument("channel '" + ch.name + "': its safe value is " + std::to_string(count) +
-                                  " counts, which " + to_string(a) + "'s error value cannot hold");
     if (analog) {
-      out.push_back({{0x6443, a.subindex}, DataType::unsigned8, 1});
-      out.push_back({{0x6444, a.subindex},
-                     DataType::integer32,
-                     static_cast<std::uint32_t>(static_cast<std::int32_t>(count))});
+      add_error_write(out, ch, eds, {0x6443, a.subindex}, DataType::unsigned8, 1);
+      add_error_write(out, ch, eds, {0x6444, a.subindex}, DataType::integer32, count);
     } else {
-      out.push_back({{0x6206, a.subindex}, DataType::unsigned8, 0xFF});
-      out.push_back({{0x6207, a.subindex}, DataType::unsigned8, static_cast<std::uint32_t>(count)});
+      add_error_write(out, ch, eds, {0x6206, a.subindex}, DataType::unsigned8, 0xFF);
+      add_error_write(out, ch, eds, {0x6207, a.subindex}, DataType::unsigned8, count);
     }
   }
   return out;
@@ -93,14 +128,18 @@ CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
   // The node's own safe state when the controller dies: before the deployment's writes (which may
   // set them otherwise), so the start-up and every re-configuration after a reboot write them.
   // The log keeps the name's pointer until it is drained: the channel's own, in config_.
-  std::vector<const IoChannel*> unsupported;
-  auto errors = error_value_writes(config_.channels, unsupported);
-  config_.node.writes.insert(config_.node.writes.begin(), errors.begin(), errors.end());
-  for (const IoChannel* ch : unsupported)
+  const ErrorWrites errors = error_value_writes(config_.channels, config_.eds ? &*config_.eds : nullptr);
+  config_.node.writes.insert(config_.node.writes.begin(), errors.writes.begin(), errors.writes.end());
+  for (const IoChannel* ch : errors.unsupported)
     saw::log(LogLevel::warning, this->name().c_str(),
              "channel '{}': its output is no CiA 401 output object (0x6411 or 0x6200): the node has no "
              "standard error value, so its output when the controller dies is the device's own",
              ch->name.c_str());
+  for (const auto& [ch, a] : errors.unlisted)
+    saw::log(LogLevel::warning, this->name().c_str(),
+             "channel '{}': the EDS lists no {:x}:{}, not written: the node has no standard error value "
+             "there, so its output when the controller dies is the device's own",
+             ch->name.c_str(), unsigned{a.index}, unsigned{a.subindex});
   check(config_.node);
   const std::uint8_t nodes[] = {config_.node.node};
   const auto tpdos = tpdo_ids(config_.node);

@@ -1,11 +1,13 @@
 // The CANopen types of a shared bus for deployments: canopen_bus (the bus task) and canopen_io (an I/O node).
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 
 #include "registration_params.hpp"
 #include "saw/canopen/canopen_bus.hpp"
 #include "saw/canopen/canopen_io.hpp"
 #include "saw/canopen/cob.hpp"
+#include "saw/canopen/eds.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
 
@@ -90,6 +92,7 @@ IoChannel parse_channel(const Params& joints, const std::string& name) {
   if (!(ch.min < ch.max)) j.fail_at("max", "must be above min");
   ch.max_velocity = j.get_in_range("max_velocity", 1e-9, 1e9, 1e9);
   ch.safe = j.get_in_range("safe", ch.min, ch.max, std::clamp(0.0, ch.min, ch.max));
+  ch.error_value = j.get_or<bool>("error_value", true);
   return ch;
 }
 
@@ -153,6 +156,11 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
     std::optional<DriveIdentity> identity;
     c.node.pdos = params::parse_pdos(p, cia402::csp, c.node.node, ctx.directory, identity);
     c.node.identity = identity;
+    if (p.has("eds")) {  // the CiA 401 error objects' types (parse_pdos read the same file)
+      std::filesystem::path file = p.get<std::string>("eds");
+      if (file.is_relative() && !ctx.directory.empty()) file = std::filesystem::path(ctx.directory) / file;
+      c.eds = load_eds(file.string());
+    }
   } else {
     p.mark_used("pdo");
     c.node.pdos = default_io_pdos(p, c.node.node, c.node.outputs, c.node.inputs);

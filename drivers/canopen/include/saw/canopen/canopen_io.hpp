@@ -5,10 +5,12 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "saw/canopen/bus_task.hpp"
+#include "saw/canopen/eds.hpp"
 #include "saw/canopen/io_node.hpp"
 #include "saw/canopen/startup.hpp"
 #include "saw/device.hpp"
@@ -24,6 +26,7 @@ struct IoChannel {
   double min = -1e9, max = 1e9;  // servo_jp beyond is refused
   double max_velocity = 1e9;     // servo_jp's step rate
   double safe = 0;               // SI: sent while not enabled, at a fault and at exit
+  bool error_value = true;       // write its CiA 401 error mode and value (false: the device's own)
 };
 
 // An I/O component's node as the last cycle saw it: a summary column (printed when a run ends).
@@ -67,6 +70,8 @@ struct CanopenIoConfig {
   TimeNs command_timeout = 0;       // 0: 3 periods; no servo_jp for this long: hold
   TimeNs feedback_timeout = 0;      // no TPDO for this long faults; 0: 10 periods (at least 10 ms)
   bool start_enabled = false;
+  // The node's EDS (`eds:`): the types of the CiA 401 error objects; none: the standard types.
+  std::optional<Eds> eds;
   StartupConfig startup;
   StartupPause startup_pause;  // tests step their simulated node here
   // Its own bus (a URI): the master's heartbeat it sends.
