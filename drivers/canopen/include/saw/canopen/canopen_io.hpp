@@ -85,7 +85,9 @@ struct CanopenIoConfig {
 // qualified read: SdoRequest → SdoReply for this node, waiting up to 1 s: non-RT callers only). Start-up: NMT
 // reset, identity, PDOs, 0x1017, 0x1016, each channel's CiA 401 error behaviour (a 0x6411:n output:
 // 0x6443:n = 1 and 0x6444:n = its safe value in counts; a 0x6200:n output: 0x6206:n = 0xFF and 0x6207:n;
-// any other output: a warning at construction, it has no standard error value), the deployment's
+// any other output: a warning at construction, it has no standard error value; with `eds` each object
+// typed as the EDS says, one it does not list not written, with a warning; none for a channel whose
+// error_value is false; a safe value the type cannot hold is refused at construction), the deployment's
 // writes, NMT start (StartupSequence; a re-configuration after a reboot writes the same). Each cycle:
 // the TPDOs into measured_js; a FAULT (this component's only) on a lost heartbeat, a heartbeat not
 // operational, a boot-up, an EMCY that emcy_severity() calls a fault (logged in hex with its name;
