@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <string>
 
 #include "saw/can/virtual_bus.hpp"
 #include "saw/canopen/canopen_arm.hpp"
+#include "saw/canopen/canopen_io.hpp"
 #include "saw/deploy/deployment.hpp"
 #include "saw/deploy/deployment_spec.hpp"
 #include "saw/drivers/sim_registration.hpp"
@@ -250,6 +252,25 @@ std::string client_build_error(const std::string& bus_prefix, const std::string&
   }
   (void)saw::can::remove_virtual_bus(bus);
   return error;
+}
+
+// Built, `error_value: false` reaches the component: its node gets no error mode or value write.
+TEST(CanopenDeployment, AChannelWithErrorValueFalseGetsNoErrorObjectWrites) {
+  const std::string bus = "cfg-errval-" + std::to_string(::getpid());
+  for (const bool on : {true, false}) {
+    std::string text = io_file;
+    text.replace(text.find("virtual:nowhere"), 15, "virtual:" + bus);
+    if (!on) text.replace(text.find("safe: 0.02}"), 11, "safe: 0.02, error_value: false}");
+    auto d = saw::deploy::build_deployment(parse(text), registry());
+    auto* io = d.find<saw::canopen::CanopenIo>("gripper");
+    ASSERT_NE(io, nullptr);
+    const auto& w = io->node().config().writes;
+    const bool written = std::any_of(w.begin(), w.end(), [](const saw::canopen::SdoWrite& x) {
+      return x.address == saw::canopen::ObjectAddress{0x6444, 1};
+    });
+    EXPECT_EQ(written, on) << "error_value: " << on;
+  }
+  (void)saw::can::remove_virtual_bus(bus);
 }
 
 // Built, the deployment refuses a client of a canopen_bus at another period than the bus task's,
