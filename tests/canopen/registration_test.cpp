@@ -273,6 +273,38 @@ TEST(CanopenDeployment, AChannelWithErrorValueFalseGetsNoErrorObjectWrites) {
   (void)saw::can::remove_virtual_bus(bus);
 }
 
+// Built with `eds:`, the I/O node's error objects take the EDS's types (UNSIGNED16 here, not
+// CiA 401's UNSIGNED8 and INTEGER32), and a safe value an UNSIGNED16 cannot hold is refused.
+TEST(CanopenDeployment, AnIoNodesEdsTypesItsErrorObjects) {
+  const std::string bus = "cfg-erreds-" + std::to_string(::getpid());
+  std::string text = io_file;
+  text.replace(text.find("virtual:nowhere"), 15, "virtual:" + bus);
+  text.replace(text.find("node: 10"), 8, "node: 10\n      eds: " SAW_CANOPEN_TEST_DATA "/io_unsigned16.eds");
+  {
+    auto d = saw::deploy::build_deployment(parse(text), registry());
+    auto* io = d.find<saw::canopen::CanopenIo>("gripper");
+    ASSERT_NE(io, nullptr);
+    const auto& w = io->node().config().writes;
+    for (const std::uint16_t index : {std::uint16_t{0x6443}, std::uint16_t{0x6444}}) {
+      const auto it = std::find_if(w.begin(), w.end(), [&](const saw::canopen::SdoWrite& x) {
+        return x.address == saw::canopen::ObjectAddress{index, 1};
+      });
+      ASSERT_NE(it, w.end()) << index;
+      EXPECT_EQ(it->type, saw::canopen::DataType::unsigned16) << index;
+    }
+  }
+  text.replace(text.find("min: 0, max: 0.08, safe: 0.02"), 29, "min: -0.08, max: 0.08, safe: -0.02");
+  std::string error;
+  try {
+    (void)saw::deploy::build_deployment(parse(text), registry());
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  EXPECT_HAS(error, "channel 'jaw'");
+  EXPECT_HAS(error, "UNSIGNED16");
+  (void)saw::can::remove_virtual_bus(bus);
+}
+
 // Built, the deployment refuses a client of a canopen_bus at another period than the bus task's,
 // at the client's entry, naming both components and both periods.
 TEST(CanopenDeployment, AClientOfABusTaskAtAnotherPeriodIsRefused) {
