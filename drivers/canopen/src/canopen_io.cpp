@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <utility>
 #include <variant>
@@ -62,7 +63,7 @@ struct ErrorWrites {
 // `value` as a write of `a`, typed by the EDS when there is one; a type that cannot hold it (or is
 // no integer of up to 32 bits) is refused naming the channel.
 void add_error_write(ErrorWrites& out, const IoChannel& ch, const Eds* eds, ObjectAddress a,
-                     DataType standard, double value) {
+                     DataType standard, double value, const char* what) {
   DataType type = standard;
   if (eds) {
     const EdsEntry* e = eds->find(a);
@@ -81,10 +82,12 @@ void add_error_write(ErrorWrites& out, const IoChannel& ch, const Eds* eds, Obje
     throw std::invalid_argument("channel '" + ch.name + "': " + to_string(a) + " is " +
                                 std::string(to_string(type)) + (eds ? " in " + eds->file : std::string()) +
                                 ", not an integer of up to 32 bits: set error_value: false");
-  if (!(value >= as_double(type_min(type)) && value <= as_double(type_max(type))))
-    throw std::invalid_argument("channel '" + ch.name + "': its safe value is " + std::to_string(value) +
-                                " counts, which " + to_string(a) + " (" + std::string(to_string(type)) +
-                                ") cannot hold");
+  if (!(value >= as_double(type_min(type)) && value <= as_double(type_max(type)))) {
+    char shown[400];  // any double, in full
+    std::snprintf(shown, sizeof shown, "%.0f", value);
+    throw std::invalid_argument("channel '" + ch.name + "': " + what + " is " + shown + ", which " +
+                                to_string(a) + " (" + std::string(to_string(type)) + ") cannot hold");
+  }
   const auto bits = k == TypeClass::signed_integer
                         ? static_cast<std::uint32_t>(static_cast<std::int32_t>(value))
                         : static_cast<std::uint32_t>(value);
@@ -103,11 +106,13 @@ ErrorWrites error_value_writes(const std::vector<IoChannel>& channels, const Eds
     }
     const double count = std::round((ch.safe - ch.offset) / ch.scale);
     if (analog) {
-      add_error_write(out, ch, eds, {0x6443, a.subindex}, DataType::unsigned8, 1);
-      add_error_write(out, ch, eds, {0x6444, a.subindex}, DataType::integer32, count);
+      add_error_write(out, ch, eds, {0x6443, a.subindex}, DataType::unsigned8, 1, "its error mode");
+      add_error_write(out, ch, eds, {0x6444, a.subindex}, DataType::integer32, count,
+                      "its safe value in counts");
     } else {
-      add_error_write(out, ch, eds, {0x6206, a.subindex}, DataType::unsigned8, 0xFF);
-      add_error_write(out, ch, eds, {0x6207, a.subindex}, DataType::unsigned8, count);
+      add_error_write(out, ch, eds, {0x6206, a.subindex}, DataType::unsigned8, 0xFF, "its error mode mask");
+      add_error_write(out, ch, eds, {0x6207, a.subindex}, DataType::unsigned8, count,
+                      "its safe value in counts");
     }
   }
   return out;
