@@ -50,12 +50,13 @@ cia402::Mode parse_mode(const Params& p) {
 // mapped, the others configured as not valid. `eds: file` instead: the file's PDOs (a DCF's
 // ParameterValues). Neither: the defaults for the mode.
 std::vector<PdoMapping> parse_pdos(const Params& p, cia402::Mode mode, std::uint8_t node,
-                                   const std::string& directory, std::optional<DriveIdentity>& identity) {
+                                   const std::string& directory, std::optional<DriveIdentity>& identity,
+                                   std::optional<Eds>* eds_out) {
   if (p.has("pdo") && p.has("eds")) p.fail_at("eds", "give either pdo or eds, not both");
   if (p.has("eds")) {
     std::filesystem::path file = p.get<std::string>("eds");
     if (file.is_relative() && !directory.empty()) file = std::filesystem::path(directory) / file;
-    const Eds eds = load_eds(file.string());  // its errors name the EDS file and line
+    Eds eds = load_eds(file.string());  // its errors name the EDS file and line
     DriveIdentity id;
     id.file = file.string();
     const auto type = eds.value({0x1000, 0}, node);
@@ -63,7 +64,9 @@ std::vector<PdoMapping> parse_pdos(const Params& p, cia402::Mode mode, std::uint
     id.vendor_id = eds.device.vendor_number;
     id.product_code = eds.device.product_number;
     identity = id;
-    return eds_pdo_mappings(eds, node);
+    auto maps = eds_pdo_mappings(eds, node);
+    if (eds_out != nullptr) *eds_out = std::move(eds);
+    return maps;
   }
   if (!p.has("pdo")) {
     p.mark_used("pdo");

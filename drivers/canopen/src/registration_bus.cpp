@@ -1,7 +1,6 @@
 // The CANopen types of a shared bus for deployments: canopen_bus (the bus task) and canopen_io (an I/O node).
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 
 #include "registration_params.hpp"
 #include "saw/canopen/canopen_bus.hpp"
@@ -154,13 +153,9 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   }
   if (p.has("pdo") || p.has("eds")) {
     std::optional<DriveIdentity> identity;
-    c.node.pdos = params::parse_pdos(p, cia402::csp, c.node.node, ctx.directory, identity);
+    // The EDS also types the CiA 401 error objects (c.eds).
+    c.node.pdos = params::parse_pdos(p, cia402::csp, c.node.node, ctx.directory, identity, &c.eds);
     c.node.identity = identity;
-    if (p.has("eds")) {  // the CiA 401 error objects' types (parse_pdos read the same file)
-      std::filesystem::path file = p.get<std::string>("eds");
-      if (file.is_relative() && !ctx.directory.empty()) file = std::filesystem::path(ctx.directory) / file;
-      c.eds = load_eds(file.string());
-    }
   } else {
     p.mark_used("pdo");
     c.node.pdos = default_io_pdos(p, c.node.node, c.node.outputs, c.node.inputs);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "saw/canopen/axis.hpp"
+#include "saw/canopen/eds.hpp"
 #include "saw/canopen/pdo.hpp"
 #include "saw/deploy/registry.hpp"
 
@@ -17,9 +18,11 @@ namespace params {
 TimeNs duration(const deploy::Params& p, const std::string& key, std::chrono::nanoseconds fallback,
                 std::chrono::nanoseconds lo, std::chrono::nanoseconds hi);
 cia402::Mode parse_mode(const deploy::Params& p);
-// `pdo:` or `eds:` (its identity too); neither: the CiA 402 defaults for the mode.
+// `pdo:` or `eds:` (its identity too, and the parsed file in `eds` if given); neither: the CiA
+// 402 defaults for the mode.
 std::vector<PdoMapping> parse_pdos(const deploy::Params& p, cia402::Mode mode, std::uint8_t node,
-                                   const std::string& directory, std::optional<DriveIdentity>& identity);
+                                   const std::string& directory, std::optional<DriveIdentity>& identity,
+                                   std::optional<Eds>* eds = nullptr);
 // `sdo: ["0x60C2:01:u8=10", ...]`.
 std::vector<SdoWrite> parse_writes(const deploy::Params& p);
 // `bus:`: a URI, or the name of a canopen_bus component.
