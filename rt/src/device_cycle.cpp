@@ -71,9 +71,13 @@ void Device::raise(const Outcome& why) noexcept {
   command_ = {};
   watchdog_.disarm();
   safe(SafeReason::fault);
-  saw::log(LogLevel::error, name().c_str(), "FAULT ({}): {} {} ({}, detail {:x})",
-           to_string(config_.safe_state).data(), fault_.source.data(), why.why, to_string(fault_.code).data(),
-           fault_.detail);
+  if (fault_.code == FaultCode::deadline_missed)
+    saw::log(LogLevel::error, name().c_str(), "FAULT ({}): deadline missed: {} periods {}",
+             to_string(config_.safe_state).data(), fault_.detail, fault_.source.data());
+  else
+    saw::log(LogLevel::error, name().c_str(), "FAULT ({}): {} {} ({}, detail {:x})",
+             to_string(config_.safe_state).data(), fault_.source.data(), why.why,
+             to_string(fault_.code).data(), fault_.detail);
   (void)(*fault_event_)(fault_);
   set_state(OperatingStateValue::fault);
 }
@@ -138,9 +142,21 @@ void Device::publish() noexcept {
   status_.watchdog_trips = watchdog_.trips();
 }
 
+void Device::on_deadline_breach(const DeadlineBreach& b) noexcept {
+  deadline_breached_ = true;
+  deadline_breach_ = b;
+}
+
 void Device::run() {
   const TimeNs t = now();
   if (t0_ < 0) t0_ = t;
+  if (deadline_breached_) {
+    deadline_breached_ = false;
+    const auto& b = deadline_breach_;
+    const bool row = b.kind == DeadlineBreach::Kind::in_a_row;
+    raise(Outcome::failed(FaultCode::deadline_missed, "its task missed its deadline",
+                          row ? "in a row" : "in a window", static_cast<std::uint32_t>(b.missed), b.latency));
+  }
   // An enable clears a fault first: a cause still present (read() sees it) faults again at once.
   if (enable_requested_) begin_enable(t);
   const Outcome in = guarded([&] { return read(); });

@@ -1,11 +1,14 @@
 #include "saw/task.hpp"
 
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <stdexcept>
 
 #include "saw/detail/access.hpp"
 #include "saw/detail/pacer.hpp"
+#include "saw/log.hpp"
 #include "saw/rt_context.hpp"
 #include "saw/rt_thread.hpp"
 
@@ -16,7 +19,12 @@ Task::Task(std::string name, TaskConfig config, std::size_t state_rows)
   if (config_.period.count() < 0) throw std::invalid_argument("task '" + this->name() + "': negative period");
   if (config_.priority < 0 || config_.priority > 99)
     throw std::invalid_argument("task '" + this->name() + "': priority must be 0..99");
+  if (config_.deadline.share < 0 || config_.deadline.share >= 1 ||
+      (config_.deadline.share > 0 && config_.deadline.window == 0))
+    throw std::invalid_argument("task '" + this->name() +
+                                "': a deadline share must be in [0, 1) over a window of at least one period");
   stats_.period = config_.period.count();
+  deadline_ = DeadlineMonitor(config_.deadline, config_.period.count());
   stats_column_ = state_table().add_column("period_statistics", &stats_);
   provide("task").add_command_read("period_statistics", stats_column_);
 }
@@ -83,11 +91,46 @@ void Task::periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) 
     histogram_.record(latency);
     stats_.last_wakeup_latency = latency;
     if (latency > stats_.max_wakeup_latency) stats_.max_wakeup_latency = latency;
+    watch_deadline(latency);
     detail::Access::cycle(*this, woke);
     const TimeNs end = monotonic_now();
-    pacer.finish_cycle(end);
+    deadline_.on_finish(pacer.finish_cycle(end));
     account(scheduled, woke, end, pacer.overruns(), pacer.missed_periods());
   }
+}
+
+void Task::watch_deadline(TimeNs latency) noexcept {
+  DeadlineBreach b;
+  const bool breached = deadline_.on_wakeup(latency, b);
+  if (breached) breach(b);
+  breached_ = breached;
+}
+
+void Task::breach(const DeadlineBreach& b) noexcept {
+  deadline_breaches_.fetch_add(1, std::memory_order_relaxed);
+  if (!breached_) {  // once per episode: every late wake-up of a stall would flood the log
+    const double late_ms = std::round(static_cast<double>(b.latency) * 1e-5) / 10;
+    if (b.kind == DeadlineBreach::Kind::in_a_row)
+      saw::log(LogLevel::error, name().c_str(),
+               "deadline: {} periods missed in a row (last wake-up {} ms late)", b.missed, late_ms);
+    else
+      saw::log(LogLevel::error, name().c_str(), "deadline: {} of {} periods missed (last wake-up {} ms late)",
+               b.missed, b.periods, late_ms);
+  }
+  on_deadline_breach(b);
+}
+
+std::string to_string(const DeadlineBreach& b) {
+  char s[128];
+  const double late_ms = static_cast<double>(b.latency) * 1e-6;
+  if (b.kind == DeadlineBreach::Kind::in_a_row)
+    std::snprintf(s, sizeof s, "%llu periods missed in a row (last wake-up %.1f ms late)",
+                  static_cast<unsigned long long>(b.missed), late_ms);
+  else
+    std::snprintf(s, sizeof s, "%llu of %llu periods missed (last wake-up %.1f ms late)",
+                  static_cast<unsigned long long>(b.missed), static_cast<unsigned long long>(b.periods),
+                  late_ms);
+  return s;
 }
 
 void Task::continuous_loop(const std::atomic<bool>& running) noexcept {

@@ -106,6 +106,39 @@ TEST(Deployment, EveryErrorNamesFileLineColumnAndKey) {
   for (const auto& c : cases) expect_error(c);
 }
 
+// Every periodic task has a deadline policy: the standard one unless its `task:` says another, or off.
+TEST(Deployment, EveryPeriodicTaskHasADeadlinePolicyUnlessItSaysOff) {
+  const std::string teleop_task = "task: {period: 1ms}\n    params: {gains";
+  const Case cases[] = {
+      {teleop_task.c_str(), "task: {period: 1ms, deadline: sometimes}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.deadline': expected off, or \{in_a_row: N, share: S, window: T\})"},
+      {teleop_task.c_str(), "task: {period: 1ms, deadline: {in_a_row: 2.5}}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.deadline\.in_a_row': expected a whole number)"},
+      {teleop_task.c_str(), "task: {period: 1ms, deadline: {share: 1.5}}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.deadline\.share': .*out of range)"},
+      {teleop_task.c_str(), "task: {period: 1ms, deadline: {window: 5ms}}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.deadline\.window': the share is judged over at least 10 periods)"},
+      {teleop_task.c_str(), "task: {period: 1ms, deadline: {in_a_row: 3, shares: 0.1}}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.deadline\.shares': unknown parameter)"},
+  };
+  for (const auto& c : cases) expect_error(c);
+
+  std::string text = good;
+  text.replace(text.find(teleop_task), teleop_task.size(),
+               "task: {period: 2ms, deadline: {in_a_row: 3, share: 0.25, window: 1s}}\n    params: {gains");
+  text.replace(text.find("task: {period: 1ms}"), 19, "task: {period: 1ms, deadline: off}");
+  auto d = build(text, "cfg.yaml", registry());
+  const auto policy = [&](const char* name) { return d.find<saw::Task>(name)->config().deadline; };
+  EXPECT_FALSE(policy("master").enabled()) << "deadline: off";
+  const auto standard = saw::DeadlinePolicy::standard();
+  EXPECT_EQ(policy("slave").in_a_row, standard.in_a_row);
+  EXPECT_EQ(policy("slave").share, standard.share);
+  EXPECT_EQ(policy("slave").window, standard.window);
+  EXPECT_EQ(policy("teleop").in_a_row, 3u);
+  EXPECT_EQ(policy("teleop").share, 0.25);
+  EXPECT_EQ(policy("teleop").window, 500u) << "1 s of 2 ms periods";
+}
+
 // `law:` picks the teleoperation's law; its settings are its own parameters, checked as declared.
 TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
   const std::string collaborative = "params: {gains: {master: 100, slave: 100}}";

@@ -137,6 +137,33 @@ TEST_P(DeviceConformance, AFailingHardwareFaultsSayingWhyAndIsSafe) {
   EXPECT_EQ(rig->output(), 0);
 }
 
+// A late loop (the task's deadline policy breached: the periodic loop calls this at the wake-up
+// that finds it) is a FAULT naming the figures, through the safe state, whatever the commander does.
+TEST_P(DeviceConformance, ALateLoopFaultsSayingHowLateAndIsSafe) {
+  auto rig = started(GetParam());
+  ASSERT_TRUE(rig->enable());
+  rig->send(Command::good);
+  rig->settle();
+  ASSERT_GT(rig->output(), 0);
+  DeadlineBreach late;
+  late.missed = late.periods = 12;
+  late.latency = 11'800'000;
+  late.period = 1'000'000;
+  detail::Access::deadline_breach(rig->device(), late);
+  rig->send(Command::good);
+  rig->cycle();
+  rig->send(Command::good);
+  rig->settle();
+  const Device& d = rig->device();
+  ASSERT_EQ(d.operating_state().state, OperatingStateValue::fault);
+  EXPECT_EQ(d.fault().code, FaultCode::deadline_missed);
+  EXPECT_EQ(d.fault().detail, 12u);
+  EXPECT_NE(to_string(d.fault()).find("12 periods in a row (last wake-up 11.8 ms late)"), std::string::npos)
+      << to_string(d.fault());
+  EXPECT_TRUE(rig->safe());
+  EXPECT_EQ(rig->output(), 0);
+}
+
 TEST_P(DeviceConformance, StopLeavesTheHardwareSafe) {
   auto rig = started(GetParam());
   ASSERT_TRUE(rig->enable());

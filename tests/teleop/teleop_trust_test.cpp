@@ -9,9 +9,10 @@
 #include <limits>
 #include <string>
 
+#include "saw/detail/access.hpp"
 #include "saw/log.hpp"
-#include "saw/teleop/teleoperation.hpp"
 #include "saw/teleop/delay_task.hpp"
+#include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/fake_device.hpp"
 #include "saw/testing/stepper.hpp"
 #include "saw/testing/teleop_rig.hpp"
@@ -24,10 +25,10 @@ using saw::OperatingStateValue;
 using saw::Status;
 using saw::teleop::FaultCode;
 using saw::teleop::FaultInfo;
-using saw::testing::TeleopConfig;
 using saw::testing::basic;
 using saw::testing::norm;
 using saw::testing::Rig;
+using saw::testing::TeleopConfig;
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 constexpr double inf = std::numeric_limits<double>::infinity();
@@ -413,6 +414,37 @@ TEST(TeleopTrust, AFaultSaysWhyInTheStateTableTheEventAndTheLogOnce) {
   EXPECT_EQ(rig.teleop.fault().code, FaultCode::none);
   ASSERT_EQ(rig.op.fault_events.size(), 2u);
   EXPECT_EQ(rig.op.fault_events[1].code, FaultCode::none);
+}
+
+}  // namespace
+
+namespace {
+
+// A late loop: the wake-up that finds the task's deadline policy breached faults the
+// teleoperation in that very cycle, zero force both ways, the figures in its reason.
+TEST(TeleopTrust, ALateLoopIsAFaultWithZeroForceNamingTheFigures) {
+  Rig rig(basic());
+  rig.step(3);
+  rig.master.position[0] += 0.01;
+  rig.step(1);
+  ASSERT_GT(norm(rig.slave.force), 0.5);
+  saw::DeadlineBreach late;
+  late.kind = saw::DeadlineBreach::Kind::share;
+  late.missed = 640;
+  late.periods = 1000;
+  late.latency = 2'260'000;
+  late.period = 1'000'000;
+  saw::detail::Access::deadline_breach(rig.teleop, late);
+  rig.step(1);
+  EXPECT_EQ(rig.teleop.operating_state(), OperatingStateValue::fault);
+  EXPECT_EQ(rig.teleop.fault().code, FaultCode::deadline_missed);
+  EXPECT_EQ(rig.teleop.fault().detail, 640u);
+  EXPECT_EQ(rig.teleop.fault_reason(), "640 of 1000 periods missed");
+  EXPECT_NE(saw::to_string(rig.teleop.fault()).find("640 periods in a window (last wake-up 2.3 ms late)"),
+            std::string::npos)
+      << saw::to_string(rig.teleop.fault());
+  EXPECT_EQ(norm(rig.slave.force), 0.0);
+  EXPECT_EQ(norm(rig.master.force), 0.0);
 }
 
 }  // namespace

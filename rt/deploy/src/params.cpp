@@ -24,6 +24,8 @@ bool Params::has(const std::string& key) const {
   return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull();
 }
 
+bool Params::has_map(const std::string& key) const { return has(key) && node_[key].IsMap(); }
+
 void Params::fail(const std::string& what) const {
   const auto [line, column] = location(node_);
   throw ConfigError(file_, line, column, path_, what);

@@ -17,6 +17,36 @@ Location location_of(const YAML::Node& n, const std::string& file, const std::st
   return {file, line, column, key};
 }
 
+// `deadline:` under `task:`: off, or {in_a_row, share, window}; the standard policy unless said.
+DeadlinePolicy parse_deadline(const Params& t, std::chrono::nanoseconds period) {
+  if (period.count() == 0) {
+    if (t.has("deadline")) t.fail_at("deadline", "a continuous task (no period) has no deadline");
+    t.mark_used("deadline");
+    return {};
+  }
+  if (!t.has("deadline")) {
+    t.mark_used("deadline");
+    return DeadlinePolicy::standard();
+  }
+  if (!t.has_map("deadline")) {
+    // `off`: lateness is counted and logged, never a fault.
+    if (const auto v = t.get<std::string>("deadline"); v == "off" || v == "false") return {};
+    t.fail_at("deadline", "expected off, or {in_a_row: N, share: S, window: T}");
+  }
+  const Params d = t.child("deadline");
+  DeadlinePolicy policy = DeadlinePolicy::standard();
+  const double in_a_row = d.get_in_range("in_a_row", 0, 1e6, policy.in_a_row);
+  if (in_a_row != static_cast<double>(static_cast<std::uint32_t>(in_a_row)))
+    d.fail_at("in_a_row", "expected a whole number of periods (0: not checked)");
+  policy.in_a_row = static_cast<std::uint32_t>(in_a_row);
+  policy.share = d.get_in_range("share", 0, 0.99, policy.share);
+  const auto window = d.get_or<std::chrono::nanoseconds>("window", policy.window * period);
+  if (window < 10 * period || window > 3600 * std::chrono::seconds(1))
+    d.fail_at("window", "the share is judged over at least 10 periods and at most an hour");
+  policy.window = static_cast<std::uint32_t>(window / period);
+  return policy;
+}
+
 std::optional<TaskConfig> parse_task(Params& p) {
   if (!p.has("task")) {
     (void)p.child("task");
@@ -32,6 +62,7 @@ std::optional<TaskConfig> parse_task(Params& p) {
   c.offset = t.get_or<std::chrono::nanoseconds>("offset", std::chrono::nanoseconds(0));
   if (c.offset.count() < 0 || (c.offset.count() != 0 && c.offset >= c.period))
     t.fail_at("offset", "the phase must be at least 0 and less than the period");
+  c.deadline = parse_deadline(t, c.period);
   return c;
 }
 

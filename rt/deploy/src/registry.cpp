@@ -13,19 +13,24 @@ namespace saw::deploy {
 
 namespace {
 
-// A device's contract in a run's summary: what was refused, when commands stopped, the last fault.
+// A device's contract in a run's summary: a FAULT and its output, what was refused, when commands
+// stopped, the last fault.
 std::string device_summary(const DeviceStatus& s) {
   std::string out;
   char b[240];
+  if (s.state == OperatingStateValue::fault)
+    out =
+        std::string("FAULT, its last output ") +
+        (s.safe_output ? "the safe one (" + std::string(to_string(s.safe_state)) + ")" : "NOT the safe one");
   const RefusedCommands& r = s.refused;
   if (r.total() != 0) {
-    std::snprintf(b, sizeof b,
-                  "%llu servo commands refused before the hardware: %llu not finite, %llu over a limit, "
-                  "%llu of another mode, %llu of the wrong size",
-                  static_cast<unsigned long long>(r.total()), static_cast<unsigned long long>(r.not_finite),
-                  static_cast<unsigned long long>(r.over_limit),
-                  static_cast<unsigned long long>(r.wrong_mode),
-                  static_cast<unsigned long long>(r.wrong_size));
+    std::snprintf(
+        b, sizeof b,
+        "%s%llu servo commands refused before the hardware: %llu not finite, %llu over a limit, "
+        "%llu of another mode, %llu of the wrong size",
+        out.empty() ? "" : "\n", static_cast<unsigned long long>(r.total()),
+        static_cast<unsigned long long>(r.not_finite), static_cast<unsigned long long>(r.over_limit),
+        static_cast<unsigned long long>(r.wrong_mode), static_cast<unsigned long long>(r.wrong_size));
     out += b;
   }
   if (s.watchdog_trips != 0) {

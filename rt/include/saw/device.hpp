@@ -198,6 +198,8 @@ class Device : public Task {
   virtual bool admit(Setpoint&) { return true; }
   // Whether the device takes this servo kind now (its mode); refused as wrong_mode otherwise.
   virtual bool accepts(ServoMode) const noexcept { return true; }
+  // The task's deadline policy breached: FAULT in the next cycle, through the safe state.
+  void on_deadline_breach(const DeadlineBreach& b) noexcept override;
 
   // ---- what a driver uses -----------------------------------------------------------------
   struct Measured {
@@ -255,6 +257,8 @@ class Device : public Task {
   bool enable_requested_ = false, enabling_ = false, homing_ = false;
   TimeNs enable_start_ = 0, home_start_ = -1, t0_ = -1;
   std::array<bool, 2> buttons_{};
+  bool deadline_breached_ = false;
+  DeadlineBreach deadline_breach_{};
   std::array<char, DeviceStatus::max_reason + 1> threw_{};  // what a throwing driver said
   EventWrite<OperatingState>* state_event_ = nullptr;
   EventWrite<FaultInfo>* fault_event_ = nullptr;

@@ -27,8 +27,9 @@ enum class FaultCode : std::uint8_t {
   device_fault,       // a device this one drives reports FAULT (its own fault says why)
   device_disabled,    // a device this one drives stayed disabled: it cannot be driven
   config_mismatch,    // a peer's configuration no longer matches this one's (a wave port's impedance)
+  deadline_missed,    // the task missed more periods than its deadline policy allows: `detail` periods
 };
-constexpr std::size_t enum_count(FaultCode) { return 11; }
+constexpr std::size_t enum_count(FaultCode) { return 12; }
 constexpr std::string_view enum_type_name(FaultCode) { return "saw::FaultCode"; }
 
 constexpr std::string_view to_string(FaultCode c) {
@@ -55,6 +56,8 @@ constexpr std::string_view to_string(FaultCode c) {
       return "device not enabled";
     case FaultCode::config_mismatch:
       return "configuration mismatch";
+    case FaultCode::deadline_missed:
+      return "deadline missed";
   }
   return "?";
 }
@@ -64,16 +67,16 @@ constexpr std::string_view to_string(FaultCode c) {
 // bounded: filled in RT code without allocating.
 struct FaultInfo {
   static constexpr std::string_view type_name = "saw::FaultInfo";
-  // 2: FaultCode::device_fault; 3: device_disabled; 4: config_mismatch
-  static constexpr std::uint32_t layout_version = 4;
+  // 2: FaultCode::device_fault; 3: device_disabled; 4: config_mismatch; 5: deadline_missed
+  static constexpr std::uint32_t layout_version = 5;
   static constexpr std::size_t max_source = 23;  // characters, then at least one NUL
 
   FaultCode code = FaultCode::none;
   Status last_read = Status::ok;  // the input's last read result (disconnected: its peer is gone)
-  std::uint32_t detail = 0;       // the device's own code (CANopen error code, USB error), or 0
-  TimeNs age_ns = 0;              // how old the last good input was (stale, not finite)
-  TimeNs time = 0;                // when the fault was raised
-  TimeNs since_start_ns = 0;      // the same, from the reporter's first cycle
+  std::uint32_t detail = 0;   // the device's own code (CANopen error code, USB error), periods missed, or 0
+  TimeNs age_ns = 0;          // how old the last good input was (stale, not finite); how late the wake-up
+  TimeNs time = 0;            // when the fault was raised
+  TimeNs since_start_ns = 0;  // the same, from the reporter's first cycle
   // Which input, side or device the check was about ("master", "node 5", "usb 1-2"); "" if none.
   std::array<char, max_source + 1> source{};
 
@@ -99,10 +102,18 @@ static_assert(sizeof(FaultInfo) == 56 && offsetof(FaultInfo, last_read) == 1 &&
               offsetof(FaultInfo, time) == 16 && offsetof(FaultInfo, since_start_ns) == 24 &&
               offsetof(FaultInfo, source) == 32);
 
-// One line for people: "master input stale: 23.4 ms old (last read: disconnected), at t=4.512 s".
+// One line for people: "master input stale: 23.4 ms old (last read: disconnected), at t=4.512 s",
+// "deadline missed: 12 periods in a row (last wake-up 11.8 ms late), at t=2.031 s".
 // Not for RT code (it allocates).
 inline std::string to_string(const FaultInfo& f) {
   if (f.code == FaultCode::none) return "no fault";
+  if (f.code == FaultCode::deadline_missed) {
+    char b[160];
+    std::snprintf(b, sizeof b, "deadline missed: %u periods %s (last wake-up %.1f ms late), at t=%.3f s",
+                  static_cast<unsigned>(f.detail), f.source_name().empty() ? "" : f.source.data(),
+                  static_cast<double>(f.age_ns) * 1e-6, static_cast<double>(f.since_start_ns) * 1e-9);
+    return b;
+  }
   std::string s(f.source_name());
   if (!s.empty()) s += ' ';
   s += to_string(f.code);

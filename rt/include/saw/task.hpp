@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "saw/component.hpp"
+#include "saw/deadline.hpp"
 #include "saw/latency_histogram.hpp"
 
 namespace saw {
@@ -21,6 +22,9 @@ struct TaskConfig {
   std::chrono::nanoseconds offset{0};
   std::size_t stack_prefault = 256 * 1024;
   std::size_t histogram_bins = 1000;  // 1 µs each
+  // When missed periods are a breach (periodic tasks; off unless set: a deployment sets
+  // DeadlinePolicy::standard() unless its file says otherwise).
+  DeadlinePolicy deadline{};
 
   static TaskConfig periodic(std::chrono::nanoseconds period, int priority = 80, int cpu = -1) {
     return {period, priority, cpu};
@@ -62,6 +66,17 @@ class Task : public Component {
   // Once Manager::start() has returned: what the thread could not get (SCHED_FIFO, affinity),
   // empty if all. The manager's rt_warnings() lists it too.
   const std::string& rt_setup_error() const noexcept { return rt_setup_error_; }
+  // Wake-ups that found the deadline policy breached (see on_deadline_breach()).
+  std::uint64_t deadline_breaches() const noexcept {
+    return deadline_breaches_.load(std::memory_order_relaxed);
+  }
+
+ protected:
+  // RT, in the task's thread, right before a cycle whose wake-up found the deadline policy
+  // breached (every such wake-up, until a cycle is on time again or the window recovers). The
+  // task has said it once in the log; a component that drives something faults here and takes
+  // its safe state in the cycle that follows. The default does nothing more.
+  virtual void on_deadline_breach(const DeadlineBreach&) noexcept {}
 
  private:
   // The manager's, through detail::Access.
@@ -77,6 +92,9 @@ class Task : public Component {
   void thread_main(const std::atomic<TimeNs>& first_wakeup, const std::atomic<bool>& running);
   void periodic_loop(TimeNs first_wakeup, const std::atomic<bool>& running) noexcept;
   void continuous_loop(const std::atomic<bool>& running) noexcept;
+  void watch_deadline(TimeNs latency) noexcept;
+  // A breach: counted, said once per episode, handed to on_deadline_breach().
+  void breach(const DeadlineBreach& b) noexcept;
   void account(TimeNs scheduled, TimeNs woke, TimeNs end, std::uint64_t overruns,
                std::uint64_t missed) noexcept;
 
@@ -87,6 +105,13 @@ class Task : public Component {
   std::thread thread_;
   std::atomic<bool> ready_{false};
   std::string rt_setup_error_;  // written by the thread before ready_ (release)
+  DeadlineMonitor deadline_;
+  bool breached_ = false;  // the last wake-up breached the policy (for one log line per episode)
+  std::atomic<std::uint64_t> deadline_breaches_{0};
 };
+
+// "12 periods missed in a row (last wake-up 11.8 ms late)", "312 of 1000 periods missed": for
+// people, not RT code (it allocates).
+std::string to_string(const DeadlineBreach& b);
 
 }  // namespace saw

@@ -169,9 +169,13 @@ void Teleoperation::raise_fault(FaultInfo why) noexcept {
   explain(why);
   summary_.reason = fault_reason_.text;
   // Once per transition: the log line, the event (the gateway publishes it), then the state.
-  saw::log(LogLevel::error, name().c_str(), "FAULT: {} {}: {} ns old, last read {}",
-           to_string(side_of(why)).data(), to_string(why.code).data(), why.age_ns,
-           saw::to_string(why.last_read).data());
+  if (why.code == FaultCode::deadline_missed)
+    saw::log(LogLevel::error, name().c_str(), "FAULT: deadline missed: {} periods {}, zero force both ways",
+             why.detail, fault_.source.data());
+  else
+    saw::log(LogLevel::error, name().c_str(), "FAULT: {} {}: {} ns old, last read {}",
+             to_string(side_of(why)).data(), to_string(why.code).data(), why.age_ns,
+             saw::to_string(why.last_read).data());
   // The words outlive the record: fault_reason_ changes only at the next fault, after an enable.
   if (fault_reason_.size != 0)
     saw::log(LogLevel::error, name().c_str(), "FAULT: {}", fault_reason_.text.data());
@@ -181,6 +185,16 @@ void Teleoperation::raise_fault(FaultInfo why) noexcept {
 
 void Teleoperation::explain(const FaultInfo& why) noexcept {
   fault_reason_.clear();
+  if (why.code == FaultCode::deadline_missed) {
+    // The FaultInfo says the periods and how late; a window's size only the words can.
+    const auto& b = deadline_breach_;
+    if (b.kind == DeadlineBreach::Kind::share)
+      fault_reason_.append(static_cast<double>(b.missed))
+          .append(" of ")
+          .append(static_cast<double>(b.periods))
+          .append(" periods missed");
+    return;
+  }
   if (side_of(why) != FaultSide::master || !law_->uses_waves()) return;
   if (why.code == FaultCode::config_mismatch) {
     fault_reason_.append(wave_port_text_);
@@ -388,7 +402,22 @@ void Teleoperation::on_input_failure(const FaultInfo& why) noexcept {
   send_forces(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
 }
 
+void Teleoperation::on_deadline_breach(const DeadlineBreach& b) noexcept {
+  deadline_breached_ = true;
+  deadline_breach_ = b;
+}
+
 void Teleoperation::run() {
+  if (deadline_breached_) {
+    deadline_breached_ = false;
+    FaultInfo f;
+    f.code = FaultCode::deadline_missed;
+    f.detail = static_cast<std::uint32_t>(deadline_breach_.missed);
+    f.age_ns = deadline_breach_.latency;
+    f.set_source(deadline_breach_.kind == DeadlineBreach::Kind::in_a_row ? "in a row" : "in a window");
+    if (start_time_ < 0) start_time_ = now();
+    raise_fault(f);  // then the cycle below sends zero force both ways
+  }
   cycle_body();
   refresh_summary();
 }

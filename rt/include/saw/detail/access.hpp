@@ -36,6 +36,9 @@ struct Access {
   static bool thread_ready(const Task& t) noexcept { return t.thread_ready(); }
   static void join(Task& t) { t.join(); }
   static void step(Task& t, TimeNs time) noexcept { t.step(time); }
+  // As the periodic loop does when a wake-up finds the deadline policy breached (tests of what a
+  // component does then, on the stepped clock, which is never late).
+  static void deadline_breach(Task& t, const DeadlineBreach& b) noexcept { t.breach(b); }
 
   // Function objects and event handlers
   static void bind(FunctionBase& f, const FunctionBinding& b) noexcept { f.bind(b); }

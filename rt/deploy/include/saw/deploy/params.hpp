@@ -26,6 +26,8 @@ class Params {
   const std::string& file() const noexcept { return file_; }
   const std::string& path() const noexcept { return path_; }
   bool has(const std::string& key) const;
+  // The key is there and holds a mapping (a key that takes a scalar or a mapping tells them apart).
+  bool has_map(const std::string& key) const;
 
   // Supported T: double, int, std::int64_t, bool, std::string, saw::Vec3, std::vector<double>,
   // std::vector<std::string>, std::vector<saw::Vec3> (a list of [x, y, z]),

@@ -119,6 +119,10 @@ class Teleoperation : public Task {
   };
   const Columns& columns() const noexcept { return columns_; }
 
+ protected:
+  // The task's deadline policy breached: FAULT in the next cycle, zero force both ways.
+  void on_deadline_breach(const DeadlineBreach& b) noexcept override;
+
  private:
   // One device: its functions and the last good input read from it.
   struct Side {
@@ -171,6 +175,8 @@ class Teleoperation : public Task {
   TeleopConfig config_;
   std::unique_ptr<LawModel> law_;
   bool clutched_ = false, ratcheting_ = false;
+  bool deadline_breached_ = false;
+  DeadlineBreach deadline_breach_{};
   bool engage_pending_ = true;  // the next engaged cycle (re-)engages the law: reset, not step
   bool inputs_seen_ = false;    // a producer that has not published yet is not a fault, for a while
   TimeNs start_time_ = -1;
