@@ -43,6 +43,7 @@ def main():
     # limits on a loaded CI host (as in canopen_sim_teleop.py).
     text = text.replace("virtual:canopen-shared", bus).replace("timeout: 150ms}", "timeout: 1s}")
     text = text.replace("stale_timeout: 20ms", "stale_timeout: 500ms")
+    text = text.replace("rpdo_deadline: 5ms", "rpdo_deadline: 500ms")
     text = re.sub(r"(\n(\s+)command_timeout: 20ms[^\n]*)", r"\1\n\2feedback_timeout: 500ms", text, count=1)
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
         f.write(text)
