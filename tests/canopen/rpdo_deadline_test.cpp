@@ -85,7 +85,19 @@ struct Stall {
     rig.seen.clear();
     rig.cycle({}, cycles);
   }
+  // `enable` as a client sends it: run at the arm's next cycle.
+  void enable() {
+    if (!mailbox) {
+      mailbox = std::make_unique<detail::Mailbox>("test client", 8, sizeof(StateCommand));
+      detail::Access::add_inbound(*arm, mailbox.get());
+      state = mailbox->add_target(execute_of(*arm->provided("arm")->find_command("state_command")));
+    }
+    const StateCommand c = StateCommand::enable;
+    ASSERT_EQ(mailbox->push(state, &c, sizeof c), Status::ok);
+  }
   SharedRig rig;
+  std::unique_ptr<detail::Mailbox> mailbox;  // before the arm: it outlives the arm's reference
+  std::uint32_t state = 0;
   std::unique_ptr<CanopenArm> arm;
 };
 
@@ -116,6 +128,13 @@ TEST(CanopenRpdoDeadline, ADriveWhoseRpdosStopDoesWhat6007SaysAndTheArmFaultsOnI
     EXPECT_EQ(s.arm->fault_reason(), FaultReason::emcy) << n;
     EXPECT_EQ(s.arm->device_status().fault.detail, 0x8250u) << n;
     EXPECT_EQ(s.arm->device_status().fault.source_name(), "n1") << n;
+    // An enable walks the drives back (fault reset where 0x6007 faulted them); their RPDOs come
+    // again, so their deadlines are watched again, and quiet.
+    s.enable();
+    s.rig.cycle({s.arm.get()}, 60);
+    EXPECT_EQ(s.arm->operating_state().state, OperatingStateValue::enabled) << n;
+    EXPECT_EQ(s.rig.drives[0].state(), cia402::State::operation_enabled) << n;
+    EXPECT_EQ(s.rig.drives[0].rpdo_timeouts(), enabled_rpdos(*s.arm, 0).size()) << "no new one";
   }
 }
 
