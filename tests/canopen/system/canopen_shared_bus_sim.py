@@ -48,8 +48,11 @@ def main():
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
         f.write(text)
         config = f.name
+    # The over-current 5 s after saw-can-sim starts: after saw-rt's start-up (about 4 s of SDO in the
+    # PREEMPT_RT guest under software emulation, tests/kernel; a node reset by its start-up forgets
+    # an EMCY sent before it) and within its 6 s run (which counts from the start-up's end).
     sim = subprocess.Popen([SIM, "--bus", bus, "--node", "1", "--node", "2", "--node", "3", "--io", "10",
-                            "--load-inertia", "0.002", "--friction", "2e-6", "--inject", "10:over-current:3.5"],
+                            "--load-inertia", "0.002", "--friction", "2e-6", "--inject", "10:over-current:5"],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         ready = sim.stdout.readline()
