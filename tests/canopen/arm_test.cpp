@@ -486,6 +486,7 @@ TEST(CanopenArm, WhenTheArmDiesEachDriveDoesWhatItsAbortConnectionOptionSays) {
   for (const auto& [option, expected] : cases) {
     auto c = arm_config(saw::canopen::cia402::csp);
     c.abort_connection = option;
+    c.rpdo_deadline = 0;  // the heartbeat consumer alone (the RPDO deadline: rpdo_deadline_test.cpp)
     ArmRig rig(c);
     rig.enable();
     ASSERT_EQ(rig.state(), OperatingStateValue::enabled);

@@ -367,3 +367,25 @@ TEST(CanopenDeployment, TheSummaryNamesTheFaultAndItsEmergency) {
 }
 
 }  // namespace
+
+namespace {
+
+// rpdo_deadline: a duration rounded up to whole ms of at least two periods, or off/0; its errors
+// name file:line:key (the rail runs at 2 ms: 4 ms at least).
+TEST(CanopenDeployment, AnRpdoDeadlineIsOffOrAtLeastTwoPeriodsNamingFileLineAndKey) {
+  for (const char* ok : {"off", "0", "4ms", "3.5ms", "false"}) {
+    std::string text = good;
+    text.replace(text.find("node: 9"), 7, std::string("node: 9\n      rpdo_deadline: ") + ok);
+    EXPECT_NO_THROW((void)parse(text)) << ok;
+  }
+  EXPECT_HAS(
+      error_of("node: 9", "node: 9\n      rpdo_deadline: 3ms"),
+      "cfg.yaml:29:22: key 'components[1].params.rpdo_deadline': rpdo_deadline (3 ms in whole ms) must "
+      "be at least two periods (4000 us), or 0 (off)");
+  EXPECT_HAS(error_of("node: 9", "node: 9\n      rpdo_deadline: 70s"),
+             "key 'components[1].params.rpdo_deadline': rpdo_deadline must be 0 (off) or up to 65.535 s");
+  EXPECT_HAS(error_of("mode: cst", "mode: cst\n      rpdo_deadline: soon"),
+             "key 'components[0].params.rpdo_deadline'");
+}
+
+}  // namespace

@@ -89,6 +89,7 @@ void TestDrive::reboot() noexcept {
       const std::uint32_t cob = default_pdo_cob_id(kind, static_cast<std::uint16_t>(n + 1), config_.node);
       (void)dictionary_.set({static_cast<std::uint16_t>((rx ? 0x1400 : 0x1800) + n), 1}, cob | pdo_invalid);
       (void)dictionary_.set({static_cast<std::uint16_t>((rx ? 0x1600 : 0x1A00) + n), 0}, std::uint8_t{0});
+      (void)dictionary_.set({static_cast<std::uint16_t>((rx ? 0x1400 : 0x1800) + n), 5}, std::uint16_t{0});
     }
   (void)dictionary_.set({0x1017, 0}, std::uint16_t{0});
   (void)dictionary_.set({0x1016, 1}, std::uint32_t{0});
@@ -101,6 +102,9 @@ void TestDrive::reboot() noexcept {
   tpdos_.clear();
   rpdo_objects_.clear();
   tpdo_objects_.clear();
+  rpdo_deadlines_.clear();
+  rpdo_seen_.clear();
+  rpdo_fired_.clear();
   nmt_ = NmtNode(config_.node);
   nmt_.boot();
 }
@@ -142,6 +146,9 @@ void TestDrive::build_pdos() {
   tpdos_.clear();
   rpdo_objects_.clear();
   tpdo_objects_.clear();
+  rpdo_deadlines_.clear();
+  rpdo_seen_.clear();
+  rpdo_fired_.clear();
   for (std::uint16_t n = 0; n < 4; ++n)
     for (const bool rx : {true, false}) {
       std::uint32_t cob = 0;
@@ -164,8 +171,13 @@ void TestDrive::build_pdos() {
         objects.push_back(e.address);
       }
       if (rx) {
+        std::uint16_t timer = 0;
+        (void)dictionary_.get({static_cast<std::uint16_t>(0x1400 + n), 5}, timer);
         rpdos_.emplace_back(m);
         rpdo_objects_.push_back(objects);
+        rpdo_deadlines_.push_back(static_cast<TimeNs>(timer) * 1'000'000);
+        rpdo_seen_.emplace_back();
+        rpdo_fired_.push_back(false);
       } else {
         tpdos_.emplace_back(m);
         tpdo_objects_.push_back(objects);
@@ -211,10 +223,9 @@ void TestDrive::on_sync(TimeNs now) noexcept {
 
 // The heartbeat consumer (CiA 301 0x1016:01: bits 16..23 the watched node, 0..15 its time in ms;
 // 0 or node 0: not used). A new value starts over: monitoring begins with the watched node's
-// next heartbeat. On expiry the heartbeat event: EMCY 0x8130, CiA 402's abort connection option
-// 0x6007 (1 fault, 2 disable voltage, 3 quick stop; 0 and others: nothing) taken at once, without
-// waiting for a SYNC, then CiA 301's error behaviour for a communication error (0x1029's default:
-// operational to pre-operational).
+// next heartbeat. On expiry the heartbeat event: EMCY 0x8130 and 0x6007 (abort_connection), then
+// CiA 301's error behaviour for a communication error (0x1029's default: operational to
+// pre-operational).
 void TestDrive::watch_master(TimeNs now) noexcept {
   std::uint32_t c = 0;
   (void)dictionary_.get({0x1016, 1}, c);
@@ -229,7 +240,30 @@ void TestDrive::watch_master(TimeNs now) noexcept {
     return;
   consumer_fired_ = true;
   ++heartbeat_events_;
-  (void)emcy_.raise(0x8130, error_register::generic | error_register::communication);
+  abort_connection(0x8130);
+  if (nmt_.state() == NmtState::operational) set_nmt(NmtCommand::enter_pre_operational);
+}
+
+// CiA 301's RPDO deadline (an RPDO's event timer, 0x1400+k:05, ms; 0: off): monitoring starts
+// with the RPDO's first reception in operational and restarts after leaving it. On expiry EMCY
+// 0x8250 (RPDO timeout) and 0x6007's reaction, once per silence; the drive stays operational (its
+// master is alive: only its RPDOs stopped), so the master hears the EMCY and its heartbeat.
+void TestDrive::watch_rpdos(TimeNs now) noexcept {
+  for (std::size_t p = 0; p < rpdo_seen_.size(); ++p) {
+    if (nmt_.state() != NmtState::operational) rpdo_seen_[p].reset();
+    if (rpdo_deadlines_[p] == 0 || !rpdo_seen_[p] || rpdo_fired_[p] ||
+        now - *rpdo_seen_[p] <= rpdo_deadlines_[p])
+      continue;
+    rpdo_fired_[p] = true;
+    ++rpdo_timeouts_;
+    abort_connection(0x8250);
+  }
+}
+
+// A communication error's EMCY, then CiA 402's abort connection option 0x6007 (1 fault, 2 disable
+// voltage, 3 quick stop; 0 and others: nothing) taken at once, without waiting for a SYNC.
+void TestDrive::abort_connection(std::uint16_t code) noexcept {
+  (void)emcy_.raise(code, error_register::generic | error_register::communication);
   std::int16_t option = 0;
   (void)dictionary_.get(object::abort_connection_option_code, option);
   const bool moving =
@@ -241,10 +275,9 @@ void TestDrive::watch_master(TimeNs now) noexcept {
     velocity_ = 0;
     drive_.update({local, option == 1, true, true});
     drive_.update({local, false, true, true});
-    if (option == 1) (void)dictionary_.set(object::error_code, std::uint16_t{0x8130});
+    if (option == 1) (void)dictionary_.set(object::error_code, code);
     (void)dictionary_.set(object::statusword, drive_.statusword());
   }
-  if (nmt_.state() == NmtState::operational) set_nmt(NmtCommand::enter_pre_operational);
 }
 
 void TestDrive::step(TimeNs now) noexcept {
@@ -265,6 +298,9 @@ void TestDrive::step(TimeNs now) noexcept {
           tpdos_.clear();
           rpdo_objects_.clear();
           tpdo_objects_.clear();
+          rpdo_deadlines_.clear();
+          rpdo_seen_.clear();
+          rpdo_fired_.clear();
           nmt_.boot();
           heartbeat_.start(now);
           continue;
@@ -294,6 +330,8 @@ void TestDrive::step(TimeNs now) noexcept {
       for (std::size_t p = 0; p < rpdos_.size(); ++p) {
         if (rpdos_[p].receive(f) != PdoReceive::ok) continue;
         ++rpdo_frames_;
+        rpdo_seen_[p] = now;
+        rpdo_fired_[p] = false;
         for (std::size_t s = 0; s < rpdo_objects_[p].size(); ++s) {
           Number v;
           if (rpdos_[p].get_number(s, v) == Codec::ok)
@@ -309,6 +347,7 @@ void TestDrive::step(TimeNs now) noexcept {
     heartbeat_.set_period(static_cast<TimeNs>(hb) * 1'000'000, now);
   }
   watch_master(now);
+  watch_rpdos(now);
   if (auto f = nmt_.poll()) send(*f);
   if (auto f = server_->poll(now)) send(*f);
   if (auto f = emcy_.poll(now)) send(*f);

@@ -1,7 +1,8 @@
 // A minimal in-process CiA 402 drive for the master's tests: a LocalDictionary served by an
 // SdoServer, an NmtNode, the drive-side state machine, PDOs built from its own mapping objects,
 // heartbeat and EMCY producers, a heartbeat consumer (0x1016:01, with CiA 402's abort connection
-// option 0x6007 on expiry), and a first-order motion. Stepped by the test; allocation-free
+// option 0x6007 on expiry), RPDO deadline monitoring (each RPDO's event timer, 0x1400+k:05: EMCY
+// 0x8250 and 0x6007 on expiry), and a first-order motion. Stepped by the test; allocation-free
 // once operational (so it may run inside a guarded cycle).
 #pragma once
 
@@ -66,6 +67,7 @@ class TestDrive {
   std::int32_t target_velocity() const noexcept;
   std::uint64_t syncs() const noexcept { return syncs_; }
   std::uint64_t heartbeat_events() const noexcept { return heartbeat_events_; }
+  std::uint64_t rpdo_timeouts() const noexcept { return rpdo_timeouts_; }
   // Every SDO write the dictionary accepted, in order (for the start-up test).
   struct Write {
     ObjectAddress address;
@@ -80,6 +82,8 @@ class TestDrive {
   void build_pdos();
   void on_sync(TimeNs now) noexcept;
   void watch_master(TimeNs now) noexcept;
+  void watch_rpdos(TimeNs now) noexcept;
+  void abort_connection(std::uint16_t code) noexcept;
   void send(const can::Frame& f) noexcept;
 
   TestDriveConfig config_;
@@ -92,6 +96,11 @@ class TestDrive {
   EmcyProducer emcy_;
   std::vector<PdoUnpacker> rpdos_;
   std::vector<std::vector<ObjectAddress>> rpdo_objects_;
+  // RPDO deadline monitoring, per RPDO: its event timer (0: off), its last reception in
+  // operational (none: not watched yet), whether this silence was reported.
+  std::vector<TimeNs> rpdo_deadlines_;
+  std::vector<std::optional<TimeNs>> rpdo_seen_;
+  std::vector<bool> rpdo_fired_;
   std::vector<PdoPacker> tpdos_;
   std::vector<std::vector<ObjectAddress>> tpdo_objects_;
   std::vector<Write> writes_;
@@ -100,7 +109,7 @@ class TestDrive {
   std::uint16_t controlword_ = 0;
   double position_ = 0, velocity_ = 0;
   TimeNs last_sync_ = 0;
-  std::uint64_t syncs_ = 0, rpdo_frames_ = 0, heartbeat_events_ = 0;
+  std::uint64_t syncs_ = 0, rpdo_frames_ = 0, heartbeat_events_ = 0, rpdo_timeouts_ = 0;
   // The heartbeat consumer, from 0x1016:01.
   std::uint32_t consumer_entry_ = 0;
   std::uint8_t consumer_node_ = 0;

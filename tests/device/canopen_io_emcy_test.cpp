@@ -46,6 +46,24 @@ void emcy(CanopenIoRig& rig, std::uint16_t code, std::uint8_t error_register) {
   }
 }
 
+// A starved component (its bus task's SYNC and heartbeat go on, its RPDOs do not): the node's RPDO
+// deadline (written at start-up, rpdo_deadline: 5 ms by default) fires EMCY 0x8250 and puts out
+// its error value (the safe value); the component's next cycle faults on that EMCY.
+TEST(CanopenIoEmcy, AStarvedComponentsNodeTakesItsErrorValueAtItsRpdoDeadlineAndTheComponentFaults) {
+  auto rig = driving();
+  rig->starve(4);
+  EXPECT_EQ(rig->sim().rpdo_timeouts(), 0u) << "within the deadline";
+  EXPECT_EQ(rig->output(), 3000);
+  rig->starve(4);
+  EXPECT_EQ(rig->sim().rpdo_timeouts(), 1u);
+  EXPECT_EQ(rig->output(), 0) << "its error value: the safe value";
+  EXPECT_EQ(rig->sim().heartbeat_events(), 0u) << "the master's heartbeat went on";
+  rig->cycle(3);
+  EXPECT_EQ(rig->io().operating_state().state, OperatingStateValue::fault);
+  EXPECT_EQ(rig->io().device_status().fault.detail, 0x8250u);
+  EXPECT_EQ(count_containing(drain_log(), "EMCY 0x8250 (RPDO timeout)"), 1);
+}
+
 TEST(CanopenIoEmcy, AnErrorRegisterOfZeroIsAWarningLoggedOnceAndShown) {
   auto rig = driving();
   emcy(*rig, 0x4210, 0x00);  // temperature, device: the register says there is no error

@@ -65,6 +65,15 @@ class CanopenIoRig : public Rig {
       step_node();
     }
   }
+  // Periods in which the component does not run (a starved task) while its bus task's SYNC and
+  // heartbeat go on: only its RPDOs stop.
+  void starve(int n) {
+    for (int i = 0; i < n; ++i, now_ += canopen::test::ms) {
+      bus_port_.now = now_;
+      task_->cycle(now_);
+      step_node();
+    }
+  }
   // The jaw: good 0.05 m (3000 counts from safe), other 0.025 m (500), over limit twice its 0.08 m.
   void send(Command c) override {
     JointState js;

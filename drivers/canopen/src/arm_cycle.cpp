@@ -232,7 +232,9 @@ Outcome CanopenArm::check_emcy(std::size_t i, bool drive_fault) noexcept {
     emcy_tpdos_[i] = 0;
   }
   if (!emcy_pending_[i] || enabling()) return Outcome::done();  // an enable resets faults
-  if (drive_fault) {
+  // An RPDO timeout says this master's RPDOs stopped reaching the drive (a starved cycle), and
+  // that the drive already did what 0x6007 says whatever its statusword shows: a fault at once.
+  if (drive_fault || h.last_emcy == emcy_code::rpdo_timeout) {
     emcy_pending_[i] = false;
     if (says())
       saw::log(LogLevel::error, name().c_str(),

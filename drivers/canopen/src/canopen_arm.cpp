@@ -27,6 +27,7 @@ std::vector<AxisConfig> axes_of(const CanopenArmConfig& c) {
     a.master_node = c.master_node;
     a.master_timeout = c.master_heartbeat_timeout;
     a.abort_connection = c.abort_connection;
+    a.rpdo_deadline = {c.rpdo_deadline, j.rpdo_deadline_unwritable};
     a.identity = j.identity;
     a.writes = j.writes;
     axes.push_back(std::move(a));
@@ -47,6 +48,7 @@ CanopenArmConfig checked(CanopenArmConfig c, const TaskConfig& task) {
   if (c.feedback_timeout == 0) c.feedback_timeout = std::max<TimeNs>(10 * period, 10'000'000);
   if (c.feedback_timeout < 2 * period)
     throw std::invalid_argument("feedback_timeout must be at least two periods");
+  c.rpdo_deadline = resolve_rpdo_deadline(c.rpdo_deadline, period);
   if (c.chain && c.chain->joints.size() != c.joints.size())
     throw std::invalid_argument("the chain has " + std::to_string(c.chain->joints.size()) +
                                 " joints, the arm " + std::to_string(c.joints.size()) + " drives");
@@ -179,8 +181,21 @@ void CanopenArm::open() {
     saw::log(LogLevel::warning, name().c_str(),
              "master_heartbeat.timeout is 0: the drives do not watch this master; killed, it leaves them as "
              "they are");
-  StartupSequence sequence(bus_, std::vector<AxisConfig>(axes_of(config_)), config_.startup);
+  const std::vector<AxisConfig> axes = axes_of(config_);
+  StartupSequence sequence(bus_, axes, config_.startup);
   run_startup(sequence, config_.startup_pause);
+  // A drive that cannot watch the RPDO deadline still runs: said once, so nobody counts on it.
+  if (config_.rpdo_deadline == 0)
+    saw::log(LogLevel::warning, name().c_str(),
+             "rpdo_deadline is off: a starved master whose bus still sends SYNC leaves the drives applying "
+             "their last setpoints");
+  for (std::size_t i = 0; i < axes.size(); ++i)
+    for (const std::uint16_t n : unwatched_rpdos(axes[i].pdos, axes[i].rpdo_deadline, sequence.written()[i]))
+      saw::log(LogLevel::warning, name().c_str(),
+               "{} (node {}): RPDO{} has no deadline ({:x}:05 not in its EDS or refused): the drive does not "
+               "see a starved master there",
+               config_.joints[i].name.c_str(), unsigned{config_.joints[i].node}, unsigned{n},
+               0x1400u + n - 1);
 }
 
 void CanopenArm::target_all(cia402::Target t) noexcept {

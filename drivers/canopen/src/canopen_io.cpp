@@ -21,6 +21,9 @@ CanopenIoConfig checked(CanopenIoConfig c, const TaskConfig& task) {
     throw std::invalid_argument("a CANopen I/O component has 1 to 8 channels");
   if (c.command_timeout == 0) c.command_timeout = 3 * period;
   if (c.feedback_timeout == 0) c.feedback_timeout = std::max<TimeNs>(10 * period, 10'000'000);
+  c.rpdo_deadline = resolve_rpdo_deadline(c.rpdo_deadline, period);
+  c.node.rpdo_deadline.time = c.rpdo_deadline;
+  if (c.eds) c.node.rpdo_deadline.unwritable = rpdos_without_event_timer(*c.eds, c.node.pdos);
   c.node.outputs.clear();
   c.node.inputs.clear();
   for (const IoChannel& ch : c.channels) {
@@ -177,6 +180,12 @@ CanopenIo::~CanopenIo() = default;
 void CanopenIo::open() {
   StartupSequence sequence(*link_.bus, std::vector<NodeSetup>{setup_of(io_->config())}, config_.startup);
   run_startup(sequence, config_.startup_pause);
+  const IoNodeConfig& n = io_->config();
+  for (const std::uint16_t rpdo : unwatched_rpdos(n.pdos, n.rpdo_deadline, sequence.written()[0]))
+    saw::log(LogLevel::warning, name().c_str(),
+             "node {}: RPDO{} has no deadline ({:x}:05 not in its EDS or refused): the node does not see a "
+             "starved master there",
+             unsigned{n.node}, unsigned{rpdo}, 0x1400u + rpdo - 1);
 }
 
 void CanopenIo::set_safe_outputs() noexcept {

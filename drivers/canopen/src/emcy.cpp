@@ -254,6 +254,7 @@ std::string_view emcy_name(std::uint16_t code) noexcept {
 
 EmcySeverity emcy_severity(const Emcy& e) noexcept {
   if (e.is_reset()) return EmcySeverity::reset;
+  if (e.code == emcy_code::rpdo_timeout) return EmcySeverity::fault;  // whatever its register says
   if (e.error_register == 0 || e.code == 0x8110 || e.code == 0x8120) return EmcySeverity::warning;
   return EmcySeverity::fault;
 }

@@ -75,7 +75,7 @@ void check(const IoNodeConfig& c) {
 NodeSetup setup_of(const IoNodeConfig& c) {
   check(c);
   NodeSetup s{c.name, c.node, c.identity,
-              node_writes(c.pdos, c.heartbeat_period, c.master_node, c.master_timeout)};
+              node_writes(c.pdos, c.heartbeat_period, c.master_node, c.master_timeout, c.rpdo_deadline)};
   for (const SdoWrite& w : c.writes) s.writes.push_back({w, false});
   return s;
 }

@@ -136,6 +136,18 @@ std::vector<SdoWrite> parse_writes(const Params& p) {
   return out;
 }
 
+std::optional<TimeNs> rpdo_deadline(const Params& p, TimeNs period) {
+  if (!p.has("rpdo_deadline")) return std::nullopt;
+  // YAML 1.1 reads a bare `off` as false: both spell "not watched", as 0 does.
+  const auto text = p.get<std::string>("rpdo_deadline");
+  if (text == "off" || text == "false") return 0;
+  try {
+    return resolve_rpdo_deadline(p.get<std::chrono::nanoseconds>("rpdo_deadline").count(), period);
+  } catch (const std::invalid_argument& e) {
+    p.fail_at("rpdo_deadline", e.what());
+  }
+}
+
 std::string parse_bus(const Params& p) {
   const std::string bus = p.get<std::string>("bus");
   if (is_bus_uri(bus)) return bus;
@@ -188,7 +200,9 @@ JointConfig parse_joint(const Params& j, const std::string& name, cia402::Mode m
   c.following_error = j.get_in_range("following_error", 0, 1e3, 0);
   c.offset = j.get_in_range("offset", -1e6, 1e6, 0);
   const bool own_pdos = j.has("pdo") || j.has("eds");
-  c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory, c.identity);
+  std::optional<Eds> eds;
+  c.pdos = parse_pdos(own_pdos ? j : shared, mode, c.node, directory, c.identity, &eds);
+  if (eds) c.rpdo_deadline_unwritable = rpdos_without_event_timer(*eds, c.pdos);
   c.writes = parse_writes(shared);
   if (&j != &shared)
     for (const SdoWrite& w : parse_writes(j)) c.writes.push_back(w);
@@ -232,6 +246,7 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
                                                     {"quick_stop", AbortConnection::quick_stop}},
                                                    AbortConnection::quick_stop);
   c.command_timeout = duration(p, "command_timeout", 3 * period, period, 10s);
+  c.rpdo_deadline = params::rpdo_deadline(p, period.count());
   c.on_command_timeout = p.get_enum<CommandTimeoutAction>(
       "on_command_timeout", {{"hold", CommandTimeoutAction::hold}, {"fault", CommandTimeoutAction::fault}},
       CommandTimeoutAction::hold);

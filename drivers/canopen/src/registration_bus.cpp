@@ -163,6 +163,7 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   c.node.writes = params::parse_writes(p);
   const auto period = s.task.period;
   c.command_timeout = duration(p, "command_timeout", 3 * period, period, 10s);
+  c.rpdo_deadline = params::rpdo_deadline(p, period.count());
   c.feedback_timeout =
       duration(p, "feedback_timeout", std::max<std::chrono::nanoseconds>(10 * period, 10ms), 2 * period, 10s);
   c.start_enabled = p.get_or<bool>("start_enabled", false);

@@ -25,6 +25,9 @@ std::vector<PdoMapping> parse_pdos(const deploy::Params& p, cia402::Mode mode, s
                                    std::optional<Eds>* eds = nullptr);
 // `sdo: ["0x60C2:01:u8=10", ...]`.
 std::vector<SdoWrite> parse_writes(const deploy::Params& p);
+// `rpdo_deadline: 5ms` (rounded up to whole ms, at least two periods), `off` or 0: not watched;
+// absent: nullopt (the component's default, resolve_rpdo_deadline()).
+std::optional<TimeNs> rpdo_deadline(const deploy::Params& p, TimeNs period);
 // `bus:`: a URI, or the name of a canopen_bus component.
 std::string parse_bus(const deploy::Params& p);
 }  // namespace params

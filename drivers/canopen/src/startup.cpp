@@ -1,5 +1,6 @@
 #include "saw/canopen/startup.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <stdexcept>
@@ -33,13 +34,27 @@ std::string_view to_string(StartupPhase p) noexcept {
 }
 
 std::vector<StartupWrite> node_writes(std::span<const PdoMapping> pdos, TimeNs heartbeat_period,
-                                      std::uint8_t master_node, TimeNs master_timeout) {
+                                      std::uint8_t master_node, TimeNs master_timeout,
+                                      const RpdoDeadline& deadline) {
   std::vector<StartupWrite> out;
-  for (const PdoMapping& m : pdos) {
+  const auto watched = [&](const PdoMapping& m) {
+    return deadline.time && m.kind == PdoKind::rpdo && m.enabled &&
+           std::find(deadline.unwritable.begin(), deadline.unwritable.end(), m.number) ==
+               deadline.unwritable.end();
+  };
+  for (PdoMapping m : pdos) {
     // Disabling a PDO the node may not have (the defaults disable 2..4) is allowed to fail.
     const bool optional = !m.enabled;
+    // The deadline owns an RPDO's event timer: an EDS default is not written before it.
+    if (watched(m)) m.event_timer = 0;
     for (const SdoWrite& w : configuration_writes(m)) out.push_back({w, optional});
   }
+  // After the PDOs (CiA 301 lets the event timer change while the PDO is valid). Optional: a node
+  // without sub-index 05h cannot watch, which is no reason to refuse it.
+  for (const PdoMapping& m : pdos)
+    if (watched(m))
+      out.push_back(
+          {{{m.communication_index(), 5}, DataType::unsigned16, deadline_ms(*deadline.time)}, true});
   const auto heartbeat_ms = static_cast<std::uint32_t>(heartbeat_period / 1'000'000);
   out.push_back({{{0x1017, 0}, DataType::unsigned16, heartbeat_ms}, false});
   if (master_timeout > 0) {
@@ -56,8 +71,8 @@ NodeSetup setup_of(const AxisConfig& axis) {
 }
 
 std::vector<StartupWrite> startup_writes(const AxisConfig& axis) {
-  std::vector<StartupWrite> out =
-      node_writes(axis.pdos, axis.heartbeat_period, axis.master_node, axis.master_timeout);
+  std::vector<StartupWrite> out = node_writes(axis.pdos, axis.heartbeat_period, axis.master_node,
+                                              axis.master_timeout, axis.rpdo_deadline);
   // "none" asks nothing of a drive: one without 0x6007 does nothing anyway.
   out.push_back({{cia402::object::abort_connection_option_code, DataType::integer16,
                   static_cast<std::uint32_t>(static_cast<std::uint16_t>(axis.abort_connection))},

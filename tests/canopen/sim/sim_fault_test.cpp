@@ -209,6 +209,46 @@ TEST(SimDriveFault, AMasterWhoseHeartbeatStopsIsNoticedByTheConsumerAndTheDriveS
   EXPECT_LT(std::abs(b.drive.motor().velocity()), 0.1) << "stopped by itself";
 }
 
+// CiA 301's RPDO deadline (0x1400+k:05, ms): a master whose RPDOs stop while its SYNC goes on
+// (a starved cycle) is seen by the drive: EMCY 0x8250, then what 0x6007 says; 0 does not watch.
+TEST(SimDriveFault, RpdosThatMissTheirDeadlineRaise0x8250AndTheDriveDoesWhat6007Says) {
+  for (const std::uint16_t deadline : {std::uint16_t{5}, std::uint16_t{0}}) {
+    Bench b;
+    Master m(b);
+    b.tick();
+    b.write({0x6007, 0}, DataType::integer16, std::int16_t{3});  // quick stop
+    m.start(cia402::csv);
+    for (std::uint16_t k = 0; k < 3; ++k)
+      b.write({static_cast<std::uint16_t>(0x1400 + k), 5}, DataType::unsigned16, deadline);
+    ASSERT_TRUE(m.reach(cia402::Target::operation_enabled));
+    m.target_velocity = 10 * 4096;
+    b.run_for(50 * ms);
+    EXPECT_EQ(b.drive.counters().rpdo_timeouts, 0u) << "every RPDO in time";
+    // Only SYNC goes on: the master's cycle is starved, its bus is not.
+    b.each_tick = [&b] {
+      if (b.now % ms == 0) b.send(sync_frame());
+    };
+    const TimeNs last = b.now - ms;
+    if (deadline == 0) {
+      b.run_for(100 * ms);
+      EXPECT_EQ(b.drive.counters().rpdo_timeouts, 0u) << "0: not watched";
+      EXPECT_EQ(b.drive.drive_state(), cia402::State::operation_enabled) << "its last setpoints, still";
+      continue;
+    }
+    ASSERT_TRUE(b.run_until([&] { return b.drive.counters().rpdo_timeouts >= 1; }, 50 * ms));
+    EXPECT_GT(b.now - last, 5 * ms);
+    EXPECT_LE(b.now - last, 7 * ms) << "within a step or two of the deadline";
+    b.run_for(2 * ms);
+    EXPECT_EQ(b.drive.counters().rpdo_timeouts, 3u) << "each RPDO once per silence";
+    EXPECT_EQ(b.drive.drive_state(), cia402::State::quick_stop_active) << "0x6007 = 3";
+    EXPECT_EQ(b.drive.nmt_state(), NmtState::operational) << "its master's SYNC goes on";
+    ASSERT_FALSE(b.emcys().empty());
+    EXPECT_EQ(b.emcys().front().code, 0x8250) << emcy_name(0x8250);
+    b.run_for(150 * ms);
+    EXPECT_LT(std::abs(b.drive.motor().velocity()), 0.1) << "stopped by itself";
+  }
+}
+
 TEST(SimDriveFault, SdoAbortOnOneObjectUntilCleared) {
   Bench b;
   b.tick();

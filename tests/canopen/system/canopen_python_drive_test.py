@@ -18,6 +18,10 @@ deployment (`canopen_drive`, CSP, 10 ms) on the same bus. Each case is what a re
   warning      an EMCY warning (0x4210, the drive stays enabled): logged in hex with its name,
                counted on the component's status, no FAULT
   error_emcy   an EMCY with the drive in FAULT: the arm's FAULT names the code and its name
+  rpdo_deadline saw-rt stopped (SIGSTOP) longer than the drive's RPDO deadline (0x1400:05, written
+               from rpdo_deadline) but shorter than its heartbeat consumer time: the drive sees the
+               RPDOs stop (EMCY 0x8250, 0x6007's quick stop); running again, saw-rt faults on that
+               EMCY naming the drive
   identity     the drive's vendor-ID is not the EDS's: start-up fails (exit 1) naming both
   reboot       the enabled drive reboots (a power cycle: its object dictionary back to the EDS's
                defaults, pre-operational, a boot-up message): saw-rt's FAULT names the reboot;
@@ -67,6 +71,7 @@ components:
       # of a second have been seen with other tests running)
       heartbeat: {{period: 100ms, timeout: 3s}}
       feedback_timeout: 3s
+      rpdo_deadline: {deadline}
 {master}
       transition_timeout: 1s
       startup: {{boot_timeout: 5s, sdo_timeout: 2s, operational_timeout: 5s}}
@@ -84,7 +89,7 @@ class Case:
 
     # The master's heartbeat as the drive watches it: generous (above), except where the
     # default (100 ms, 300 ms) is under test.
-    def __init__(self, name, extra="", default_master=False, top="", **drive_options):
+    def __init__(self, name, extra="", default_master=False, top="", deadline="3s", **drive_options):
         self.name = name
         self.bus = f"sawpydrive{os.getpid()}{name.replace('_', '')}"
         self.server, port = start_socketcand(SERVER, self.bus)
@@ -95,7 +100,8 @@ class Case:
         self.drive.boot()
         with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
             master = "" if default_master else "      master_heartbeat: {period: 100ms, timeout: 3s}\n"
-            f.write(DEPLOYMENT.format(bus=self.bus, node=NODE, extra=extra, master=master, top=top))
+            f.write(DEPLOYMENT.format(bus=self.bus, node=NODE, extra=extra, master=master, top=top,
+                                      deadline=deadline))
             self.config = f.name
         self.rt = None
 
@@ -264,6 +270,29 @@ def error_emcy():
     print("ok error_emcy: FAULT naming EMCY 0x2310 (continuous over-current)")
 
 
+def rpdo_deadline():
+    c = Case("rpdo_deadline", deadline="500ms")  # the consumer: 3 s
+    c.start(duration=8)
+    c.wait_for(lambda: enabled(c), 20, "the drive enabled")
+    time.sleep(0.5)
+    deadlines = dict(c.drive.rpdo_deadlines)
+    c.rt.send_signal(signal.SIGSTOP)  # a starved master: nothing leaves it
+    stopped = time.monotonic()
+    c.wait_for(lambda: c.drive.rpdo_timeouts, 2.5, "the drive's RPDO deadline fired")
+    fired = c.drive.rpdo_timeouts[0][1] - stopped
+    c.rt.send_signal(signal.SIGCONT)
+    c.wait_for(lambda: "RPDO timeout" in c.err_so_far(), 20, "saw-rt's FAULT on the drive's EMCY 0x8250")
+    c.finish()
+    c.expect(deadlines and set(deadlines.values()) == {0.5}, f"the RPDOs' event timers: {deadlines}")
+    c.expect(not c.drive.consumer_events, "the heartbeat consumer fired: the stop outlasted 3 s")
+    # Its state then (saw-rt's exit later disables it, as always).
+    after = [what for t, what in c.drive.history if t >= stopped and what.startswith("state ")]
+    c.expect(after[:1] == ["state quick stop active"], f"the drive after the deadline: {after}")
+    c.expect(re.search(r"node 5.*EMCY 0x8250 \(RPDO timeout\)", c.err), "no FAULT line naming EMCY 0x8250")
+    print(f"ok rpdo_deadline: the drive's RPDO deadline fired {fired * 1000:.0f} ms after SIGSTOP (500 ms written); "
+          "it quick-stopped, and saw-rt faulted on its EMCY 0x8250")
+
+
 def identity():
     c = Case("identity", extra=f"      eds: {EDS}\n", vendor=0x1234)
     c.start()
@@ -348,7 +377,8 @@ def reboot():
           f"({len(written)} objects written by SDO, NMT start, the 402 walk-up; a 10 ms period)")
 
 
-CASES = [kill9, boot_fault, stuck_fault, stuck_enable, wrong_mode, pre_op, warning, error_emcy, identity, reboot]
+CASES = [kill9, boot_fault, stuck_fault, stuck_enable, wrong_mode, pre_op, warning, error_emcy, rpdo_deadline,
+         identity, reboot]
 
 if __name__ == "__main__":
     wanted = sys.argv[5:]

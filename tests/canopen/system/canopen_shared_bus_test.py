@@ -70,6 +70,8 @@ class Rig:
         # The machine's stalls, not the path under test, would trip the shipped 150 ms and 10-20 ms
         # limits on a loaded CI host (as in canopen_sim_teleop.py).
         text = text.replace("timeout: 150ms}", "timeout: 1s}").replace("stale_timeout: 20ms", "stale_timeout: 500ms")
+        text = text.replace("rpdo_deadline: 5ms", "rpdo_deadline: 500ms").replace("rpdo_deadline: 100ms",
+                                                                                "rpdo_deadline: 500ms")
         text = re.sub(r"(\n(\s+)command_timeout: 20ms[^\n]*)", r"\1\n\2feedback_timeout: 500ms", text, count=1)
         with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
             f.write(text)

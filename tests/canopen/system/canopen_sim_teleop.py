@@ -54,8 +54,9 @@ def run(tag, rt_seconds, inject=(), terminate_after=None):
     # lab PC; this test is about the path, so it allows 500 ms (stalls of 100 ms have been seen).
     text = re.sub(r"(\n(\s+)command_timeout: 20ms[^\n]*)", r"\1\n\2feedback_timeout: 500ms", text, count=1)
     text = text.replace("stale_timeout: 20ms", "stale_timeout: 500ms")
+    text = text.replace("rpdo_deadline: 5ms", "rpdo_deadline: 500ms")
     text = text.replace("timeout: 150ms}", "timeout: 500ms}")
-    if any(x not in text for x in ("feedback_timeout: 500ms", "stale_timeout: 500ms", "timeout: 500ms}")):
+    if any(x not in text for x in ("feedback_timeout: 500ms", "stale_timeout: 500ms", "timeout: 500ms}", "rpdo_deadline: 500ms")):
         fail("the deployment file changed: this test's edits no longer apply", text)
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
         f.write(text)

@@ -11,7 +11,10 @@ to the application is written here from CiA 301/402, not from sawrt's code:
   a position that follows 0x607A in CSP;
 - the heartbeat consumer (0x1016, CiA 301 7.2.8.3.2.2): once a watched node's first heartbeat
   came, no heartbeat within its time is a heartbeat event: EMCY 0x8130 and the abort-connection
-  option code 0x6007 (CiA 402: 0 nothing, 1 fault, 2 disable voltage, 3 quick stop).
+  option code 0x6007 (CiA 402: 0 nothing, 1 fault, 2 disable voltage, 3 quick stop);
+- RPDO deadline monitoring (CiA 301: an RPDO's event timer, 0x1400+k sub 5, ms, is a deadline on
+  the receiving side): in operational, once an RPDO came, none within its event timer is EMCY
+  0x8250 (RPDO timeout) and the same 0x6007 reaction, once per silence; the drive stays operational.
 
 Scenario knobs: start in FAULT (and whether a fault reset clears it), a mode display that does
 not follow 0x6060, a state it does not leave, a different identity, and calls to fault, warn,
@@ -79,6 +82,9 @@ class PythonDrive:
         self.watched = {}  # node -> consumer time (s)
         self.last_heartbeat = {}  # node -> time of its last heartbeat
         self.consumer_events = []  # (node, time)
+        self.rpdo_deadlines = {}  # RPDO identifier -> its event timer (s), from NMT start; 0: off
+        self.rpdo_seen = {}  # RPDO identifier -> time of its last reception in operational
+        self.rpdo_timeouts = []  # (identifier, time)
         self.enabled_with_mode = set()  # 0x6061 values seen while operation enabled
         self.syncs = 0
         self.writes = []  # (time, index, subindex) of every SDO write the drive took
@@ -95,6 +101,10 @@ class PythonDrive:
         if not isinstance(obj, ODVariable):
             obj = obj[sub]
         return obj.decode_raw(self.node.get_data(index, sub))
+
+    def _has(self, index, sub):
+        od = self.node.object_dictionary
+        return index in od and (isinstance(od[index], ODVariable) or sub in od[index])
 
     def _set(self, index, sub, value):
         obj = self.node.object_dictionary[index]
@@ -134,6 +144,7 @@ class PythonDrive:
                     del self.node.data_store[index]
                 self.node.nmt.stop_heartbeat()
                 self.watched, self.last_heartbeat, self.rpdos, self.tpdos = {}, {}, [], []
+                self.rpdo_deadlines, self.rpdo_seen = {}, {}
                 if command == 0x81 and self.state != "fault":
                     self._enter("switch on disabled")
                 self.boot()
@@ -152,6 +163,7 @@ class PythonDrive:
                 self.network.unsubscribe(cob, self._on_rpdo)
             self.node.data_store.clear()
             self.watched, self.last_heartbeat, self.rpdos, self.tpdos, self.received = {}, {}, [], [], {}
+            self.rpdo_deadlines, self.rpdo_seen = {}, {}
             self.previous_controlword = 0
             self._note("reboot")
             self._enter("switch on disabled")
@@ -186,6 +198,7 @@ class PythonDrive:
         while not self._stop.wait(0.005):
             with self.lock:
                 now = time.monotonic()
+                self._watch_rpdos(now)
                 for node, limit in self.watched.items():
                     seen = self.last_heartbeat.get(node)
                     if seen is None:
@@ -198,14 +211,26 @@ class PythonDrive:
                     elif now - seen <= limit:
                         fired.discard(node)
 
-    def _abort_connection(self):
-        self.node.emcy.send(0x8130, 0x11)
+    def _watch_rpdos(self, now):
+        if self.node.nmt.state != "OPERATIONAL":
+            self.rpdo_seen = {}  # watched again from the first RPDO in operational
+            return
+        for cob, limit in self.rpdo_deadlines.items():
+            seen = self.rpdo_seen.get(cob)
+            if limit > 0 and seen is not None and now - seen > limit:
+                del self.rpdo_seen[cob]  # once per silence: the next RPDO arms it again
+                self.rpdo_timeouts.append((cob, now))
+                self._note(f"RPDO 0x{cob:03X} missed its {limit * 1000:.0f} ms deadline")
+                self._abort_connection(0x8250)
+
+    def _abort_connection(self, code=0x8130):
+        self.node.emcy.send(code, 0x11)
         option = self._get(0x6007) if 0x6007 in self.node.object_dictionary else 0
         self._note(f"abort connection option {option}")
         if self.state not in ("operation enabled", "quick stop active"):
             return
         if option == 1:
-            self._fault(0x8130, 0x11)
+            self._fault(code, 0x11)
         elif option == 2:
             self._enter("switch on disabled")
         elif option == 3:
@@ -228,6 +253,11 @@ class PythonDrive:
         for old, _ in self.rpdos:
             self.network.unsubscribe(old, self._on_rpdo)
         self.rpdos = [m for m in (self._mapping(0x1400 + n, 0x1600 + n) for n in range(4)) if m]
+        self.rpdo_deadlines, self.rpdo_seen = {}, {}
+        for n in range(4):
+            m = self._mapping(0x1400 + n, 0x1600 + n)
+            if m and self._has(0x1400 + n, 5):
+                self.rpdo_deadlines[m[0]] = self._get(0x1400 + n, 5) / 1000
         self.tpdos = [m for m in (self._mapping(0x1800 + n, 0x1A00 + n) for n in range(4)) if m]
         for cob, _ in self.rpdos:
             self.network.subscribe(cob, self._on_rpdo)
@@ -235,6 +265,8 @@ class PythonDrive:
     def _on_rpdo(self, can_id, data, timestamp):
         with self.lock:
             self.received[can_id] = bytes(data)
+            if self.node.nmt.state == "OPERATIONAL":
+                self.rpdo_seen[can_id] = time.monotonic()
 
     def _on_sync(self, can_id, data, timestamp):
         with self.lock:

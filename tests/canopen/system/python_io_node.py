@@ -7,7 +7,7 @@ TPDO1 (communication and mapping, both remappable by SDO), 0x6411:01 "write anal
 opening), and the output's error behaviour: 0x6443:01 "analog output error mode" (1, the default:
 take the error value on a device failure or communication loss; 0: keep the output) and 0x6444:01
 "analog output error value" (INTEGER32, default 0), which the output takes when its heartbeat
-consumer fires. What python canopen's LocalNode leaves to the application is PythonDrive's (NMT, PDOs
+consumer fires or RPDO1 misses its deadline (its event timer 0x1400:05, EMCY 0x8250). What python canopen's LocalNode leaves to the application is PythonDrive's (NMT, PDOs
 at SYNC, the heartbeat consumer); the application here is a jaw that moves towards the command
 by at most `rate` counts per SYNC.
 """
@@ -41,8 +41,12 @@ def io_dictionary(node_id):
     od.add_object(_var("Producer heartbeat time", 0x1017, 0, UNSIGNED16, "rw", 0))
     od.add_object(_record(ODArray, "Consumer heartbeat time", 0x1016, [("Consumer 1", UNSIGNED32, 0)]))
     od.add_object(_record(ODRecord, "Identity", 0x1018, [("Vendor-ID", UNSIGNED32, 0x5A5), ("Product code", UNSIGNED32, 401)]))
-    od.add_object(_record(ODRecord, "RPDO1 communication", 0x1400,
-                          [("COB-ID", UNSIGNED32, 0x200 + node_id), ("Transmission type", UNSIGNED8, 1)]))
+    rpdo1 = _record(ODRecord, "RPDO1 communication", 0x1400,
+                    [("COB-ID", UNSIGNED32, 0x200 + node_id), ("Transmission type", UNSIGNED8, 1)])
+    # CiA 301's event timer (ms): on an RPDO, its deadline (PythonDrive watches it).
+    rpdo1.add_member(_var("Event timer", 0x1400, 5, UNSIGNED16, "rw", 0))
+    rpdo1[0].default = 5
+    od.add_object(rpdo1)
     od.add_object(_record(ODRecord, "TPDO1 communication", 0x1800,
                           [("COB-ID", UNSIGNED32, 0x180 + node_id), ("Transmission type", UNSIGNED8, 1)]))
     for index, name in ((0x1600, "RPDO1 mapping"), (0x1A00, "TPDO1 mapping")):
@@ -67,9 +71,10 @@ class PythonIoNode(PythonDrive):
         self.outputs.append(out)
         self._set(0x6401, 1, now + max(-self.rate, min(self.rate, out - now)))
 
-    def _abort_connection(self):
-        """The heartbeat event: EMCY 0x8130, and the output at its error value if its mode says so."""
-        self.node.emcy.send(0x8130, 0x11)
+    def _abort_connection(self, code=0x8130):
+        """A heartbeat event (EMCY 0x8130) or an RPDO deadline missed (0x8250): the EMCY, and the
+        output at its error value if its mode says so."""
+        self.node.emcy.send(code, 0x11)
         if self._get(0x6443, 1) == 1:
             value = max(-0x8000, min(0x7FFF, self._get(0x6444, 1)))
             self._set(0x6411, 1, value)

@@ -175,6 +175,7 @@ void PdoChannels::rebuild(PdoKind kind, std::uint16_t number) noexcept {
       r.unpacker.emplace(layout);
       for (std::size_t i = 0; i < m->count; ++i) r.objects[i] = m->entries[i].address;
       r.synchronous = m->transmission <= 240;
+      r.deadline = static_cast<TimeNs>(m->event_timer) * 1'000'000;
       r.enabled = true;
     } else {
       Tpdo& t = tpdos_[slot];
@@ -222,7 +223,24 @@ void PdoChannels::start(TimeNs now) noexcept {
     t.last_sent = now;
     t.due = t.transmission >= transmission::event_manufacturer;
   }
-  for (Rpdo& r : rpdos_) r.pending = false;
+  for (Rpdo& r : rpdos_) {
+    r.pending = r.fresh = r.expired = false;
+    r.seen.reset();  // the deadline is watched from the first RPDO in operational
+  }
+}
+
+std::uint16_t PdoChannels::expired_rpdo(TimeNs now) noexcept {
+  for (std::uint16_t n = 1; n <= max_pdos; ++n) {
+    Rpdo& r = rpdos_[n - 1u];
+    if (r.fresh) {
+      r.fresh = r.expired = false;
+      r.seen = now;
+    }
+    if (!r.enabled || r.deadline == 0 || !r.seen || r.expired || now - *r.seen <= r.deadline) continue;
+    r.expired = true;
+    return n;
+  }
+  return 0;
 }
 
 void PdoChannels::apply(Rpdo& r) noexcept {
@@ -245,6 +263,7 @@ PdoChannels::Receive PdoChannels::on_frame(const can::Frame& f) noexcept {
       case PdoReceive::wrong_length:
         return Receive::wrong_length;
       case PdoReceive::ok:
+        r.fresh = true;
         if (r.synchronous) {
           r.pending = true;
           return Receive::latched;

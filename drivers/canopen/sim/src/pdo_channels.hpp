@@ -51,6 +51,12 @@ class PdoChannels {
   // inhibit time (0x1800 sub 3, 100 µs) has passed, or when the event timer (sub 5, ms) runs out.
   std::optional<can::Frame> poll(TimeNs now) noexcept;
 
+  // RPDO deadline monitoring (CiA 301: an RPDO's event timer, 0x1400 + n - 1 sub 05h in ms, is a
+  // deadline on the receiving side). Called each step in operational, after that step's frames:
+  // the number of an RPDO that came at least once since start() and not within its deadline since,
+  // once per silence (a reception re-arms it); 0 when none (call again for the next one).
+  std::uint16_t expired_rpdo(TimeNs now) noexcept;
+
   // PDOs whose configuration could not be built (an EDS with an invalid mapping): not used.
   std::uint64_t invalid_configurations() const noexcept { return invalid_; }
   std::uint64_t refused_values() const noexcept { return refused_values_; }
@@ -63,6 +69,10 @@ class PdoChannels {
     bool synchronous = true;
     bool pending = false;
     std::optional<PdoUnpacker> unpacker;
+    TimeNs deadline = 0;         // its event timer; 0: not watched
+    bool fresh = false;          // received since the last expired_rpdo()
+    std::optional<TimeNs> seen;  // its last reception, as expired_rpdo() saw it
+    bool expired = false;        // this silence was reported
     std::array<ObjectAddress, max_pdo_entries> objects{};
   };
   struct Tpdo {

@@ -30,6 +30,7 @@ constexpr std::uint16_t following_error = 0x8611;
 constexpr std::uint16_t pdo_length = 0x8210;
 constexpr std::uint16_t bus_off_recovered = 0x8140;
 constexpr std::uint16_t heartbeat_error = 0x8130;  // life guard or heartbeat error
+constexpr std::uint16_t rpdo_timeout = 0x8250;     // CiA 301: an RPDO's deadline passed
 }  // namespace code
 
 namespace object {
@@ -151,6 +152,18 @@ void SimDrive::watch_consumer() noexcept {
   ++counters_.heartbeat_events;
   raise(code::heartbeat_error, error_register::communication);
   abort_connection(code::heartbeat_error);
+}
+
+// CiA 301's RPDO deadline: an RPDO's event timer (0x1400 + n - 1 sub 05h) passed since it last
+// came, in operational (watched from its first reception). EMCY 0x8250, then what 0x6007 says, as
+// at a heartbeat event; the node stays operational (the master's heartbeat may well go on).
+void SimDrive::watch_rpdos() noexcept {
+  if (nmt_.state() != NmtState::operational) return;
+  while (pdos_->expired_rpdo(now_) != 0) {
+    ++counters_.rpdo_timeouts;
+    raise(code::rpdo_timeout, error_register::communication);
+    abort_connection(code::rpdo_timeout);
+  }
 }
 
 void SimDrive::restore(std::uint16_t first, std::uint16_t last) noexcept {
@@ -302,8 +315,8 @@ void SimDrive::clear_all() noexcept {
 }
 
 void SimDrive::abort_connection(std::uint16_t code) noexcept {
-  // CiA 402's abort connection (0x6007) acts on a drive that is driving; a bus-off and a
-  // heartbeat event are its events. Absent 0x6007, nothing happens (the drive keeps its last
+  // CiA 402's abort connection (0x6007) acts on a drive that is driving; a bus-off, a heartbeat
+  // event and an RPDO timeout are its events. Absent 0x6007, nothing happens (the drive keeps its last
   // setpoints).
   if (!drive_.following() && drive_.state() != cia402::State::quick_stop_active) return;
   switch (get_or<std::int16_t>(object::abort_connection_option, 0)) {
@@ -406,6 +419,7 @@ void SimDrive::step(TimeNs now) noexcept {
   publish_actuals();  // what a SYNC in this step's frames samples
   receive_all();
   watch_consumer();
+  watch_rpdos();
   control();
   produce();
   flush();

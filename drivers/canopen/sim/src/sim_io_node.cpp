@@ -19,7 +19,7 @@ constexpr ObjectAddress consumer{0x1016, 1};
 constexpr ObjectAddress analog_input{0x6401, 1};
 constexpr ObjectAddress analog_output{0x6411, 1};
 constexpr ObjectAddress error_mode{0x6443, 1}, error_value{0x6444, 1};
-constexpr std::uint16_t emcy_heartbeat = 0x8130, emcy_over_current = 0x2310;
+constexpr std::uint16_t emcy_heartbeat = 0x8130, emcy_over_current = 0x2310, emcy_rpdo_timeout = 0x8250;
 
 void add_count(LocalDictionary& d, std::uint16_t index, std::string name, std::uint8_t n,
                Access a = Access::ro) {
@@ -43,11 +43,12 @@ LocalDictionary make_io_dictionary(std::uint8_t node) {
     const bool first = n == 1;
     const auto rpdo = static_cast<std::uint16_t>(0x1400 + n - 1),
                tpdo = static_cast<std::uint16_t>(0x1800 + n - 1);
-    add_count(d, rpdo, "RPDO communication", 2);
+    add_count(d, rpdo, "RPDO communication", 5);
     d.add_value(ObjectAddress{rpdo, 1}, "COB-ID", DataType::unsigned32, Access::rw,
                 default_pdo_cob_id(PdoKind::rpdo, n, node) | (first ? 0u : 0x80000000u));
     d.add_value(ObjectAddress{rpdo, 2}, "Transmission type", DataType::unsigned8, Access::rw,
                 std::uint8_t{1});
+    d.add_value(ObjectAddress{rpdo, 5}, "Event timer", DataType::unsigned16, Access::rw, std::uint16_t{0});
     add_count(d, tpdo, "TPDO communication", 5);
     d.add_value(ObjectAddress{tpdo, 1}, "COB-ID", DataType::unsigned32, Access::rw,
                 default_pdo_cob_id(PdoKind::tpdo, n, node) | (first ? 0u : 0x80000000u));
@@ -274,6 +275,15 @@ void SimIoNode::step(TimeNs now) noexcept {
     (void)emcy_.raise(emcy_heartbeat, 0x11);  // generic, communication
     apply_error_value();
   }
+  // CiA 301's RPDO deadline (0x1400:05, from the first RPDO in operational): the same error
+  // values, EMCY 0x8250 (RPDO timeout); the next RPDO carries the outputs again.
+  if (nmt_.state() == NmtState::operational)
+    while (pdos_->expired_rpdo(now) != 0) {
+      ++rpdo_timeouts_;
+      ++emcys_;
+      (void)emcy_.raise(emcy_rpdo_timeout, 0x11);
+      apply_error_value();
+    }
   if (silent_until_ && now >= *silent_until_) silent_until_.reset();
   if (over_current_ && now >= over_current_until_) {  // the cause gone: error reset, outputs again
     over_current_ = false;

@@ -10,6 +10,7 @@
 #include "saw/canopen/heartbeat.hpp"
 #include "saw/canopen/nmt.hpp"
 #include "saw/canopen/pdo.hpp"
+#include "saw/canopen/rpdo_deadline.hpp"
 #include "saw/canopen/units.hpp"
 #include "saw/clock.hpp"
 
@@ -43,6 +44,9 @@ struct AxisConfig {
   std::uint8_t master_node = 127;
   TimeNs master_timeout = 300'000'000;
   AbortConnection abort_connection = AbortConnection::quick_stop;
+  // The drive watches the master's RPDOs too (their event timers): a starved master whose SYNC
+  // and heartbeat go on is seen, and 0x6007 acts. Resolved by the component (default: on).
+  RpdoDeadline rpdo_deadline;
   std::optional<DriveIdentity> identity;  // nullopt: not checked (no EDS given)
   // The deployment's own SDO writes (0x60C2 interpolation period, vendor objects), written at
   // start-up after 0x6007 and before 0x6060, in this order.

@@ -40,6 +40,8 @@ struct JointConfig {
   std::vector<PdoMapping> pdos;           // what the start-up configures; empty: default_pdo_mappings()
   std::vector<SdoWrite> writes;           // the deployment's own SDO writes (AxisConfig::writes)
   std::optional<DriveIdentity> identity;  // from its EDS/DCF: checked at start-up
+  // RPDOs whose EDS lists no writable event timer: their deadline is not written (a warning).
+  std::vector<std::uint16_t> rpdo_deadline_unwritable;
 };
 
 enum class CommandTimeoutAction : std::uint8_t { hold, fault };
@@ -61,6 +63,10 @@ struct CanopenArmConfig {
   TimeNs master_heartbeat_period = 100'000'000;
   TimeNs master_heartbeat_timeout = 300'000'000;
   AbortConnection abort_connection = AbortConnection::quick_stop;
+  // Each drive's RPDO deadline (rpdo_deadline.hpp): no RPDO for this long and the drive signals
+  // EMCY 0x8250 and does what 0x6007 says; the master faults on that EMCY. nullopt: max(5 ms,
+  // 3 periods); 0: off. checked() rounds it up to whole ms (at least two periods).
+  std::optional<TimeNs> rpdo_deadline;
   // With no fresh servo_* for this long, an enabled arm holds its position (csp), zero velocity
   // (csv) or zero torque (cst), and says so; `fault` also makes it a FAULT. 0: 3 periods.
   TimeNs command_timeout = 0;

@@ -70,6 +70,9 @@ struct CanopenIoConfig {
   TimeNs command_timeout = 0;       // 0: 3 periods; no servo_jp for this long: hold
   TimeNs feedback_timeout = 0;      // no TPDO for this long faults; 0: 10 periods (at least 10 ms)
   bool start_enabled = false;
+  // The node's RPDO deadline (rpdo_deadline.hpp): no RPDO for this long and it signals EMCY 0x8250
+  // and puts out its error values (a FAULT here). nullopt: max(5 ms, 3 periods); 0: off.
+  std::optional<TimeNs> rpdo_deadline;
   // The node's EDS (`eds:`): the types of the CiA 401 error objects; none: the standard types.
   std::optional<Eds> eds;
   StartupConfig startup;
@@ -83,16 +86,16 @@ struct CanopenIoConfig {
 // Provided `<interface_name>` (CRTK, by the device base): measured_js (the channels), servo_jp,
 // state_command, operating_state, fault. Provided "canopen": status (CanopenIoStatus), sdo (a
 // qualified read: SdoRequest → SdoReply for this node, waiting up to 1 s: non-RT callers only). Start-up: NMT
-// reset, identity, PDOs, 0x1017, 0x1016, each channel's CiA 401 error behaviour (a 0x6411:n output:
-// 0x6443:n = 1 and 0x6444:n = its safe value in counts; a 0x6200:n output: 0x6206:n = 0xFF and 0x6207:n;
-// any other output: a warning at construction, it has no standard error value; with `eds` each object
-// typed as the EDS says, one it does not list not written, with a warning; none for a channel whose
-// error_value is false; a safe value the type cannot hold is refused at construction), the deployment's
-// writes, NMT start (StartupSequence; a re-configuration after a reboot writes the same). Each cycle:
-// the TPDOs into measured_js; a FAULT (this component's only) on a lost heartbeat, a heartbeat not
-// operational, a boot-up, an EMCY that emcy_severity() calls a fault (logged in hex with its name;
-// a warning is logged so and counted in status, no FAULT), TPDOs older than feedback_timeout, bus
-// off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs
+// reset, identity, PDOs, the RPDO deadline (unless its EDS lists no writable 0x1400:05), 0x1017, 0x1016, each
+// channel's CiA 401 error behaviour (a 0x6411:n output: 0x6443:n = 1 and 0x6444:n = its safe value in counts;
+// a 0x6200:n output: 0x6206:n = 0xFF and 0x6207:n; any other output: a warning at construction, it has no
+// standard error value; with `eds` each object typed as the EDS says, one it does not list not written, with
+// a warning; none for a channel whose error_value is false; a safe value the type cannot hold is refused at
+// construction), the deployment's writes, NMT start (StartupSequence; a re-configuration after a reboot
+// writes the same). Each cycle: the TPDOs into measured_js; a FAULT (this component's only) on a lost
+// heartbeat, a heartbeat not operational, a boot-up, an EMCY that emcy_severity() calls a fault (logged in
+// hex with its name; a warning is logged so and counted in status, no FAULT), TPDOs older than
+// feedback_timeout, bus off. `enable` waits for every TPDO. Not enabled, at a fault and at exit the outputs
 // are the channels' safe values; at exit also one SYNC and NMT enter pre-operational.
 class CanopenIo : public Device {
  public:

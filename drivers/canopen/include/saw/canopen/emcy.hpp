@@ -30,6 +30,13 @@ std::string_view emcy_class_name(std::uint16_t code) noexcept;
 // side)", 0x8611 "following error"; a code not in the tables gets its class's name.
 std::string_view emcy_name(std::uint16_t code) noexcept;
 
+// Codes the master acts on by themselves.
+namespace emcy_code {
+// CiA 301: an RPDO's deadline (its event timer, 0x1400 + n - 1 sub 05h) passed without an RPDO:
+// the node says this master's RPDOs stopped coming, and has reacted (a CiA 402 drive: 0x6007).
+inline constexpr std::uint16_t rpdo_timeout = 0x8250;
+}  // namespace emcy_code
+
 // What an EMCY means for a component that has nothing else to judge it by (an I/O node has no
 // CiA 402 statusword that says whether the node faulted).
 enum class EmcySeverity : std::uint8_t {
@@ -41,7 +48,8 @@ enum class EmcySeverity : std::uint8_t {
 // frames lost, the node still communicates; a lasting loss shows as stale TPDOs or a lost
 // heartbeat) and 0x8120 (CAN error passive: still on the bus). 0x8130 (heartbeat or life guard
 // error: the node lost the master and took its error values), 0x8140 (recovered from bus off:
-// it was off the bus), 0x8150 (CAN-ID collision) and 0x8100 (generic) mean lost communication:
+// it was off the bus), 0x8150 (CAN-ID collision), 0x8250 (RPDO timeout: the node stopped getting
+// the master's RPDOs and took its error values) and 0x8100 (generic) mean lost communication:
 // faults.
 EmcySeverity emcy_severity(const Emcy& e) noexcept;
 const char* to_string(EmcySeverity s) noexcept;  // "reset", "warning", "fault"

@@ -31,6 +31,7 @@ struct IoNodeConfig {
   TimeNs heartbeat_timeout = 300'000'000;  // lost after this long without one
   std::uint8_t master_node = 127;          // 0x1016:01: the master it watches ...
   TimeNs master_timeout = 300'000'000;     // ... and for how long (0: not watched)
+  RpdoDeadline rpdo_deadline;              // its RPDOs' event timers (nullopt time: not written)
   std::vector<SdoWrite> writes;            // the deployment's own, after 0x1016
   std::optional<DriveIdentity> identity;   // 0x1000, 0x1018:01/02 as its EDS says; nullopt: not checked
 };
@@ -46,7 +47,7 @@ struct IoEmcys {
   Emcy last_warning{}, last_fault{};
 };
 
-// Its start-up: PDOs, 0x1017, 0x1016:01, the deployment's writes (no CiA 402 objects).
+// Its start-up: PDOs, the RPDO deadline, 0x1017, 0x1016:01, the deployment's writes (no CiA 402 objects).
 NodeSetup setup_of(const IoNodeConfig& c);
 
 // The cycle, on the owner's thread: receive() takes every frame that arrived (TPDOs, heartbeat,

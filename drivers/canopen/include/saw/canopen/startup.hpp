@@ -12,6 +12,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
 #include "saw/canopen/pdo.hpp"
+#include "saw/canopen/rpdo_deadline.hpp"
 #include "saw/clock.hpp"
 
 namespace saw::canopen {
@@ -25,14 +26,17 @@ struct StartupWrite {
 };
 
 // What the start-up writes to one drive, in order: its PDOs (configuration_writes() each),
-// the producer heartbeat time 0x1017 (ms), the consumer heartbeat time 0x1016:01 (the master's
-// node-ID and time, ms; when master_timeout is not 0), the abort connection option code 0x6007,
-// the deployment's writes (AxisConfig::writes), the mode of operation 0x6060.
+// each enabled RPDO's deadline (0x1400 + n - 1 sub 05h, ms; optional), the producer heartbeat time 0x1017
+// (ms), the consumer heartbeat time 0x1016:01 (the master's node-ID and time, ms; when master_timeout is not
+// 0), the abort connection option code 0x6007, the deployment's writes (AxisConfig::writes), the mode of
+// operation 0x6060.
 std::vector<StartupWrite> startup_writes(const AxisConfig& axis);
-// What any node gets (a CiA 402 drive's start with it): its PDOs, 0x1017 and, when
-// master_timeout is not 0, 0x1016:01.
+// What any node gets (a CiA 402 drive's start with it): its PDOs, the RPDO deadline (when
+// deadline.time is set: to each enabled RPDO its EDS does not call unwritable, optional), 0x1017
+// and, when master_timeout is not 0, 0x1016:01.
 std::vector<StartupWrite> node_writes(std::span<const PdoMapping> pdos, TimeNs heartbeat_period,
-                                      std::uint8_t master_node, TimeNs master_timeout);
+                                      std::uint8_t master_node, TimeNs master_timeout,
+                                      const RpdoDeadline& deadline = {});
 
 // One node as the start-up sees it, whatever its profile: who it is and what it is written.
 struct NodeSetup {

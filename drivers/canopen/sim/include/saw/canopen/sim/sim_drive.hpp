@@ -45,6 +45,7 @@ struct SimDriveCounters {
   std::uint64_t emcys = 0;             // EMCYs produced (error and error reset)
   std::uint64_t heartbeats = 0;        // heartbeats produced (boot-up not included)
   std::uint64_t heartbeat_events = 0;  // the watched node (0x1016:01, the master) went silent
+  std::uint64_t rpdo_timeouts = 0;     // an RPDO missed its deadline (its event timer, 0x1400+k:05)
   std::uint64_t pdo_length_errors = 0;
 };
 
@@ -121,6 +122,7 @@ class SimDrive {
   void abort_connection(std::uint16_t code) noexcept;
   void refresh_consumer() noexcept;
   void watch_consumer() noexcept;
+  void watch_rpdos() noexcept;
   SdoAbort check_write(ObjectAddress address, std::span<const std::uint8_t> data) const noexcept;
   void written(ObjectAddress address) noexcept;
   SdoAbort injected_abort(ObjectAddress address) const noexcept;

@@ -38,7 +38,9 @@ LocalDictionary make_io_dictionary(std::uint8_t node);
 // opening) moves towards the output (its commanded opening) by at most `rate` counts — and the
 // TPDOs go out; the heartbeat when due. The heartbeat consumer (0x1016:01, from the watched
 // node's first heartbeat) fires EMCY 0x8130 and, with the error mode 0x6443:01 at 1 (its default),
-// the output takes the error value 0x6444:01 (default 0; clamped to the 16-bit output). Faults: over-current
+// the output takes the error value 0x6444:01 (default 0; clamped to the 16-bit output); so does an RPDO
+// that misses its deadline (its event timer 0x1400+k:05, ms, watched from its first reception in
+// operational), with EMCY 0x8250. Faults: over-current
 // (EMCY 0x2310, the error register's current bit, the output held at 0 for 0.5 s, then the error reset EMCY)
 // and heartbeat-loss (its heartbeat stops for the duration). step() neither allocates, locks nor throws
 // (remapping a PDO rebuilds it, as on SimDrive).
@@ -63,6 +65,7 @@ class SimIoNode {
   std::uint64_t sdo_requests() const noexcept { return sdo_requests_; }
   std::uint64_t emcys() const noexcept { return emcys_; }
   std::uint64_t heartbeat_events() const noexcept { return heartbeat_events_; }
+  std::uint64_t rpdo_timeouts() const noexcept { return rpdo_timeouts_; }  // RPDO deadlines missed
 
  private:
   class SdoView;
@@ -92,7 +95,7 @@ class SimIoNode {
   bool over_current_ = false;
   TimeNs over_current_until_ = 0;
   std::optional<TimeNs> silent_until_;
-  std::uint64_t syncs_ = 0, sdo_requests_ = 0, emcys_ = 0, heartbeat_events_ = 0;
+  std::uint64_t syncs_ = 0, sdo_requests_ = 0, emcys_ = 0, heartbeat_events_ = 0, rpdo_timeouts_ = 0;
 };
 
 }  // namespace saw::canopen::sim
