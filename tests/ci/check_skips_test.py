@@ -10,6 +10,7 @@ Usage: check_skips_test.py [CTEST BUILD_DIR]   (with them, every entry of the li
 
 from __future__ import annotations
 
+import html
 import json
 import subprocess
 import sys
@@ -38,7 +39,7 @@ CASES = {
 
 
 def junit(*cases: tuple[str, str]) -> str:
-    body = "".join(CASES[kind].format(name=name) for name, kind in cases)
+    body = "".join(CASES[kind].format(name=html.escape(name)) for name, kind in cases)
     return f'<?xml version="1.0" encoding="UTF-8"?>\n<testsuite name="(empty)" tests="{len(cases)}">{body}</testsuite>'
 
 
@@ -83,6 +84,16 @@ class Checker(unittest.TestCase):
         r = self.check(junit(("A.Runs", "pass"), ("Guard.Faults", "gtest")))
         self.assertEqual(r.returncode, 0, r.stdout)
         self.assertIn("UNEXPECTED SKIP Guard.Faults", r.stdout)
+
+    def test_a_parameterized_gtest_is_named_without_ctests_getparam_suffix(self) -> None:
+        listing = self.tmp / "param.txt"
+        listing.write_text("Suite/Conf.Case/socketcan no AF_CAN on the host\n")
+        name = 'Suite/Conf.Case/socketcan  # GetParam() = "socketcan"'
+        r = self.check(junit(("A.Runs", "pass"), (name, "gtest")), "--strict", listing=listing)
+        self.assertEqual(r.returncode, 0, r.stdout)
+        r = self.check(junit(("A.Runs", "pass"), ('Suite/Conf.Case/virtual  # GetParam() = "virtual"', "gtest")),
+                       "--strict", listing=listing)
+        self.assertEqual(r.returncode, 1, r.stdout)
 
     def test_a_pattern_matches_whole_names_only(self) -> None:
         r = self.check(junit(("A.Runs", "pass"), ("Family.ONE/hw2", "exit77")), "--strict")
