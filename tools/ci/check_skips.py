@@ -156,7 +156,8 @@ def main(argv: list[str]) -> int:
         for s, _ in unexpected:
             print(f"  UNEXPECTED SKIP {s.test}: {s.reason()}")
             # A gtest's own message is its reason; a script's last lines show where it stopped.
-            if s.output.strip() and s.kind != "SKIP_REGULAR_EXPRESSION_MATCHED":
+            said = s.output.strip()
+            if said and said != s.reason() and s.kind != "SKIP_REGULAR_EXPRESSION_MATCHED":
                 print(indent(s.output, 20))
         print(
             "  Each is a test CI claims and did not exercise: make it run here (tools/bootstrap.sh installs "
