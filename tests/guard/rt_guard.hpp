@@ -40,6 +40,8 @@ class GuardWindow {
 // Whether the guard binary locked its memory (mlockall) at start-up, as saw-rt does: only then
 // is a page fault in a cycle a defect of the code under test rather than of the set-up.
 bool memory_locked() noexcept;
+// Why it did not (the mlockall error and the limit), or empty when it did.
+std::string memory_lock_error();
 
 std::string describe(const GuardCounts& c);
 

@@ -1,6 +1,7 @@
 """Runs sawgui's pytest-qt tests in real windows on a private Xvfb display (a display number Xvfb
 picks itself, so tests side by side do not collide). Exit 77 (skipped) when there is no Xvfb or no
-PySide6 / pytest-qt in this Python, with the reason.
+PySide6 / pytest-qt in this Python, with the reason, and also when pytest itself skipped a test:
+pytest exits 0 then, and CTest would count the run as a pass of everything.
 
 usage: run_under_xvfb.py SAW_RT [pytest arguments...]
 """
@@ -9,6 +10,8 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
+import xml.etree.ElementTree as ET
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SKIP = 77
@@ -39,12 +42,28 @@ def main(argv):
     env = dict(os.environ, DISPLAY=":" + display, QT_QPA_PLATFORM="xcb", SAW_RT=os.path.abspath(argv[0]),
                PYTHONDONTWRITEBYTECODE="1")
     env.pop("WAYLAND_DISPLAY", None)
+    report = tempfile.NamedTemporaryFile(suffix=".xml", delete=False)
+    report.close()
     try:
-        return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-v", "-s", HERE, *argv[1:]],
-                              env=env, cwd=HERE).returncode
+        rc = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-v", "-s", "-rs",
+                             f"--junitxml={report.name}", HERE, *argv[1:]], env=env, cwd=HERE).returncode
+        skipped = pytest_skips(report.name) if rc == 0 else []
+        if skipped:
+            for name, why in skipped:
+                print(f"SKIP: pytest skipped {name}: {why}")
+            return SKIP
+        return rc
     finally:
         server.terminate()
         server.wait(timeout=10)
+        os.unlink(report.name)
+
+
+def pytest_skips(path):
+    """(test, reason) of each test pytest skipped, from its junit report."""
+    return [(f"{case.get('classname')}.{case.get('name')}", skipped.get("message", ""))
+            for case in ET.parse(path).getroot().iter("testcase")
+            for skipped in case.findall("skipped")]
 
 
 if __name__ == "__main__":
