@@ -329,7 +329,10 @@ std::string summary_line(const CanopenStatus& s) {
         static_cast<unsigned long long>(s.frames_received), static_cast<unsigned long long>(s.frames_sent),
         static_cast<unsigned long long>(s.send_refused), static_cast<unsigned long long>(s.foreign_frames));
   out += b;
-  if (s.faults != 0) {
+  if (s.faults != 0 && s.fault.code == FaultCode::deadline_missed) {
+    // The base's fault, not the drives': its own words say it all.
+    out += "\n" + std::to_string(s.faults) + " faults; the last: " + saw::to_string(s.fault);
+  } else if (s.faults != 0) {
     const FaultReason reason = s.fault.code == FaultCode::none ? FaultReason::none : s.reason;
     char node[16] = "";
     if (s.fault_node != 0) std::snprintf(node, sizeof node, " (node %u)", s.fault_node);

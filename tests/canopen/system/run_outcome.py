@@ -19,7 +19,7 @@ TRACKING_MAX_MM = 25.0
 
 def deadline_fault(stdout):
     """The first summary line of a component in FAULT for a missed deadline, or None."""
-    m = re.search(r"^\s*(\w+): FAULT.*deadline missed.*$", stdout, re.M)
+    m = re.search(r"^\s*(\w+): .*deadline missed.*$", stdout, re.M)
     return m.group(0).strip() if m else None
 
 
