@@ -129,12 +129,12 @@ if normal == "control":
 
 # saw-rt left every drive safe as it exited: disabled at a last SYNC, then pre-operational (a
 # master that stops sends nothing again, so nothing may stay enabled on its last torque).
-def drives_left_safe(sim_out):
+def drives_left_safe(sim_out, also_safe=()):
     left = re.findall(r"^\s*([123])\s+(\S+)\s+(.+?)\s{2,}\d+\s+(-?\d+)", sim_out, re.M)
     if sorted(n for n, *_ in left) != ["1", "2", "3"]:
         fail("saw-can-sim's table of drives is missing", sim_out)
     for node, nmt, state, _ in left:
-        if nmt != "pre-operational" or state != "switch on disabled":
+        if nmt != "pre-operational" or (state != "switch on disabled" and state not in also_safe):
             fail(f"node {node} was left {nmt}, {state} when saw-rt exited (not pre-operational, "
                  "switch on disabled)", sim_out)
     return left
@@ -163,8 +163,13 @@ print(f"ok: SIGTERM after {m.group(1)} enabled cycles left every drive disabled 
 
 # An over-current on the shoulder drive 2 s in.
 rt, sim_out = run("fault", 4, inject=["2:over-current:2"])
-if deadline_fault(rt.stdout) and judged(rt, "over-current") == "deadline":
-    drives_left_safe(sim_out)
+named = (re.search(r"^\s*slave: FAULT", rt.stdout, re.M) and
+         re.search(r"^\s*slave: .*shoulder_pitch.*continuous over-current", rt.stdout, re.M) and
+         re.search(r"^\s*teleop: FAULT.*slave device in FAULT", rt.stdout, re.M))
+if not named and deadline_fault(rt.stdout) and judged(rt, "over-current") == "deadline":
+    # The loops faulted on their deadlines before the over-current could be told apart: the drives
+    # are safe all the same (node 2 may be in its own fault: its power stage is off there too).
+    drives_left_safe(sim_out, also_safe=("fault",))
     print("ok: a deadline FAULT came before the over-current; every drive left disabled and pre-operational")
     sys.exit(0)
 if not (re.search(r"^\s*slave: FAULT", rt.stdout, re.M) and
