@@ -19,7 +19,7 @@ YAML = """deployment:
 components:
   - name: arm_{tag}
     type: sim_haptic_device
-    task: {{period: 1ms, priority: 80}}
+    task: {{period: 1ms, priority: 80, deadline: {{in_a_row: 500, share: 0.5}}}}  # as conftest.py's
     params: {{model: omni}}
 exports:
   - {{component: arm_{tag}, provided: arm}}
