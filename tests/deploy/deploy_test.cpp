@@ -1,7 +1,12 @@
 // Deployment files: every mistake is reported with file, line, column and key, before anything
 // starts; a good file runs, records, and the saw-rt process behaves as documented.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -206,6 +211,40 @@ TEST(Deployment, ConnectionTypeMismatchKeepsTheManagersMessage) {
                                 "required: slave, server: teleop, provided: teleop");
   EXPECT_NE(message.find("'servo_cf'"), std::string::npos) << message;
   EXPECT_NE(message.find("'teleop'"), std::string::npos) << message;
+}
+
+// A disk that stops taking writes for longer than the state table's ring (256 rows, 256 ms at
+// 1 kHz) delays the recorder's writer, not its collector: no row is lost. The file is a pipe of
+// one page that nobody reads for 600 ms (a few dozen rows fill it).
+TEST(Deployment, ARecordingToADiskThatStallsLosesNoRow) {
+  const std::string fifo = ::testing::TempDir() + "deploy_test_stall.fifo";
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const int reader =
+      ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);  // so that the recorder's open does not wait
+  ASSERT_GE(reader, 0);
+  ASSERT_GT(::fcntl(reader, F_SETPIPE_SZ, 4096), 0);
+  std::string text = std::string(good) + "record: {file: " + fifo + ", columns: [master.measured_cp]}\n";
+  text.replace(text.find("clock: stepped"), 14, "clock: real");
+  auto d = build(text, "cfg.yaml", registry());
+  d.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));
+  std::uint64_t newlines = 0;
+  std::thread drain([&] {  // the disk takes writes again, until the recorder closes the file
+    ::fcntl(reader, F_SETFL, 0);
+    char b[65536];
+    for (ssize_t n; (n = ::read(reader, b, sizeof b)) > 0;)
+      newlines += static_cast<std::uint64_t>(std::count(b, b + n, '\n'));
+  });
+  d.run_for(0.3);
+  d.stop();
+  drain.join();
+  ::close(reader);
+  std::filesystem::remove(fifo);
+  ASSERT_NE(d.recorder(), nullptr);
+  EXPECT_EQ(d.recorder()->lost_rows(), 0u);
+  EXPECT_GT(d.recorder()->rows(), 700u);          // the 900 ms run's rows, give or take its start and stop
+  EXPECT_EQ(newlines, d.recorder()->rows() + 1);  // and the header
 }
 
 TEST(Deployment, SteppedRunRecordsEveryRow) {

@@ -1,10 +1,12 @@
 #include "saw/deploy/recorder.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
 
 #include "saw/crtk.hpp"
+#include "saw/rt_thread.hpp"
 
 namespace saw::deploy {
 namespace {
@@ -95,14 +97,13 @@ Recorder::Recorder(std::string path, std::vector<Column> columns, int decimation
 
 Recorder::~Recorder() { stop(); }
 
-void Recorder::poll() {
-  if (file_ == nullptr) return;
+void Recorder::collect(std::string& out) {
   const StateTable& clock = columns_.front().component->state_table();
   const auto written = clock.rows_written();
   // Keep two rows of margin from the writer, as the state table's own history reads do.
   const std::uint64_t oldest = written > clock.capacity() - 2 ? written - (clock.capacity() - 2) : 0;
   if (next_tick_ < oldest) {
-    lost_ += oldest - next_tick_;
+    lost_.fetch_add(oldest - next_tick_, std::memory_order_relaxed);
     next_tick_ = oldest;
   }
   for (; next_tick_ < written; ++next_tick_) {
@@ -123,27 +124,67 @@ void Recorder::poll() {
       c.format->write(buffer_.data(), line_);
     }
     if (!ok) {
-      ++lost_;
+      lost_.fetch_add(1, std::memory_order_relaxed);
       continue;
     }
-    std::fprintf(file_, "%.9f%s\n", static_cast<double>(stamp.time) * 1e-9, line_.c_str());
-    ++rows_;
+    char time[32];
+    std::snprintf(time, sizeof time, "%.9f", static_cast<double>(stamp.time) * 1e-9);
+    out += time;
+    out += line_;
+    out += '\n';
+    rows_.fetch_add(1, std::memory_order_relaxed);
   }
 }
 
+void Recorder::poll() {
+  if (file_ == nullptr) return;
+  collected_.clear();
+  collect(collected_);
+  std::fwrite(collected_.data(), 1, collected_.size(), file_);
+}
+
+void Recorder::write_pending() {
+  std::string chunk;
+  {
+    std::lock_guard lock(pending_mutex_);
+    chunk.swap(pending_);
+  }
+  if (!chunk.empty()) std::fwrite(chunk.data(), 1, chunk.size(), file_);
+}
+
 void Recorder::start_thread() {
-  thread_ = std::thread([this] {
+  collector_ = std::thread([this] {
+    (void)rt::set_fifo(1);  // where it may not (no rtprio), it runs as a normal thread
     while (!stop_.load(std::memory_order_acquire)) {
-      poll();
+      collected_.clear();
+      collect(collected_);
+      const auto rows = static_cast<std::uint64_t>(std::count(collected_.begin(), collected_.end(), '\n'));
+      {
+        std::lock_guard lock(pending_mutex_);
+        if (pending_.size() + collected_.size() <= max_pending) {
+          pending_ += collected_;
+        } else {  // the disk is that far behind: these rows are lost, and counted
+          rows_.fetch_sub(rows, std::memory_order_relaxed);
+          lost_.fetch_add(rows, std::memory_order_relaxed);
+        }
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
+  writer_ = std::thread([this] {
+    while (!stop_.load(std::memory_order_acquire)) {
+      write_pending();
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   });
 }
 
 void Recorder::stop() {
   stop_.store(true, std::memory_order_release);
-  if (thread_.joinable()) thread_.join();
+  if (collector_.joinable()) collector_.join();
+  if (writer_.joinable()) writer_.join();
   if (file_ != nullptr) {
+    write_pending();
     poll();
     std::fclose(file_);
     file_ = nullptr;
