@@ -99,7 +99,7 @@ chroot "$root_dir" /usr/bin/env -i HOME=/root PATH=/usr/sbin:/usr/bin:/sbin:/bin
     local t1=${EPOCHREALTIME/./}
     took=$(((t1-t0)/1000000))
     local line
-    printf -v line "%-44s %6d s  exit %d\n" "$name" "$took" "$rc"
+    printf -v line "%-50s %6d s  exit %d\n" "$name" "$took" "$rc"
     report+=$line
     [ "$rc" -eq 0 ] || status=1
   }
