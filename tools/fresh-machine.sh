@@ -1,17 +1,45 @@
 #!/usr/bin/env bash
-# Times both README commands as a new user would meet them: a minimal Debian 12 root made by
-# debootstrap (nothing installed, nothing cached) from the Debian mirror this machine's apt uses,
-# the tree of a commit copied in, then in a chroot `tools/run.sh --duration 2` (the main job)
-# and `tools/test.sh` (the suite), every output line stamped with seconds since start and each
-# step's time and exit status reported. Needs root and debootstrap.
-# Usage: tools/fresh-machine.sh [ROOT_DIR] [COMMIT]
+# Times the README's two commands' installs as a new user meets them: a minimal Debian 12 root
+# made by debootstrap --variant=minbase (nothing installed, no apt or pip cache) from the Debian
+# mirror this machine's apt uses, the tree of a commit copied in (git archive), then in a chroot
+# (this host's /proc, /sys, /dev bound in; all unmounted on exit):
+#   1. the main job's install part: `tools/bootstrap.sh`, exactly what `tools/run.sh` runs first
+#      (through tools/build.sh): apt-get update, the build's Debian packages, the Ruckig sdist;
+#   2. without --build, `cmake --preset release` (configure only): proof that step 1 is enough to
+#      configure; timed but not counted in either figure;
+#      with --build, the rest of the main job, `tools/run.sh --duration 2`: configure, build saw-rt
+#      and the packages it loads (about 6-10 minutes on 2 cores), a 2 s run; counted in the main
+#      job's figure;
+#   3. the test command's install part, after the main job as the README orders them:
+#      `tools/bootstrap.sh --tests`, what `tools/test.sh` runs first: the tests' Debian packages
+#      (QEMU, the RT kernel and its initramfs, clang, Xvfb...) and the Python venv from PyPI;
+#   4. with --suite, the rest of the test command, `tools/test.sh` (the whole build, every test).
+# Each step's wall-clock time includes its downloads, so it depends on this host's network and
+# mirror; debootstrap's own time is reported apart and counted nowhere. Every output line is
+# stamped with seconds since the start; the last lines are the figures and each step's exit status.
+# Needs root and debootstrap.
+# Usage: tools/fresh-machine.sh [--build] [--suite] [ROOT_DIR] [COMMIT]   (defaults /tmp/saw-fresh-root HEAD)
 set -euo pipefail
+build=0
+suite=0
+pos=()
+for a in "$@"; do
+  case $a in
+    --build) build=1 ;;
+    --suite) suite=1 ;;
+    -*) echo "usage: tools/fresh-machine.sh [--build] [--suite] [ROOT_DIR] [COMMIT]" >&2; exit 2 ;;
+    *) pos+=("$a") ;;
+  esac
+done
+set -- ${pos[@]+"${pos[@]}"}
+[ "$(id -u)" -eq 0 ] || { echo "fresh-machine: needs root (debootstrap, chroot, mounts)" >&2; exit 1; }
 command -v debootstrap >/dev/null || {
   echo "fresh-machine: needs debootstrap (apt-get install debootstrap) and root" >&2
   exit 1
 }
-root_dir=${1:-/tmp/saw-fresh-root}
+root_dir=$(realpath -m "${1:-/tmp/saw-fresh-root}")
 commit=${2:-HEAD}
+[ "$root_dir" != / ] || { echo "fresh-machine: ROOT_DIR must not be /" >&2; exit 2; }
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # Everything mounted below the root, deepest first: the bind mounts made here, and any a test
 # made inside (`ip netns` mounts /run/netns).
@@ -38,8 +66,10 @@ if [ -z "$mirror" ] && [ -f /etc/apt/sources.list ]; then
     /etc/apt/sources.list)
 fi
 [ -n "$mirror" ] || { echo "fresh-machine: no bookworm entry in this machine's apt sources" >&2; exit 1; }
-echo "fresh-machine: debootstrap bookworm from $mirror"
+echo "fresh-machine: debootstrap --variant=minbase bookworm from $mirror (not counted)"
+SECONDS=0
 debootstrap --variant=minbase bookworm "$root_dir" "$mirror" >/dev/null
+echo "fresh-machine: debootstrap took ${SECONDS} s"
 # A network reached through a proxy with a local CA (as in some sandboxes): trust it inside too.
 if compgen -G "/usr/local/share/ca-certificates/*.crt" >/dev/null; then
   mkdir -p "$root_dir/usr/local/share/ca-certificates"
@@ -52,28 +82,46 @@ for d in proc sys dev dev/shm; do mount --bind "/$d" "$root_dir/$d"; done
 cp /etc/resolv.conf "$root_dir/etc/resolv.conf"
 mkdir -p "$root_dir/root/sawrt"
 git -C "$repo" archive "$commit" | tar -x -C "$root_dir/root/sawrt"
-chroot "$root_dir" /usr/bin/env -i HOME=/root PATH=/usr/sbin:/usr/bin:/sbin:/bin /bin/bash -c '
+chroot "$root_dir" /usr/bin/env -i HOME=/root PATH=/usr/sbin:/usr/bin:/sbin:/bin \
+  SAW_BUILD=$build SAW_SUITE=$suite /bin/bash -c '
   cd /root/sawrt
   s=${EPOCHREALTIME/./}
   stamp() { while IFS= read -r l; do n=${EPOCHREALTIME/./}; printf "%6d.%01d %s\n" $(((n-s)/1000000)) $(((n-s)/100000%10)) "$l"; done; }
   status=0
   report=""
-  # step NAME COMMAND...: runs a README command, stamped; its time and exit status kept for the end.
+  took=0
+  # step NAME COMMAND...: runs a command, stamped; its time (in $took) and exit status kept for the end.
   step() {
     local name=$1 t0=${EPOCHREALTIME/./} rc=0
     shift
     echo "== $name"
     "$@" 2>&1 | stamp || rc=$?
     local t1=${EPOCHREALTIME/./}
+    took=$(((t1-t0)/1000000))
     local line
-    printf -v line "%-28s %6d s  exit %d\n" "$name" $(((t1-t0)/1000000)) "$rc"
+    printf -v line "%-50s %6d s  exit %d\n" "$name" "$took" "$rc"
     report+=$line
     [ "$rc" -eq 0 ] || status=1
   }
   set -o pipefail
-  step "tools/run.sh --duration 2" tools/run.sh --duration 2
-  step "tools/test.sh" tools/test.sh
+  step "main job install: tools/bootstrap.sh" tools/bootstrap.sh
+  main=$took
+  summary="main job install: $main s"
+  if [ "$SAW_BUILD" = 1 ]; then
+    step "main job rest: tools/run.sh --duration 2" tools/run.sh --duration 2
+    summary+=" (with its build and run: $((main + took)) s)"
+  else
+    # Not counted: shows that the build part alone configures the release preset.
+    step "configure check: cmake --preset release" cmake --preset release
+  fi
+  step "test command install: tools/bootstrap.sh --tests" tools/bootstrap.sh --tests
+  summary+="; test-command install: $took s"
+  if [ "$SAW_SUITE" = 1 ]; then
+    step "test command rest: tools/test.sh" tools/test.sh
+    summary+=" (the whole test command after it: $took s)"
+  fi
   n=${EPOCHREALTIME/./}
   printf "%s" "$report"
-  echo "total $(((n-s)/1000000)) s"
+  echo "total in the chroot $(((n-s)/1000000)) s"
+  echo "$summary"
   exit $status'

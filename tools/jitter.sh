@@ -5,6 +5,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
+tools/bootstrap.sh --tests  # .venv (and what the tests and tools run: stress-ng, rt-tests, Xvfb...)
 tools/build.sh saw-jitter
 mkdir -p build/jitter docs/img
 build/release/tools/bench/saw-jitter --load --markdown --out build/jitter "$@" | tee build/jitter/table.md

@@ -6,6 +6,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
+tools/bootstrap.sh --tests  # .venv (and what the tests and tools run: stress-ng, rt-tests, Xvfb...)
 tools/build.sh saw-latency
 mkdir -p build/latency docs/img
 build/release/tools/bench/saw-latency --csv build/latency/table.csv "$@" | tee build/latency/table.md

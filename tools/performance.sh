@@ -12,6 +12,7 @@ quick=0 can_only=0 gui_only=0
 [[ "${1:-}" == "--quick" ]] && quick=1
 [[ "${1:-}" == "--can" ]] && can_only=1
 [[ "${1:-}" == "--gui" ]] && gui_only=1
+tools/bootstrap.sh --tests  # .venv (plots, the GUI benchmarks), stress-ng and cyclictest (jitter)
 bin=build/release/tools/bench
 run() {  # name, command...: the command line and its output into $out/name.{cmd,md}
   local name=$1; shift

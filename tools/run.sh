@@ -9,6 +9,7 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 if [[ "${1:-}" == "--gui" ]]; then
   shift
+  tools/bootstrap.sh --tests  # sawgui: the venv (PySide6) and the X libraries its xcb plugin links
   tools/build.sh saw-rt saw-gateway
   yaml=build/teleop-sim-gui.yaml
   { cat config/teleop-sim.yaml

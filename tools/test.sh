@@ -28,6 +28,7 @@ while (($#)); do
 done
 junit=${junit:-$root/build/release/junit.xml}
 
+tools/bootstrap.sh --tests  # the build's part, then what the tests run (QEMU, Xvfb, the venv...)
 tools/build.sh
 rc=0
 ctest --preset release --timeout 300 --output-junit "$junit" ${args[@]+"${args[@]}"} || rc=$?

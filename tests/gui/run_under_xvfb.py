@@ -23,7 +23,7 @@ def main(argv):
         return 2
     xvfb = shutil.which("Xvfb")
     if xvfb is None:
-        print("SKIP: no Xvfb (Debian package xvfb; tools/bootstrap.sh installs it)")
+        print("SKIP: no Xvfb (Debian package xvfb; tools/bootstrap.sh --tests installs it)")
         return SKIP
     missing = [m for m in ("PySide6", "pyqtgraph", "pytestqt") if importlib.util.find_spec(m) is None]
     if missing:

@@ -21,9 +21,9 @@ skip() {
 
 rm -rf "$out"
 kernel=$(find /boot -maxdepth 1 -name 'vmlinuz-*-rt-amd64' 2>/dev/null | sort -V | tail -n 1)
-[ -n "$kernel" ] || skip "no PREEMPT_RT kernel in /boot (Debian's linux-image-rt-amd64; tools/bootstrap.sh installs it)"
+[ -n "$kernel" ] || skip "no PREEMPT_RT kernel in /boot (Debian's linux-image-rt-amd64; tools/bootstrap.sh --tests installs it)"
 command -v qemu-system-x86_64 > /dev/null || skip "no qemu-system-x86_64 (Debian's qemu-system-x86)"
-[ -x "$src/.venv/bin/vng" ] || skip "no virtme-ng in the tools venv ($src/.venv: tools/bootstrap.sh)"
+[ -x "$src/.venv/bin/vng" ] || skip "no virtme-ng in the tools venv ($src/.venv: tools/bootstrap.sh --tests)"
 command -v busybox > /dev/null || skip "no busybox for virtme-ng's initramfs (Debian's busybox-static)"
 mkdir -p "$out"
 for target in "$@"; do

@@ -48,7 +48,7 @@ class TheWheelIsPureAndInstalls(unittest.TestCase):
                 "--disable-pip-version-check", "--no-cache-dir", "-w", tmp / "dist", src)
         if r.returncode != 0:
             raise AssertionError(f"pip wheel failed (does the tools venv have tools/requirements.txt's setuptools? "
-                                 f"tools/bootstrap.sh installs it):\n{r.stdout}\n{r.stderr}")
+                                 f"tools/bootstrap.sh --tests installs it):\n{r.stdout}\n{r.stderr}")
         cls.wheels = sorted((tmp / "dist").glob("*.whl"))
         cls.project = tomllib.loads((SOURCE / "pyproject.toml").read_text(encoding="utf-8"))["project"]
 

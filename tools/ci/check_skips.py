@@ -160,7 +160,7 @@ def main(argv: list[str]) -> int:
             if said and said != s.reason() and s.kind != "SKIP_REGULAR_EXPRESSION_MATCHED":
                 print(indent(s.output, 20))
         print(
-            "  Each is a test CI claims and did not exercise: make it run here (tools/bootstrap.sh installs "
+            "  Each is a test CI claims and did not exercise: make it run here (tools/bootstrap.sh --tests installs "
             f"what the tests need), or, if it cannot run on this machine by its nature, add it to {a.list} "
             "with the reason."
         )
