@@ -45,9 +45,11 @@ def bad_commands(s, d, rng):
     r = subprocess.run([sys.executable, os.path.join(HERE, "peer.py"), "bad", str(s.domain), d.teleop, arm],
                        capture_output=True, text=True, timeout=60)
     note = (r.stdout.strip().splitlines() or [r.stderr.strip()[-200:]])[-1]
+    # A FAULT these commands caused would be one no injection explains (unexpected, reported); a
+    # late loop meanwhile is counted as such. Either way the teleoperation is enabled again.
     s.poll_faults()
-    s.recover_timing()  # a late loop meanwhile is counted as such, not as this injection's
-    return r.returncode == 0 and s.enabled(d), note
+    s.recover_timing()
+    return r.returncode == 0 and s.ensure_enabled(d), note
 
 
 def segment_scribble(s, d, rng):

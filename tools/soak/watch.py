@@ -27,7 +27,8 @@ class FaultLog:
         self.path, self.pos = path, 0
         self.expect = []  # (until monotonic s, component regex, text regex, injection)
         self.unexpected, self.expected, self.timing, self.limit = [], [], [], []
-        self.reenabled = False  # the soak enabled this deployment again after a FAULT
+        self.reenabled = False
+        self.last_line = ""  # the last FAULT (not a consequent one)  # the soak enabled this deployment again after a FAULT
         self.last_device_fault = None  # (time, which list it went to)
         self.timing_pending = False  # a timing FAULT the soak has not yet recovered from
 
@@ -59,6 +60,7 @@ class FaultLog:
             if follows and t - follows[0] < 5.0:
                 follows[1].append(line)  # with its device's FAULT
                 continue
+            self.last_line = line
             for _, comp, text, inj in self.expect:
                 if comp.search(comp_name) and text.search(text_):
                     self.expected.append((inj, line))
