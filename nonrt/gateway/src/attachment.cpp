@@ -215,7 +215,9 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
   }
 }
 
-Attachment::~Attachment() {
+Attachment::~Attachment() { stop(); }
+
+void Attachment::stop() {
   stop_.store(true, std::memory_order_release);
   if (query_stop_ != nullptr) query_stop_->set_trigger_value(true);
   if (query_thread_.joinable()) query_thread_.join();

@@ -29,6 +29,9 @@ class Attachment {
   void add_stats(GatewayStats& s) const;
   // Starts the thread (after the gateway has published its first manifest).
   void start();
+  // Joins its threads (idempotent). The gateway stops every attachment before destroying any:
+  // a running one may call back into the gateway, which reads them all (publish_manifest).
+  void stop();
   // FAULT on the operating state and "FAULT: <why>" on the error topic.
   void publish_fault(const std::string& why);
   // Until the readers have acknowledged the fault and error samples, or `deadline` (monotonic).

@@ -91,7 +91,10 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
 }
 
 Gateway::~Gateway() {
-  attachments_.clear();  // threads joined before the DDS entities go
+  // Every thread joined before any attachment goes (a running one's liveness change publishes
+  // the manifest, which reads them all), and before the DDS entities go.
+  for (auto& a : attachments_) a->stop();
+  attachments_.clear();
   if (imports_ != nullptr) imports_->manager.stop();
   imports_.reset();
   delete_participant(dds_->context.participant);
