@@ -45,8 +45,16 @@ def main(argv):
     report = tempfile.NamedTemporaryFile(suffix=".xml", delete=False)
     report.close()
     try:
-        rc = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-v", "-s", "-rs",
-                             f"--junitxml={report.name}", HERE, *argv[1:]], env=env, cwd=HERE).returncode
+        # pytest's output is held and printed after a summary of what failed: a log cut to its first
+        # lines (CTest's, CI's) still names the failing test and its assertion.
+        run = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-v", "-s", "-rs",
+                              f"--junitxml={report.name}", HERE, *argv[1:]], env=env, cwd=HERE,
+                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace")
+        rc = run.returncode
+        if rc != 0 and os.path.getsize(report.name) > 0:
+            for name, why in pytest_failures(report.name):
+                print(f"FAILED: {name}\n{why}\n")
+        print(run.stdout, flush=True)
         skipped = pytest_skips(report.name) if rc == 0 else []
         if skipped:
             for name, why in skipped:
@@ -64,6 +72,14 @@ def pytest_skips(path):
     return [(f"{case.get('classname')}.{case.get('name')}", skipped.get("message", ""))
             for case in ET.parse(path).getroot().iter("testcase")
             for skipped in case.findall("skipped")]
+
+
+def pytest_failures(path, lines=25):
+    """(test, the last `lines` lines of its traceback) of each failed or errored test, from its junit report."""
+    return [(f"{case.get('classname')}.{case.get('name')}",
+             "\n".join((bad.get("message", "") + "\n" + (bad.text or "")).strip().splitlines()[-lines:]))
+            for case in ET.parse(path).getroot().iter("testcase")
+            for bad in case.findall("failure") + case.findall("error")]
 
 
 if __name__ == "__main__":
