@@ -56,6 +56,12 @@ TEST(FalconDeployment, ParameterErrorsNameFileLineAndKey) {
   EXPECT_NE(e4.find("clutch_buttons"), std::string::npos) << e4;
   const std::string e5 = error_of("{transport: sim, typo: 1}");
   EXPECT_NE(e5.find("typo"), std::string::npos) << e5;
+  // Reopening an unplugged Falcon waits on USB: only the I/O thread may (never the cycle).
+  const std::string e6 = error_of("{transport: sim, reconnect: 1s}");
+  EXPECT_NE(e6.find("falcon.yaml:6"), std::string::npos) << e6;
+  EXPECT_NE(e6.find("reconnect"), std::string::npos) << e6;
+  EXPECT_NE(e6.find("io_thread"), std::string::npos) << e6;
+  EXPECT_EQ(error_of("{transport: sim, io_thread: true, reconnect: 1s}"), "");
 }
 
 // No Falcon here: starting a USB Falcon says so (or that there is no USB at all).

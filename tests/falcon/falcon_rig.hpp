@@ -21,6 +21,11 @@ struct FalconRig {
   explicit FalconRig(FalconConfig c = {}, SimFirmwareConfig f = {}) {
     auto transport = std::make_unique<SimTransport>(f);
     sim = &transport->firmware();
+    start(c, std::move(transport));
+  }
+  // On another transport (`sim` stays null).
+  FalconRig(FalconConfig c, std::unique_ptr<FalconTransport> transport) { start(c, std::move(transport)); }
+  void start(const FalconConfig& c, std::unique_ptr<FalconTransport> transport) {
     device = std::make_unique<FalconDevice>("falcon", TaskConfig::periodic(std::chrono::milliseconds(1), 0),
                                             c, std::move(transport));
     detail::Access::add_inbound(*device, &mailbox);

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <thread>
 
@@ -66,6 +67,91 @@ TEST(FalconThreadedTransport, AFalconHomesAndIsPushedThroughTheIoThread) {
   std::printf("threaded: %llu exchanges, %llu without a new report\n",
               static_cast<unsigned long long>(device.summary().exchanges),
               static_cast<unsigned long long>(device.summary().no_answer));
+}
+
+// A Falcon on a cable: unplugged, every exchange is `disconnected` and open() finds nothing;
+// plugged in again, open() finds a fresh firmware (powered up again: not homed). The test thread
+// plugs and unplugs; only the I/O thread opens and exchanges.
+class Cable final : public FalconTransport {
+ public:
+  void open() override {
+    if (!plugged.load(std::memory_order_acquire)) throw TransportError("Falcon: no Falcon found (unplugged)");
+    sim_ = std::make_unique<SimTransport>();
+    sim_->open();
+    opens.fetch_add(1, std::memory_order_relaxed);
+  }
+  ExchangeResult exchange(const Packet& out, Packet& in) noexcept override {
+    if (!plugged.load(std::memory_order_acquire) || !sim_) return {ExchangeStatus::disconnected, 0, -4};
+    return sim_->exchange(out, in);
+  }
+  void close() noexcept override { sim_.reset(); }
+  std::string describe() const override { return "a Falcon on a cable"; }
+  std::atomic<bool> plugged{true};
+  std::atomic<int> opens{0};
+
+ private:
+  std::unique_ptr<SimTransport> sim_;
+};
+
+// Steps the rig a cycle a millisecond (the I/O thread runs beside it) until `done`, at most `limit`.
+template <class Done>
+bool step_until(test::FalconRig& rig, Done done, int limit = 5000) {
+  for (int i = 0; i < limit; ++i) {
+    if (done()) return true;
+    rig.cycle();
+    std::this_thread::sleep_for(1ms);
+  }
+  return done();
+}
+
+TEST(FalconThreadedTransport, AFalconPluggedInAgainIsOpenedAgainAndHomedBeforeAnyForce) {
+  auto cable = std::make_unique<Cable>();
+  Cable& c = *cable;
+  FalconConfig config;
+  config.max_missed = 50;  // a shared 2-core machine: the I/O thread may be late now and then
+  test::FalconRig rig(config, std::make_unique<ThreadedTransport>(std::move(cable), 0, 100'000, 20'000'000));
+  ASSERT_TRUE(step_until(rig, [&] { return rig.homed() && rig.state() == OperatingStateValue::enabled; }));
+
+  c.plugged.store(false, std::memory_order_release);
+  ASSERT_TRUE(step_until(rig, [&] { return rig.state() == OperatingStateValue::fault; }));
+  EXPECT_EQ(rig.device->fault().code, FaultCode::device_lost);
+  EXPECT_EQ(rig.device->fault().source_name(), "usb");
+  EXPECT_EQ(rig.device->fault().detail, 4u) << "the backend's code (LIBUSB_ERROR_NO_DEVICE)";
+  EXPECT_FALSE(rig.homed()) << "a Falcon plugged in again has a fresh firmware";
+  // Enabled while still unplugged: no answer, FAULT again (never ENABLED on nothing).
+  rig.write("state_command", StateCommand::enable);
+  rig.cycle(60);
+  EXPECT_NE(rig.state(), OperatingStateValue::enabled);
+
+  c.plugged.store(true, std::memory_order_release);
+  ASSERT_TRUE(step_until(rig, [&] { return rig.device->transport().reopened() == 1; }))
+      << "the I/O thread did not open the Falcon again (" << c.opens.load() << " opens)";
+  EXPECT_EQ(c.opens.load(), 2);
+  // The operator's enable homes it again first: busy, no force, until the firmware says homed.
+  rig.write("state_command", StateCommand::enable);
+  ASSERT_TRUE(step_until(rig, [&] { return rig.homed() && rig.state() == OperatingStateValue::enabled; }))
+      << "state " << static_cast<int>(rig.state()) << ", homed " << rig.homed() << ", homing "
+      << rig.device->homing() << ", exchanges " << rig.device->summary().exchanges << ", unanswered "
+      << rig.device->summary().no_answer;
+  rig.cycle();
+  EXPECT_EQ(rig.device->summary().reopened, 1u);
+  rig.device->cleanup();
+}
+
+TEST(FalconThreadedTransport, WithoutReconnectAnUnpluggedFalconStaysClosed) {
+  auto cable = std::make_unique<Cable>();
+  Cable& c = *cable;
+  FalconConfig config;
+  config.max_missed = 50;
+  test::FalconRig rig(config, std::make_unique<ThreadedTransport>(std::move(cable), 0));
+  ASSERT_TRUE(step_until(rig, [&] { return rig.homed(); }));
+  c.plugged.store(false, std::memory_order_release);
+  ASSERT_TRUE(step_until(rig, [&] { return rig.state() == OperatingStateValue::fault; }));
+  c.plugged.store(true, std::memory_order_release);
+  rig.cycle(100);
+  EXPECT_EQ(c.opens.load(), 1);
+  EXPECT_EQ(rig.device->transport().reopened(), 0u);
+  rig.device->cleanup();
 }
 
 }  // namespace

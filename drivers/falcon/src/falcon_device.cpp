@@ -76,12 +76,10 @@ void FalconDevice::close() noexcept { transport_->close(); }
 
 Outcome FalconDevice::enable() {
   consecutive_missed_ = 0;  // out of FAULT: the next exchanges say whether it is back
-  // Homing was lost (the fault said so, and is_homed went false): the counts may be relative
-  // again, so home again.
-  if (homing_lost_ && !homing()) {
-    homing_lost_ = false;
-    start_homing();
-  }
+  // Homing was lost (the fault said so, and is_homed went false; or the Falcon was unplugged):
+  // the counts may be relative again, so home again — on every enable until a homing is done
+  // (one cut short by a fault does not count).
+  if (homing_lost_ && !homing()) start_homing();
   return Outcome::done();
 }
 
@@ -89,6 +87,7 @@ Outcome FalconDevice::home() {
   if (!homed_seen_) return Outcome::pending();
   homed_seen_ = false;
   homed_ = true;
+  homing_lost_ = false;
   return Outcome::done();
 }
 
@@ -180,6 +179,7 @@ Outcome FalconDevice::write(const Setpoint& s) {
   Packet in{};
   const ExchangeResult x = transport_->exchange(out, in);
   ++summary_.exchanges;
+  summary_.reopened = transport_->reopened();
   Outcome o;
   switch (x.status) {
     case ExchangeStatus::ok: {
@@ -203,6 +203,12 @@ Outcome FalconDevice::write(const Setpoint& s) {
       break;
     case ExchangeStatus::disconnected:
       summary_.last_usb_error = x.error;
+      // A Falcon plugged in again (the transport's reconnect) has a fresh firmware, not homed:
+      // the next enable homes it before any force.
+      if (homed_) lose_homing();
+      homed_ = false;
+      homing_lost_ = true;
+      measured_ = false;
       o = Outcome::failed(FaultCode::device_lost, "the device is gone (unplugged)", "usb",
                           static_cast<std::uint32_t>(x.error < 0 ? -x.error : x.error));
       break;

@@ -25,12 +25,12 @@ std::string summary_line(const FalconSummary& s) {
   char b[400];
   std::snprintf(b, sizeof b,
                 "%llu exchanges: %llu unanswered, %llu USB errors (last %d), %llu corrupt frames refused, "
-                "%llu poses out of the model, %llu forces saturated",
+                "%llu poses out of the model, %llu forces saturated, reopened %llu times after an unplug",
                 static_cast<unsigned long long>(s.exchanges), static_cast<unsigned long long>(s.no_answer),
                 static_cast<unsigned long long>(s.usb_errors), s.last_usb_error,
                 static_cast<unsigned long long>(s.bad_frames),
-                static_cast<unsigned long long>(s.out_of_model),
-                static_cast<unsigned long long>(s.saturated));
+                static_cast<unsigned long long>(s.out_of_model), static_cast<unsigned long long>(s.saturated),
+                static_cast<unsigned long long>(s.reopened));
   return b;
 }
 
@@ -44,6 +44,13 @@ FalconSpec parse_falcon(const deploy::ComponentContext& ctx, Params& p) {
   s.io_thread = p.get_or<bool>("io_thread", s.transport == TransportKind::usb);
   const int io_default = s.task.priority > 0 ? std::min(s.task.priority + 1, 99) : 0;
   s.io_priority = static_cast<int>(p.get_in_range("io_priority", 0, 99, io_default));
+  // A Falcon unplugged and plugged in again is opened again by the I/O thread (its next enable
+  // homes it): looked for every `reconnect`, 0 never.
+  s.reconnect = p.get_or<std::chrono::nanoseconds>("reconnect", s.io_thread ? 1s : 0s).count();
+  if (s.reconnect < 0 || s.reconnect > std::chrono::nanoseconds(60s).count())
+    p.fail_at("reconnect", "in [0, 60 s] (0: an unplugged Falcon stays closed)");
+  if (s.reconnect > 0 && !s.io_thread)
+    p.fail_at("reconnect", "needs io_thread: true (the cycle never waits for a USB enumeration)");
   FalconConfig& c = s.device;
   c.max_force = p.get_in_range("max_force", 0.1, 20, c.max_force);
   if (p.has("workspace")) {
@@ -117,7 +124,7 @@ std::unique_ptr<FalconTransport> make_transport(const FalconSpec& s) {
     t = std::make_unique<SimTransport>(s.sim);
   else
     t = std::make_unique<UsbTransport>(s.usb);
-  if (s.io_thread) t = std::make_unique<ThreadedTransport>(std::move(t), s.io_priority);
+  if (s.io_thread) t = std::make_unique<ThreadedTransport>(std::move(t), s.io_priority, 100'000, s.reconnect);
   return t;
 }
 

@@ -48,8 +48,9 @@ bool ThreadedTransport::Slot::load(Packet& p, ExchangeStatus& s, std::int32_t& e
   return true;
 }
 
-ThreadedTransport::ThreadedTransport(std::unique_ptr<FalconTransport> inner, int priority, TimeNs poll_ns)
-    : inner_(std::move(inner)), priority_(priority), poll_ns_(poll_ns) {
+ThreadedTransport::ThreadedTransport(std::unique_ptr<FalconTransport> inner, int priority, TimeNs poll_ns,
+                                     TimeNs reconnect_ns)
+    : inner_(std::move(inner)), priority_(priority), poll_ns_(poll_ns), reconnect_ns_(reconnect_ns) {
   if (!inner_) throw std::invalid_argument("ThreadedTransport: no transport");
 }
 
@@ -91,7 +92,28 @@ void ThreadedTransport::loop() noexcept {
     if (r.status == ExchangeStatus::ok && r.bytes < packet_size)
       std::memset(in.data() + r.bytes, 0, packet_size - r.bytes);  // short: the codec refuses it
     report_.store(in, r.status, r.error);
+    // The cycle has the disconnect (its FAULT); until a device is back, it sees no report.
+    if (r.status == ExchangeStatus::disconnected && reconnect_ns_ > 0 && reopen())
+      reopened_.fetch_add(1, std::memory_order_relaxed);
   }
+}
+
+bool ThreadedTransport::reopen() noexcept {
+  inner_->close();
+  const timespec step{0, 10'000'000};  // close() waits at most this long for the thread
+  while (running_.load(std::memory_order_acquire)) {
+    for (TimeNs slept = 0; slept < reconnect_ns_ && running_.load(std::memory_order_acquire);
+         slept += 10'000'000)
+      nanosleep(&step, nullptr);
+    if (!running_.load(std::memory_order_acquire)) break;
+    try {
+      inner_->open();  // finds the device, loads its firmware if it has none running
+      return true;
+    } catch (...) {  // not there yet (TransportError), or out of memory: tried again
+      inner_->close();
+    }
+  }
+  return false;
 }
 
 ExchangeResult ThreadedTransport::exchange(const Packet& out, Packet& in) noexcept {

@@ -41,10 +41,11 @@ struct FalconConfig {
 // commands, watchdog trips, faults — are the base's "device" column).
 struct FalconSummary {
   static constexpr std::string_view type_name = "saw::drivers::falcon::FalconSummary";
-  static constexpr std::uint32_t layout_version = 2;  // 2: the contract's counters left for DeviceStatus
+  static constexpr std::uint32_t layout_version = 3;  // 3: reopened
   std::uint64_t exchanges = 0;
   std::uint64_t no_answer = 0, usb_errors = 0, bad_frames = 0, out_of_model = 0;
   std::uint64_t saturated = 0;
+  std::uint64_t reopened = 0;  // opened again after an unplug (the transport's reconnect)
   std::int32_t last_usb_error = 0;
 };
 

@@ -23,14 +23,16 @@ struct FalconSpec {
   // The exchanges in an I/O thread beside the task (ThreadedTransport): the default on USB,
   // whose transfers may wait longer than a period and allocate inside libusb.
   bool io_thread = false;
-  int io_priority = 0;  // SCHED_FIFO; default: the task's priority + 1 (0 stays 0)
+  int io_priority = 0;   // SCHED_FIFO; default: the task's priority + 1 (0 stays 0)
+  TimeNs reconnect = 0;  // ns between looks for an unplugged Falcon (default 1 s with io_thread)
 };
 
-// params: transport (usb|sim), io_thread, io_priority, firmware, usb: {bus, index, exchange_timeout_ms,
-// handshake_tries, load_attempts}, max_force, workspace: {min, max}, origin, start_enabled, home_on_start,
-// homing_dac, homing_timeout, max_missed, clutch_buttons, operator_buttons, command_timeout, calibration:
-// {dac_per_newton_metre, dac_limit, angle_at_zero}, sim: {initial_angles, operator_homes, inertia, damping,
-// hand: {amplitude, frequency, stiffness, damping}}. Errors name file:line and the key (deploy::Params).
+// params: transport (usb|sim), io_thread, io_priority, reconnect, firmware, usb: {bus, index,
+// exchange_timeout_ms, handshake_tries, load_attempts}, max_force, workspace: {min, max}, origin,
+// start_enabled, home_on_start, homing_dac, homing_timeout, max_missed, clutch_buttons, operator_buttons,
+// command_timeout, calibration: {dac_per_newton_metre, dac_limit, angle_at_zero}, sim: {initial_angles,
+// operator_homes, inertia, damping, hand: {amplitude, frequency, stiffness, damping}}. Errors name file:line
+// and the key (deploy::Params).
 FalconSpec parse_falcon(const deploy::ComponentContext& ctx, deploy::Params& p);
 
 // The transport the spec names (not opened).

@@ -41,6 +41,8 @@ class FalconTransport {
   virtual void close() noexcept = 0;
   // What this transport talks to, for logs ("usb bus 1 address 4", "simulated firmware").
   virtual std::string describe() const = 0;
+  // How often a device that went away was opened again (ThreadedTransport's reconnect). RT-safe.
+  virtual std::uint64_t reopened() const noexcept { return 0; }
 };
 
 }  // namespace saw::drivers::falcon
