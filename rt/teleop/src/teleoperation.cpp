@@ -168,17 +168,24 @@ void Teleoperation::raise_fault(FaultInfo why) noexcept {
   fault_ = why;
   explain(why);
   summary_.reason = fault_reason_.text;
-  // Once per transition: the log line, the event (the gateway publishes it), then the state.
-  if (why.code == FaultCode::deadline_missed)
-    saw::log(LogLevel::error, name().c_str(), "FAULT: deadline missed: {} periods {}, zero force both ways",
-             why.detail, fault_.source.data());
-  else
+  // Once per transition: one log line, the event (the gateway publishes it), then the state.
+  // A deadline's line carries the window's words when it was a window ("107 of 1000 periods
+  // missed"): one line per fault, whose first words say its kind, for people and log scanners.
+  if (why.code == FaultCode::deadline_missed) {
+    if (fault_reason_.size != 0)
+      saw::log(LogLevel::error, name().c_str(), "FAULT: deadline missed: {} ({}), zero force both ways",
+               fault_reason_.text.data(), fault_.source.data());
+    else
+      saw::log(LogLevel::error, name().c_str(), "FAULT: deadline missed: {} periods {}, zero force both ways",
+               why.detail, fault_.source.data());
+  } else {
     saw::log(LogLevel::error, name().c_str(), "FAULT: {} {}: {} ns old, last read {}",
              to_string(side_of(why)).data(), to_string(why.code).data(), why.age_ns,
              saw::to_string(why.last_read).data());
-  // The words outlive the record: fault_reason_ changes only at the next fault, after an enable.
-  if (fault_reason_.size != 0)
-    saw::log(LogLevel::error, name().c_str(), "FAULT: {}", fault_reason_.text.data());
+    // The words outlive the record: fault_reason_ changes only at the next fault, after an enable.
+    if (fault_reason_.size != 0)
+      saw::log(LogLevel::error, name().c_str(), "FAULT: {}", fault_reason_.text.data());
+  }
   (void)(*fault_event_)(fault_);
   set_operating_state(OperatingStateValue::fault);
 }
