@@ -16,7 +16,8 @@ of 64 bytes (full speed, as the FT232). Its behaviour follows the baud rate the 
   commands, the status says all three arms are homed.
 
 It prints `ready` once bound, then one line per phase, and on SIGTERM or when the host goes away
-a last line `exchanges=N seconds=S rate=R firmware_bytes=B homed=0|1`.
+a last line `exchanges=N seconds=S rate=R firmware_bytes=B homed=0|1 homings=H` (homed: it ever
+homed; an unplug takes the homing, as the firmware, away).
 Needs root, configfs, usb_f_fs and dummy_hcd. Usage: falcon_gadget.py
 """
 
@@ -95,7 +96,14 @@ class Falcon:
         self.loaded = False  # a firmware runs: uploaded, then the host switched to packet speed
         self.homing_commands = 0
         self.homed = False
+        self.homings = 0  # times homed, across unplugs
         self.lock = threading.Lock()
+
+    def unplugged(self):
+        with self.lock:
+            self.mode, self.loaded, self.homed, self.homing_commands = "loader", False, False, 0
+            self.rx.clear()
+        self.purge()
 
     def baud(self, divisor):
         # FT232 rates: 3 MHz / divisor (the low 14 bits; the top bits are eighths).
@@ -154,6 +162,7 @@ class Falcon:
             self.homing_commands += 1
             if self.homing_commands >= HOMING_REPORTS and not self.homed:
                 self.homed = True
+                self.homings += 1
                 print(f"homed after {self.homing_commands} homing commands", flush=True)
         now = time.monotonic()
         self.first = self.first or now
@@ -211,7 +220,7 @@ def serve():
         seconds = (falcon.last or 0) - (falcon.first or 0)
         rate = falcon.exchanges / seconds if seconds > 0 else 0
         print(f"exchanges={falcon.exchanges} seconds={seconds:.2f} rate={rate:.0f} "
-              f"firmware_bytes={falcon.firmware_bytes} homed={int(falcon.homed)}", flush=True)
+              f"firmware_bytes={falcon.firmware_bytes} homed={int(falcon.homings > 0)} homings={falcon.homings}", flush=True)
         os._exit(0)
 
     signal.signal(signal.SIGTERM, finish)
@@ -221,7 +230,10 @@ def serve():
             continue
         request_type, request, value, index, length, kind = struct.unpack("<BBHHHB3x", event)
         if kind == EVENT_UNBIND:
+            # Unplugged: the Falcon's controller loses its firmware and its homing (a replug
+            # finds the loader again and must upload and home anew).
             print("unbound", flush=True)
+            falcon.unplugged()
         if kind != EVENT_SETUP:
             continue
         if request_type & 0x80:  # device to host

@@ -8,19 +8,10 @@ set -euo pipefail
 src=$1
 saw_rt=$2
 work=$(mktemp -d)
-modprobe dummy_hcd is_high_speed=0 2> /dev/null || modprobe dummy_hcd
-modprobe libcomposite
-modprobe usb_f_fs
-mountpoint -q /sys/kernel/config || mount -t configfs none /sys/kernel/config
-head -c 4000 /dev/urandom > "$work/firmware.bin"  # the gadget echoes it: any content will do
-python3 "$src/tests/kernel/falcon_gadget.py" > "$work/gadget.log" 2>&1 &
-gadget=$!
-trap 'kill -TERM $gadget 2>/dev/null || true; wait $gadget 2>/dev/null || true; echo "--- gadget"; cat "$work/gadget.log"' EXIT
-for _ in $(seq 200); do grep -q '^ready' "$work/gadget.log" && break; sleep 0.1; done
-grep -q '^ready' "$work/gadget.log" || { echo "the gadget did not come up"; exit 1; }
-# The host side enumerates it: wait for 0403:cb48 on the bus.
-for _ in $(seq 300); do grep -lqs cb48 /sys/bus/usb/devices/*/idProduct && break; sleep 0.1; done
-grep -lqs cb48 /sys/bus/usb/devices/*/idProduct || { echo "0403:cb48 never enumerated"; exit 1; }
+# shellcheck source=tests/kernel/gadget.sh
+source "$src/tests/kernel/gadget.sh"
+trap gadget_down EXIT
+gadget_up "$work"
 # Under software emulation a cycle stalls for tens of ms: the limits on missed exchanges, on a
 # transfer's wait, on stale inputs and the tasks' deadline policies are loosened (the USB path is
 # under test, not the timing: a starved loop's deadline FAULT is System.AStarvedTeleoperation…'s
@@ -44,8 +35,8 @@ wait $rt || rc=$?
 cat "$work/rt.out"
 echo "--- saw-rt stderr"
 cat "$work/rt.err"
-kill -TERM $gadget
-wait $gadget || true
+kill -TERM "$gadget"
+wait "$gadget" || true
 [ "$rc" -eq 0 ] || { echo "saw-rt exited $rc"; exit 1; }
 # The upload echoes the loader's probe byte, then the file's 4000 bytes.
 grep -q "firmware_bytes=4001 " "$work/gadget.log" || { echo "the firmware was not uploaded whole"; exit 1; }

@@ -123,9 +123,11 @@ if [ "$(cat "$out/can.vcan0.result")" = pass ]; then
     "$src/tests/canopen/system/canopen_shared_bus_sim.py" "$saw_rt" "$saw_can_sim" \
     "$src/config/canopen-shared-bus.yaml"
   check guard 120 guard
+  # The soak's CAN bus down/up and Falcon unplug/replug, on vcan0 and the USB gadget.
+  check soak.guest 300 "$src/tests/kernel/soak_guest.sh" "$src" "$saw_rt"
   # Last: it takes vcan0 down and up again. Writes one result per check (can.classic, ...).
   check can.peers 240 "$src/.venv/bin/python" "$src/tests/kernel/can_peers.py" "$can_side" vcan0 "$out"
 else
-  for c in can.conformance canopen.teleop canopen.shared_bus guard can.peers; do echo "fail: no vcan0 (can.vcan0.log)" > "$out/$c.result"; done
+  for c in can.conformance canopen.teleop canopen.shared_bus guard soak.guest can.peers; do echo "fail: no vcan0 (can.vcan0.log)" > "$out/$c.result"; done
 fi
 date > "$out/done"

@@ -52,7 +52,7 @@ args=(-r "$kernel" --cpus 2 --memory 2G --rwdir "$out" --exec "$src/tests/kernel
 SECONDS=0
 rc=0
 # virtme-run (virtme-ng's helper) must be on PATH. No --network: the guest has loopback only.
-PATH="$src/.venv/bin:$PATH" timeout --kill-after=10 540 vng "${args[@]}" < /dev/null > "$out/console.log" 2>&1 || rc=$?
+PATH="$src/.venv/bin:$PATH" timeout --kill-after=10 840 vng "${args[@]}" < /dev/null > "$out/console.log" 2>&1 || rc=$?
 echo "$SECONDS" > "$out/seconds"
 echo "guest: $SECONDS s in all ($accel), the kernel up $(cat "$out/boot-seconds" 2>/dev/null || echo '?') s when the checks began"
 for r in "$out"/*.result; do

@@ -1,7 +1,9 @@
-"""The soak's three teleoperations (simulated, CANopen, bilateral), each a saw-rt process of its
-own with its gateway beside it, as a lab runs them. Names carry a prefix, so that their segments
-(/dev/shm/saw.<component>) and the CAN bus do not meet another run's."""
+"""The soak's teleoperations (simulated, CANopen, bilateral; and in the PREEMPT_RT guest a Falcon
+over USB), each a saw-rt process of its own with its gateway beside it, as a lab runs them. Names
+carry a prefix, so that their segments (/dev/shm/saw.<component>) and the CAN bus do not meet
+another run's."""
 import os
+import re
 import subprocess
 import time
 
@@ -57,7 +59,7 @@ components:
     type: canopen_arm
     task: {{period: 1ms, priority: 80}}
     params:
-      bus: virtual:{p}bus
+      bus: {bus}
       mode: cst
       start_enabled: true
       heartbeat: {{period: 50ms, timeout: 150ms}}
@@ -111,9 +113,58 @@ connections:
 {bilateral_connections}
 exports:
   - {{component: {p}master, provided: arm}}
+  - {{component: {p}slave, provided: arm}}
   - {{component: {p}teleop, provided: teleop}}
 record: {{columns: [{p}master.measured_cp, {p}slave.measured_cp]}}
 """
+
+
+# The Falcon over real USB (the guest's gadget, tests/kernel/falcon_gadget.py) as the master of a
+# simulated Omni; an unplugged Falcon is looked for again every 500 ms (`reconnect`). The guest's
+# emulated CPUs stall its tasks for tens of ms: exchanges may go unanswered for 200 cycles there.
+FALCON = """deployment: {{name: {p}fal}}
+components:
+  - name: {p}master
+    type: falcon
+    task: {{period: 1ms, priority: 80}}
+    params:
+      transport: usb
+      firmware: {firmware}
+      usb: {{bus: -1, index: 0, exchange_timeout_ms: 20}}
+      max_missed: 200
+      reconnect: 500ms
+      max_force: 8.0
+      workspace: {{min: [-0.06, -0.06, -0.06], max: [0.06, 0.06, 0.06]}}
+  - name: {p}slave
+    type: sim_haptic_device
+    task: {{period: 1ms, priority: 80}}
+    params: {{model: omni}}
+""" + TELEOP + """exports:
+  - {{component: {p}master, provided: arm}}
+  - {{component: {p}slave, provided: arm}}
+  - {{component: {p}teleop, provided: teleop}}
+record: {{columns: [{p}master.measured_cp, {p}slave.measured_cp, {p}teleop.tracking_error]}}
+"""
+
+# The device an operator enables first (it configures drives or homes on that enable).
+DEVICE_FIRST = {"canopen": "slave", "falcon": "master"}
+
+
+def loosen(text):
+    """The timing limits for a machine that stalls its tasks for tens to hundreds of ms (the
+    software-emulated PREEMPT_RT guest), as its other checks loosen them: the faults injected are
+    under test there, not the timing (a late loop's FAULT is the host soak's and the starved
+    teleoperation test's). Tasks: 500 missed periods in a row or 90 %; inputs, the arm's commands
+    and feedback 500 ms; the drives' RPDO deadline and heartbeats 500 ms; the Falcon's unanswered
+    exchanges 1000 in a row (the guest's gadget answers some 25–100 a second)."""
+    edits = [("task: {period: 1ms, ", "task: {period: 1ms, deadline: {in_a_row: 500, share: 0.9}, "),
+             ("stale_timeout: 20ms", "stale_timeout: 500ms"), ("rpdo_deadline: 5ms", "rpdo_deadline: 500ms"),
+             ("timeout: 150ms}", "timeout: 500ms}"),
+             ("      command_timeout: 20ms\n", "      command_timeout: 500ms\n      feedback_timeout: 500ms\n"),
+             ("max_missed: 200", "max_missed: 1000")]
+    for old, new in edits:
+        text = text.replace(old, new)
+    return text
 
 
 def joints():
@@ -144,15 +195,26 @@ class Deployment:
     """One saw-rt process (its log and recording in `run_dir`), its gateway and, for the CANopen
     arm, the drives' process."""
 
-    def __init__(self, kind, prefix, bin_dir, src, run_dir, domain):
+    def __init__(self, kind, prefix, bin_dir, src, run_dir, domain, can_bus=None, firmware=None, loose=False):
+        """`can_bus`: the CANopen arm's bus (a private virtual one by default); `firmware`: the
+        Falcon's firmware file (the falcon deployment); `loose`: timing limits for an emulated
+        machine (loosen())."""
         self.kind, self.p, self.bin, self.dir, self.domain = kind, prefix, bin_dir, run_dir, domain
-        text = {"sim": SIM, "canopen": CANOPEN, "bilateral": BILATERAL}[kind]
+        self.bus = can_bus or f"virtual:{prefix}bus"
+        text = {"sim": SIM, "canopen": CANOPEN, "bilateral": BILATERAL, "falcon": FALCON}[kind]
         self.yaml = os.path.join(run_dir, f"{kind}.yaml")
+        text = text.format(p=prefix, extra="", joints=joints() if kind == "canopen" else "", bus=self.bus,
+                           firmware=firmware,
+                           bilateral_connections=bilateral_connections(src, prefix) if kind == "bilateral" else "")
         with open(self.yaml, "w") as f:
-            f.write(text.format(p=prefix, extra="", joints=joints() if kind == "canopen" else "",
-                                bilateral_connections=bilateral_connections(src, prefix) if kind == "bilateral" else ""))
+            f.write(loosen(text) if loose else text)
         self.exports = {"sim": ["master", "slave", "teleop"], "canopen": ["master", "slave", "teleop"],
-                        "bilateral": ["master", "teleop"]}[kind]
+                        "bilateral": ["master", "slave", "teleop"], "falcon": ["master", "slave", "teleop"]}[kind]
+        # The devices an operator enables before the teleoperation (an enable of an enabled
+        # device does nothing): the one that configures or homes on it first.
+        first = DEVICE_FIRST.get(kind, "master")
+        self.devices = [prefix + first] + [prefix + x for x in ("master", "slave") if x != first]
+        self.slow_enable = kind in DEVICE_FIRST
         self.exports = [prefix + e for e in self.exports]
         self.teleop = prefix + "teleop"
         self.rt = self.gw = self.drives = None
@@ -165,7 +227,7 @@ class Deployment:
         self.drive_starts += 1
         out = open(self.log(f"drives{self.drive_starts}.log"), "w")
         self.drives = subprocess.Popen(
-            [os.path.join(self.bin, "saw-can-sim"), "--bus", f"virtual:{self.p}bus", "--node", "1", "--node", "2",
+            [os.path.join(self.bin, "saw-can-sim"), "--bus", self.bus, "--node", "1", "--node", "2",
              "--node", "3", "--load-inertia", "0.002", "--friction", "2e-6", "--priority", "70"],
             stdout=out, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + 10
@@ -189,6 +251,14 @@ class Deployment:
             args += ["--attach", e]
         self.gw = subprocess.Popen(args, stdout=open(self.log(f"gw{self.gw_starts}.out"), "w"),
                                    stderr=subprocess.STDOUT)
+
+    def drives_left(self):
+        """After stop(): each CAN drive's NMT and CiA 402 state as saw-can-sim's table at its exit
+        says them, [(node, nmt, state)] (empty without drives, or when the table is missing)."""
+        if not self.drive_starts:
+            return []
+        text = open(self.log(f"drives{self.drive_starts}.log"), errors="replace").read()
+        return re.findall(r"^\s*([123])\s+(\S+)\s+(.+?)\s{2,}-?\d+\s+-?\d+", text, re.M)
 
     def stop(self):
         """SIGINT to saw-rt (its orderly stop: every device through its safe state, the summary);

@@ -13,6 +13,18 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 MARGIN = 3.0  # s after recovery in which a fault the injection caused may still be logged
 
 
+# What a CANopen arm whose drives or bus went away may say (its own FAULT), and its teleoperation's.
+ARM_GONE = r"heartbeat|stale|reboot|lost|EMCY|drive|bus|node|send|CAN|deadline"
+
+
+def allow_device_faults(d, device, text, seconds, injection):
+    """The FAULTs an injection may cause on `device` (a component suffix: slave, master) and the
+    teleoperation's that follows it, expected for `seconds`."""
+    until = time.monotonic() + seconds
+    d.faults.allow(rf"^{d.p}{device}$", text, until, injection)
+    d.faults.allow(rf"^{d.p}teleop$", rf"{device} device in FAULT", until, injection)
+
+
 def gateway_kill(s, d, rng):
     """kill -9 of the deployment's gateway, then a new one: the RT process runs on, and state flows
     again through the new gateway to the soak's readers (untouched)."""
@@ -80,8 +92,7 @@ def drive_reboot(s, d, rng):
     """The CAN drives' process killed and started again (the drives reboot: boot-up, their
     configuration gone): the arm faults saying so and the teleoperation with it; an operator's
     enable, through DDS, configures the drives again and teleoperates."""
-    d.faults.allow(rf"^{d.p}slave$", r"heartbeat|stale|reboot|lost|EMCY|drive|bus|node", time.monotonic() + 60, "drive_reboot")
-    d.faults.allow(rf"^{d.p}teleop$", r"slave device in FAULT", time.monotonic() + 60, "drive_reboot")
+    allow_device_faults(d, "slave", ARM_GONE, 60, "drive_reboot")
     d.drives.send_signal(signal.SIGKILL)
     d.drives.wait()
     time.sleep(rng.uniform(0.2, 1.0))
@@ -90,10 +101,59 @@ def drive_reboot(s, d, rng):
     return s.ensure_enabled(d, timeout=30), f"drives started {d.drive_starts} times"
 
 
+def can_bus_down(s, d, rng):
+    """The CAN interface taken down for 0.2–1 s and up again (a cable pulled, a bus-off): the arm
+    faults saying so — its frames refused, the drives' heartbeats and PDOs gone, or the drives
+    stopping on their own RPDO deadline — and the teleoperation with it; an operator's enable
+    starts the drives again and teleoperates."""
+    ifname = d.bus.split(":", 1)[1]
+    allow_device_faults(d, "slave", ARM_GONE, 60, "can_bus_down")
+    subprocess.run(["ip", "link", "set", ifname, "down"], check=True)
+    down = rng.uniform(0.2, 1.0)
+    try:
+        time.sleep(down)
+    finally:
+        subprocess.run(["ip", "link", "set", ifname, "up"], check=True)
+    time.sleep(0.5)
+    return s.ensure_enabled(d, timeout=30), f"{ifname} down for {down:.2f} s"
+
+
+UDC = "/sys/kernel/config/usb_gadget/sawfalcon/UDC"
+
+
+def falcon_replug(s, d, rng):
+    """The Falcon unplugged (its USB gadget unbound from the controller) for 0.5–2 s and plugged in
+    again: the Falcon faults saying it is gone, with zero force, and the teleoperation with it; the
+    driver's I/O thread finds it again and loads its firmware; an operator's enable homes it and
+    teleoperates."""
+    allow_device_faults(d, "master", r"unplugged|lost|answer|homing|usb|USB", 60, "falcon_replug")
+    with open(UDC) as f:
+        udc = f.read().strip()
+    with open(UDC, "w") as f:
+        f.write("\n")
+    out = rng.uniform(0.5, 2.0)
+    try:
+        time.sleep(out)
+    finally:
+        with open(UDC, "w") as f:
+            f.write(udc + "\n")
+    time.sleep(1.0)
+    return s.ensure_enabled(d, timeout=30), f"unplugged for {out:.2f} s"
+
+
 INJECTORS = {
-    "gateway_kill": (gateway_kill, ("sim", "canopen", "bilateral")),
-    "peer_crash": (peer_crash, ("sim", "canopen", "bilateral")),
+    "gateway_kill": (gateway_kill, ("sim", "canopen", "bilateral", "falcon")),
+    "peer_crash": (peer_crash, ("sim", "canopen", "bilateral", "falcon")),
     "bad_commands": (bad_commands, ("sim", "canopen", "bilateral")),
     "segment_scribble": (segment_scribble, ("sim", "canopen", "bilateral")),
     "drive_reboot": (drive_reboot, ("canopen",)),
+    "can_bus_down": (can_bus_down, ("canopen",)),
+    "falcon_replug": (falcon_replug, ("falcon",)),
 }
+# Kinds that need a real kernel interface (the PREEMPT_RT guest's vcan0 and USB gadget).
+STRUCTURAL = {"can_bus_down": lambda d: d.bus.startswith("socketcan:")}
+
+
+def applies(kind, d):
+    """Whether fault `kind` can be injected on deployment `d`."""
+    return d.kind in INJECTORS[kind][1] and STRUCTURAL.get(kind, lambda _: True)(d)

@@ -17,7 +17,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "nonrt", "python"))
 from deployments import Deployment  # noqa: E402
-from faults import INJECTORS, MARGIN  # noqa: E402
+from faults import ARM_GONE, INJECTORS, MARGIN, allow_device_faults, applies  # noqa: E402
 from watch import FaultLog, fds, rss_kib  # noqa: E402
 from sawdds import Client, msgs  # noqa: E402
 from cyclonedds.internal import InvalidSample  # noqa: E402
@@ -28,7 +28,8 @@ class Soak:
         self.dir, self.domain = args.out, args.domain
         self.client = Client(self.domain)
         prefix = f"sk{os.getpid()}"
-        self.deps = [Deployment(k, prefix + k[0], args.bin, args.src, self.dir, self.domain)
+        self.deps = [Deployment(k, prefix + k[0], args.bin, args.src, self.dir, self.domain, can_bus=args.can_bus,
+                                firmware=args.falcon_firmware, loose=args.loose_timing)
                      for k in args.deployments.split(",")]
         for d in self.deps:
             d.faults = FaultLog(d.log("err"))
@@ -40,7 +41,8 @@ class Soak:
 
     def readers(self, d):
         if d.state is None:
-            d.state = self.client.reader_for(self.client.find(f"rt/{d.teleop}/tracking_error", 30))
+            # (An emulated guest takes tens of seconds to start a saw-rt and its gateway.)
+            d.state = self.client.reader_for(self.client.find(f"rt/{d.teleop}/tracking_error", 90))
             d.opstate = self.client.reader_for(self.client.find(f"rt/{d.teleop}/operating_state", 30), reliable=True)
 
     def drain(self, d):
@@ -68,7 +70,8 @@ class Soak:
         return False
 
     def ensure_enabled(self, d, timeout=20.0):
-        """The teleoperation ENABLED again: the operator's enable, the CANopen arm's first."""
+        """The teleoperation ENABLED again: the operator's enable of each device (the CANopen arm's
+        or the Falcon's first), then of the teleoperation."""
         if self.enabled(d, 1.0):
             return True
         deadline = time.monotonic() + timeout
@@ -76,9 +79,11 @@ class Soak:
             self.poll_faults()
             if d.kind == "canopen" and "joint limit" in d.faults.last_line:
                 self.home_arm(d)
-            if d.kind == "canopen":
-                self.client.send(f"rt/{d.p}slave/state_command", msgs.StringStamped(string="enable"), 5)
-                time.sleep(1.0)
+            # Every device first (any may have faulted: a late loop faults each task that saw
+            # it), then the teleoperation.
+            for device in d.devices:
+                self.client.send(f"rt/{device}/state_command", msgs.StringStamped(string="enable"), 5)
+            time.sleep(1.0 if d.slow_enable else 0.3)
             self.client.send(f"rt/{d.teleop}/state_command", msgs.StringStamped(string="enable"), 5)
             if self.enabled(d, 3.0):
                 d.faults.reenabled = True
@@ -93,9 +98,7 @@ class Soak:
         """An arm beyond its soft limit cannot be enabled (rightly); a lab moves it back by hand
         or homes it. Here the drives are simulated: started again, they are at their home."""
         d.homings += 1
-        until = time.monotonic() + 30
-        d.faults.allow(rf"^{d.p}slave$", r"heartbeat|stale|reboot|lost|EMCY|drive|bus|node|limit", until, "homing")
-        d.faults.allow(rf"^{d.p}teleop$", r"slave device in FAULT", until, "homing")
+        allow_device_faults(d, "slave", ARM_GONE + "|limit", 30, "homing")
         d.drives.kill()
         d.drives.wait()
         d.start_drives()
@@ -160,7 +163,13 @@ def main():
     ap.add_argument("--domain", type=int, default=None)
     ap.add_argument("--rss-growth-kib", type=int, default=8192)
     ap.add_argument("--no-stress", action="store_true")
-    ap.add_argument("--deployments", default="sim,canopen,bilateral", help="of sim, canopen, bilateral")
+    ap.add_argument("--deployments", default="sim,canopen,bilateral",
+                    help="of sim, canopen, bilateral, falcon (a Falcon on USB: the guest's gadget)")
+    ap.add_argument("--can-bus", default=None, help="the CANopen arm's bus (default: a private virtual one), "
+                                                     "e.g. socketcan:vcan0 (then can_bus_down applies)")
+    ap.add_argument("--falcon-firmware", default=None, help="the firmware file of the falcon deployment")
+    ap.add_argument("--loose-timing", action="store_true",
+                    help="timing limits for a software-emulated machine (deployments.loosen)")
     ap.add_argument("--kinds", default=",".join(INJECTORS), help="the faults to inject, of " + ", ".join(INJECTORS))
     args = ap.parse_args()
     args.seed = args.seed if args.seed is not None else int(time.time()) % 100000
@@ -196,8 +205,8 @@ def main():
         t0 = time.monotonic()
         end = t0 + args.minutes * 60
         # Each kind on each deployment it applies to once, in a random order; then at random.
-        kinds = [k for k in args.kinds.split(",") if any(d.kind in INJECTORS[k][1] for d in s.deps)]
-        plan = [(k, d) for k in kinds for d in s.deps if d.kind in INJECTORS[k][1]]
+        kinds = [k for k in args.kinds.split(",") if any(applies(k, d) for d in s.deps)]
+        plan = [(k, d) for k in kinds for d in s.deps if applies(k, d)]
         rng.shuffle(plan)
         next_sample = t0 + 60
         while time.monotonic() < end:
@@ -221,7 +230,7 @@ def main():
                 kind, d = plan.pop()
             else:
                 kind = rng.choice(kinds)
-                d = rng.choice([d for d in s.deps if d.kind in INJECTORS[kind][1]])
+                d = rng.choice([d for d in s.deps if applies(kind, d)])
             fn = INJECTORS[kind][0]
             s.poll_faults()
             s.recover_timing()
@@ -267,6 +276,7 @@ def main():
                  "rows recorded | rows lost | FAULTs injected | FAULTs for time | wake-up max | FAULTs at a limit after a re-enable | "
                  "FAULTs unexpected |")
     lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    safe_lines = []
     for d in s.deps:
         out = open(d.log("out")).read()
         cmin, _, rows, lost = summary_figures(out)
@@ -277,11 +287,26 @@ def main():
                      f"{len(d.faults.unexpected)} |")
         if codes[d.kind] != 0:
             failures.append(f"{d.kind}: saw-rt's orderly stop exited {codes[d.kind]}")
+        if d.kind == "canopen":
+            # saw-rt left every drive safe as it stopped: disabled, then pre-operational.
+            left = d.drives_left()
+            unsafe = [f"node {n} {nmt}, {st}" for n, nmt, st in left
+                      if nmt != "pre-operational" or st != "switch on disabled"]
+            if len(left) != 3 or unsafe:
+                failures.append(f"{d.kind}: drives not left safe at the end: {unsafe or 'no table of drives'}")
+            else:
+                safe_lines.append(f"{d.kind}: its 3 drives left pre-operational and switch on disabled")
         if r0 is not None and r1 is not None and r1 - r0 > args.rss_growth_kib:
             failures.append(f"{d.kind}: saw-rt's resident memory grew {r1 - r0} KiB")
         if f0 is not None and f1 is not None and f1 > f0:
             failures.append(f"{d.kind}: saw-rt's open files grew from {f0} to {f1}")
-        if lost is None or lost > 0:
+        if lost is None:
+            failures.append(f"{d.kind}: no recorder summary")
+        elif lost > 0 and args.loose_timing:
+            # The emulated guest stalls the recorder's collector beyond the history it copies
+            # from (hundreds of ms): counted and said, judged by the host's soak instead.
+            lines.append(f"\n{d.kind}: the recording lost {lost} rows (--loose-timing: reported, not judged)")
+        elif lost > 0:
             failures.append(f"{d.kind}: the recording lost {lost} rows")
         if rows is not None and rows < cmin - 10:
             failures.append(f"{d.kind}: {rows} rows recorded for {cmin} cycles")
@@ -290,6 +315,8 @@ def main():
     if s.timing_recoveries:
         lines.append(f"\nFAULTs for time (a late task or drive, each safe): {sum(len(d.faults.timing) for d in s.deps)}; "
                      f"the soak enabled the teleoperation again {sum(s.timing_recoveries)} of {len(s.timing_recoveries)} times")
+    if safe_lines:
+        lines.append("\nAt the end: " + "; ".join(safe_lines))
     homed = sum(d.homings for d in s.deps)
     if homed:
         lines.append(f"\nArms homed (beyond a soft limit, the CANopen drives started again at their home, as a lab "
