@@ -118,8 +118,12 @@ TEST(FalconThreadedTransport, AFalconPluggedInAgainIsOpenedAgainAndHomedBeforeAn
   EXPECT_EQ(rig.device->fault().source_name(), "usb");
   EXPECT_EQ(rig.device->fault().detail, 4u) << "the backend's code (LIBUSB_ERROR_NO_DEVICE)";
   EXPECT_FALSE(rig.homed()) << "a Falcon plugged in again has a fresh firmware";
-  // Enabled while still unplugged: no answer, FAULT again (never ENABLED on nothing).
+  // Enabled while still unplugged: refused at once (never ENABLED on nothing, not even busy).
+  EXPECT_FALSE(rig.device->transport().connected());
   rig.write("state_command", StateCommand::enable);
+  rig.cycle(2);
+  EXPECT_EQ(rig.state(), OperatingStateValue::fault);
+  EXPECT_EQ(rig.device->fault().code, FaultCode::device_lost);
   rig.cycle(60);
   EXPECT_NE(rig.state(), OperatingStateValue::enabled);
 
@@ -127,6 +131,7 @@ TEST(FalconThreadedTransport, AFalconPluggedInAgainIsOpenedAgainAndHomedBeforeAn
   ASSERT_TRUE(step_until(rig, [&] { return rig.device->transport().reopened() == 1; }))
       << "the I/O thread did not open the Falcon again (" << c.opens.load() << " opens)";
   EXPECT_EQ(c.opens.load(), 2);
+  EXPECT_TRUE(rig.device->transport().connected());
   // The operator's enable homes it again first: busy, no force, until the firmware says homed.
   rig.write("state_command", StateCommand::enable);
   ASSERT_TRUE(step_until(rig, [&] { return rig.homed() && rig.state() == OperatingStateValue::enabled; }))

@@ -15,8 +15,10 @@ of 64 bytes (full speed, as the FT232). Its behaviour follows the baud rate the 
   finds none). The encoders stay at 0; once the host has asked for homing mode for HOMING_REPORTS
   commands, the status says all three arms are homed.
 
-It prints `ready` once bound, then one line per phase, and on SIGTERM or when the host goes away
-a last line `exchanges=N seconds=S rate=R firmware_bytes=B homed=0|1 homings=H` (homed: it ever
+It prints `ready` once bound, then one line per phase (each ending `at T`, T its CLOCK_MONOTONIC
+seconds, the clock of saw-rt's log lines), a line `gap G s before T` when the host went G > 0.2 s
+without a report while a firmware ran (a host that stopped asking, or a gadget starved), and on
+SIGTERM or when the host goes away a last line `exchanges=N seconds=S rate=R firmware_bytes=B homed=0|1 homings=H` (homed: it ever
 homed; an unplug takes the homing, as the firmware, away).
 Needs root, configfs, usb_f_fs and dummy_hcd. Usage: falcon_gadget.py
 """
@@ -46,6 +48,10 @@ EVENT_DISABLE = 3
 # FTDI SIO requests (bRequest of vendor requests, as libftdi names them).
 SIO_RESET, SIO_MODEM_CTRL, SIO_SET_FLOW_CTRL, SIO_SET_BAUDRATE, SIO_SET_DATA = 0, 1, 2, 3, 4
 SIO_POLL_MODEM_STATUS, SIO_SET_LATENCY_TIMER, SIO_GET_LATENCY_TIMER, SIO_SET_BITMODE = 5, 9, 10, 11
+
+
+def say(text):
+    print(f"{text} at {time.monotonic():.3f}", flush=True)
 
 
 def write(path, text):
@@ -92,6 +98,7 @@ class Falcon:
         self.exchanges = 0
         self.first = None
         self.last = None
+        self.prev = None  # the last report since the last plug-in
         self.firmware_bytes = 0
         self.loaded = False  # a firmware runs: uploaded, then the host switched to packet speed
         self.homing_commands = 0
@@ -102,6 +109,7 @@ class Falcon:
     def unplugged(self):
         with self.lock:
             self.mode, self.loaded, self.homed, self.homing_commands = "loader", False, False, 0
+            self.prev = None  # no gap counted across the unplug
             self.rx.clear()
         self.purge()
 
@@ -111,7 +119,7 @@ class Falcon:
         mode = "loader" if whole >= 100 else "upload" if whole >= 10 else "packet"
         with self.lock:
             if mode != self.mode:
-                print(f"mode {mode} (divisor {whole})", flush=True)
+                say(f"mode {mode} (divisor {whole})")
             if self.mode == "upload" and mode == "packet" and self.firmware_bytes > 0:
                 self.loaded = True
             self.mode = mode
@@ -133,7 +141,7 @@ class Falcon:
             if self.mode == "loader":
                 i = self.rx.find(b"\x0a\x43\x0d")
                 if i >= 0:
-                    print("loader handshake", flush=True)
+                    say("loader handshake")
                     self.tx.put(b"\x0a\x44\x2c\x0d")
                     del self.rx[: i + 3]
                 return
@@ -163,8 +171,11 @@ class Falcon:
             if self.homing_commands >= HOMING_REPORTS and not self.homed:
                 self.homed = True
                 self.homings += 1
-                print(f"homed after {self.homing_commands} homing commands", flush=True)
+                say(f"homed after {self.homing_commands} homing commands")
         now = time.monotonic()
+        if self.prev is not None and now - self.prev > 0.2:
+            say(f"gap {now - self.prev:.3f} s before")
+        self.prev = now
         self.first = self.first or now
         self.last = now
         self.exchanges += 1
@@ -232,7 +243,7 @@ def serve():
         if kind == EVENT_UNBIND:
             # Unplugged: the Falcon's controller loses its firmware and its homing (a replug
             # finds the loader again and must upload and home anew).
-            print("unbound", flush=True)
+            say("unbound")
             falcon.unplugged()
         if kind != EVENT_SETUP:
             continue

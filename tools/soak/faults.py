@@ -124,9 +124,11 @@ UDC = "/sys/kernel/config/usb_gadget/sawfalcon/UDC"
 def falcon_replug(s, d, rng):
     """The Falcon unplugged (its USB gadget unbound from the controller) for 0.5–2 s and plugged in
     again: the Falcon faults saying it is gone, with zero force, and the teleoperation with it; the
-    driver's I/O thread finds it again and loads its firmware; an operator's enable homes it and
-    teleoperates."""
-    allow_device_faults(d, "master", r"unplugged|lost|answer|homing|usb|USB", 60, "falcon_replug")
+    driver's I/O thread finds it again and loads its firmware (an enable before then is refused,
+    saying it is not connected); an operator's enable homes it and teleoperates. Recovered when the
+    Falcon is ENABLED, homed and no longer busy, and the teleoperation ENABLED."""
+    s.device_reader(d, "master")  # before the unplug: it sees every state from here
+    allow_device_faults(d, "master", r"unplugged|not connected|lost|usb|USB", 60, "falcon_replug")
     with open(UDC) as f:
         udc = f.read().strip()
     with open(UDC, "w") as f:
@@ -138,7 +140,10 @@ def falcon_replug(s, d, rng):
         with open(UDC, "w") as f:
             f.write(udc + "\n")
     time.sleep(1.0)
-    return s.ensure_enabled(d, timeout=30), f"unplugged for {out:.2f} s"
+    if not s.ensure_enabled(d, timeout=30):
+        return False, f"unplugged for {out:.2f} s; the teleoperation not ENABLED again"
+    ready, seen = s.device_ready(d, "master", 30)
+    return ready, f"unplugged for {out:.2f} s" + ("" if ready else f"; the Falcon last seen {seen}")
 
 
 INJECTORS = {

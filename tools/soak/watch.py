@@ -49,8 +49,11 @@ class FaultLog:
         # Only whole lines: a line the process is still writing is read next time.
         cut = chunk.rfind("\n") + 1
         self.pos += len(chunk[:cut].encode(errors="replace"))
+        # Each line is judged at its own time (saw-rt's log is CLOCK_MONOTONIC, as time.monotonic):
+        # a FAULT logged within an expectation but read after it ended is still expected. The
+        # expectations are kept for a minute past their end: lines are read seconds late at most.
         now = time.monotonic()
-        self.expect = [e for e in self.expect if e[0] > now]
+        self.expect = [e for e in self.expect if e[0] > now - 60]
         for line in chunk[:cut].splitlines():
             m = FAULT.match(line)
             if not m:
@@ -61,8 +64,8 @@ class FaultLog:
                 follows[1].append(line)  # with its device's FAULT
                 continue
             self.last_line = line
-            for _, comp, text, inj in self.expect:
-                if comp.search(comp_name) and text.search(text_):
+            for until, comp, text, inj in self.expect:
+                if t <= until and comp.search(comp_name) and text.search(text_):
                     self.expected.append((inj, line))
                     self.last_device_fault = (t, self.expected)
                     break

@@ -75,6 +75,10 @@ void FalconDevice::open() {
 void FalconDevice::close() noexcept { transport_->close(); }
 
 Outcome FalconDevice::enable() {
+  // Refused at once, saying why: enabled on nothing, it would go ENABLED (homing) and fault only
+  // after max_missed cycles, as "no answer".
+  if (!transport_->connected())
+    return Outcome::failed(FaultCode::device_lost, "not connected: unplugged, or being opened again", "usb");
   consecutive_missed_ = 0;  // out of FAULT: the next exchanges say whether it is back
   // Homing was lost (the fault said so, and is_homed went false; or the Falcon was unplugged):
   // the counts may be relative again, so home again — on every enable until a homing is done

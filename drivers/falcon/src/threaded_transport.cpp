@@ -63,6 +63,7 @@ void ThreadedTransport::open() {
   inner_->open();
   command_.store(encode_command(MotorCommand{}), ExchangeStatus::ok, 0);  // zero force until told
   taken_ = report_.seq.load(std::memory_order_acquire);
+  connected_.store(true, std::memory_order_release);
   running_.store(true, std::memory_order_release);
   thread_ = std::thread([this] { loop(); });
   setup_error_.clear();
@@ -91,10 +92,14 @@ void ThreadedTransport::loop() noexcept {
     if (r.status == ExchangeStatus::no_answer) continue;  // the cycle sees no new report
     if (r.status == ExchangeStatus::ok && r.bytes < packet_size)
       std::memset(in.data() + r.bytes, 0, packet_size - r.bytes);  // short: the codec refuses it
+    // Not connected before the cycle can see the disconnect: its next enable is refused.
+    if (r.status == ExchangeStatus::disconnected) connected_.store(false, std::memory_order_release);
     report_.store(in, r.status, r.error);
     // The cycle has the disconnect (its FAULT); until a device is back, it sees no report.
-    if (r.status == ExchangeStatus::disconnected && reconnect_ns_ > 0 && reopen())
+    if (r.status == ExchangeStatus::disconnected && reconnect_ns_ > 0 && reopen()) {
       reopened_.fetch_add(1, std::memory_order_relaxed);
+      connected_.store(true, std::memory_order_release);
+    }
   }
 }
 
@@ -132,6 +137,7 @@ ExchangeResult ThreadedTransport::exchange(const Packet& out, Packet& in) noexce
 }
 
 void ThreadedTransport::close() noexcept {
+  connected_.store(false, std::memory_order_release);
   if (running_.exchange(false, std::memory_order_acq_rel) && thread_.joinable()) {
     thread_.join();
     // The thread may have stopped before the cycle's last (zero) command went out: leave the

@@ -34,6 +34,7 @@ class ThreadedTransport final : public FalconTransport {
   void close() noexcept override;
   std::string describe() const override;
   std::uint64_t reopened() const noexcept override { return reopened_.load(std::memory_order_relaxed); }
+  bool connected() const noexcept override { return connected_.load(std::memory_order_acquire); }
   // What the thread could not get (SCHED_FIFO), empty if all; set by open().
   const std::string& setup_error() const noexcept { return setup_error_; }
   FalconTransport& inner() noexcept { return *inner_; }
@@ -59,6 +60,7 @@ class ThreadedTransport final : public FalconTransport {
   TimeNs poll_ns_;
   TimeNs reconnect_ns_;
   std::atomic<std::uint64_t> reopened_{0};
+  std::atomic<bool> connected_{false};  // open, and no disconnect since
   std::string setup_error_;
   Slot command_, report_;
   std::uint64_t taken_ = 0;  // the cycle's: the last report sequence handed out

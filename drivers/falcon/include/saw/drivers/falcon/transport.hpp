@@ -43,6 +43,9 @@ class FalconTransport {
   virtual std::string describe() const = 0;
   // How often a device that went away was opened again (ThreadedTransport's reconnect). RT-safe.
   virtual std::uint64_t reopened() const noexcept { return 0; }
+  // False while a device that went away is not back (unplugged, or being found and opened again
+  // by ThreadedTransport's reconnect): an enable then has nothing to enable. RT-safe.
+  virtual bool connected() const noexcept { return true; }
 };
 
 }  // namespace saw::drivers::falcon
