@@ -1,5 +1,6 @@
 #include "saw/task.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -14,8 +15,21 @@
 
 namespace saw {
 
+namespace {
+
+// The rows its history needs: `history` of periods, when set and no other size was asked for.
+std::size_t rows_for(const TaskConfig& c, std::size_t state_rows) {
+  if (state_rows != StateTable::default_rows || c.history.count() <= 0 || !c.is_periodic()) return state_rows;
+  const auto rows = static_cast<std::size_t>((c.history + c.period - std::chrono::nanoseconds(1)) / c.period);
+  return std::max(rows, StateTable::default_rows);
+}
+
+}  // namespace
+
 Task::Task(std::string name, TaskConfig config, std::size_t state_rows)
-    : Component(std::move(name), state_rows), config_(config), histogram_(config.histogram_bins) {
+    : Component(std::move(name), rows_for(config, state_rows)),
+      config_(config),
+      histogram_(config.histogram_bins) {
   if (config_.period.count() < 0) throw std::invalid_argument("task '" + this->name() + "': negative period");
   if (config_.priority < 0 || config_.priority > 99)
     throw std::invalid_argument("task '" + this->name() + "': priority must be 0..99");

@@ -144,6 +144,27 @@ TEST(Deployment, EveryPeriodicTaskHasADeadlinePolicyUnlessItSaysOff) {
   EXPECT_EQ(policy("teleop").window, 500u) << "1 s of 2 ms periods";
 }
 
+// `history:` sizes a task's state table: how far a recorder or another history reader may fall
+// behind before it loses rows.
+TEST(Deployment, ATasksHistoryIsAsLongAsItSays) {
+  const std::string teleop_task = "task: {period: 1ms}\n    params: {gains";
+  const Case cases[] = {
+      {teleop_task.c_str(), "task: {period: 1ms, history: 2 min}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.history': '2 min' is not a duration)"},
+      {teleop_task.c_str(), "task: {period: 1ms, history: 61s}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.history': a periodic task's history is at least a period and at most 60 s)"},
+      {teleop_task.c_str(), "task: {period: 1ms, history: 100us}\n    params: {gains",
+       R"(^cfg\.yaml:12:\d+: key 'components\[2\]\.task\.history': a periodic task's history)"},
+  };
+  for (const auto& c : cases) expect_error(c);
+  std::string text = good;
+  text.replace(text.find(teleop_task), teleop_task.size(),
+               "task: {period: 2ms, history: 3s}\n    params: {gains");
+  auto d = build(text, "cfg.yaml", registry());
+  EXPECT_EQ(d.find<saw::Task>("teleop")->state_table().capacity(), 1500u) << "3 s of 2 ms periods";
+  EXPECT_EQ(d.find<saw::Task>("master")->state_table().capacity(), saw::StateTable::default_rows);
+}
+
 // `law:` picks the teleoperation's law; its settings are its own parameters, checked as declared.
 TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
   const std::string collaborative = "params: {gains: {master: 100, slave: 100}}";

@@ -63,6 +63,10 @@ std::optional<TaskConfig> parse_task(Params& p) {
   if (c.offset.count() < 0 || (c.offset.count() != 0 && c.offset >= c.period))
     t.fail_at("offset", "the phase must be at least 0 and less than the period");
   c.deadline = parse_deadline(t, c.period);
+  c.history = t.get_or<std::chrono::nanoseconds>("history", std::chrono::nanoseconds(0));
+  if (c.history.count() != 0 &&
+      (c.period.count() == 0 || c.history > 60 * std::chrono::seconds(1) || c.history < c.period))
+    t.fail_at("history", "a periodic task's history is at least a period and at most 60 s");
   return c;
 }
 

@@ -25,6 +25,9 @@ struct TaskConfig {
   // When missed periods are a breach (periodic tasks; off unless set: a deployment sets
   // DeadlinePolicy::standard() unless its file says otherwise).
   DeadlinePolicy deadline{};
+  // How far back its state table keeps rows (periodic tasks; 0: StateTable::default_rows). The
+  // recorder and other history readers lose rows when they fall further behind than this.
+  std::chrono::nanoseconds history{0};
 
   static TaskConfig periodic(std::chrono::nanoseconds period, int priority = 80, int cpu = -1) {
     return {period, priority, cpu};
