@@ -47,6 +47,8 @@ const char* to_string(ServoMode m) noexcept {
       return "servo_jv";
     case ServoMode::jf:
       return "servo_jf";
+    case ServoMode::cp:
+      return "servo_cp";
   }
   return "?";
 }
@@ -67,6 +69,10 @@ DeviceConfig checked(DeviceConfig c, const TaskConfig& task, const std::string& 
   if (c.joints.size() > JointState::max_joints) fail("at most 8 joints");
   if ((c.servo_jp || c.servo_jv || c.servo_jf) && c.joints.empty()) fail("joint commands need joints");
   if (c.servo_cf && !c.cartesian) fail("servo_cf needs a Cartesian device");
+  if (c.servo_cp && !c.cartesian) fail("servo_cp needs a Cartesian device");
+  if (!(c.max_linear_speed > 0) || !(c.max_angular_speed > 0)) fail("servo_cp speeds must be positive");
+  for (std::size_t k = 0; k < 3; ++k)
+    if (!(c.workspace_min[k] <= c.workspace_max[k])) fail("the workspace's min is above its max");
   if (!(c.max_force >= 0)) fail("max_force must not be negative");
   if (c.command_timeout == 0) c.command_timeout = 3 * task.period.count();
   if (c.command_timeout < task.period.count()) fail("command_timeout must be at least one period");
@@ -118,6 +124,7 @@ void Device::provide_interfaces() {
     // Declared for callers outside the host (the gateway checks it); servo_cf() checks the norm.
     if (config_.max_force > 0) a.limit(arm_if::servo_cf.name, -config_.max_force, config_.max_force);
   }
+  if (config_.servo_cp) crtk::provide(a, arm_if::servo_cp, [this](const Pose& p) { servo_cp(p); });
   if (config_.servo_jp)
     crtk::provide(a, arm_if::servo_jp, [this](const JointState& js) { servo_joints(js, ServoMode::jp); });
   if (config_.servo_jv)
@@ -213,6 +220,43 @@ void Device::servo_joints(const JointState& js, ServoMode mode) noexcept {
     last_jp_time_ = t;
     has_jp_ = true;
   }
+}
+
+void Device::servo_cp(const Pose& p) noexcept {
+  const TimeNs t = now();
+  watchdog_.commanded(t);
+  if (!accepts(ServoMode::cp)) return refuse(status_.refused.wrong_mode);
+  for (std::size_t k = 0; k < 3; ++k)
+    if (!std::isfinite(p.position[k])) return refuse(status_.refused.not_finite);
+  for (std::size_t k = 0; k < 4; ++k)
+    if (!std::isfinite(p.orientation[k])) return refuse(status_.refused.not_finite);
+  // A quaternion off the unit sphere is no rotation: refused as out of range, never normalised.
+  if (!Pose::valid(p)) return refuse(status_.refused.over_limit);
+  for (std::size_t k = 0; k < 3; ++k)
+    if (p.position[k] < config_.workspace_min[k] || p.position[k] > config_.workspace_max[k])
+      return refuse(status_.refused.over_limit);
+  // As servo_jp's step: from the last accepted pose (or, first, the measured one), over the time
+  // since (bounded by the command timeout: a command after a pause cannot jump).
+  const double since =
+      static_cast<double>(std::clamp(t - last_cp_time_, config().period.count(), config_.command_timeout)) *
+      1e-9;
+  const Pose& from = has_cp_ ? last_cp_ : measured_.cp;
+  const double dx = p.position[0] - from.position[0], dy = p.position[1] - from.position[1],
+               dz = p.position[2] - from.position[2];
+  if (std::sqrt(dx * dx + dy * dy + dz * dz) > config_.max_linear_speed * since)
+    return refuse(status_.refused.over_limit);
+  double dot = 0;
+  for (std::size_t k = 0; k < 4; ++k) dot += p.orientation[k] * from.orientation[k];
+  const double angle = 2 * std::acos(std::min(1.0, std::abs(dot)));  // q and -q: one rotation
+  if (angle > config_.max_angular_speed * since) return refuse(status_.refused.over_limit);
+  Setpoint s;
+  s.mode = ServoMode::cp;
+  s.pose = p;
+  if (!admit(s)) return refuse(status_.refused.over_limit);
+  command_ = s;
+  last_cp_ = p;
+  last_cp_time_ = t;
+  has_cp_ = true;
 }
 
 void Device::state_command(StateCommand c) noexcept {

@@ -92,7 +92,7 @@ void Device::begin_enable(TimeNs t) noexcept {
   enabling_ = true;
   enable_start_ = t;
   command_ = {};
-  has_jp_ = false;
+  has_jp_ = has_cp_ = false;
   watchdog_.disarm();
   state_.is_busy = true;                         // DISABLED and busy until the hardware says it is powered
   state_.state = OperatingStateValue::disabled;  // said by step_enable(), unless done at once

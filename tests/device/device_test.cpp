@@ -211,6 +211,53 @@ TEST(DeviceJoints, JointCommandsAreCheckedAgainstTheDeclaredLimits) {
   EXPECT_EQ(r.wrong_size, 1u);
 }
 
+TEST(DeviceCartesian, PoseCommandsAreCheckedAgainstTheWorkspaceAndTheSpeeds) {
+  DeviceConfig c = ScriptedDevice::config();
+  c.servo_cp = true;
+  c.max_linear_speed = 0.2;   // m/s: 0.2 mm per 1 ms cycle
+  c.max_angular_speed = 1.0;  // rad/s: 1 mrad per cycle
+  c.workspace_min = {-0.1, -0.1, -0.1};
+  c.workspace_max = {0.1, 0.1, 0.1};
+  ScriptedDevice d("pose", c);
+  Command* servo_cp = d.provided("arm")->find_command("servo_cp");
+  ASSERT_NE(servo_cp, nullptr);
+  d.state_table().finalize();
+  d.startup();
+  TimeNs t = 1'000'000'000;
+  const auto step = [&] { detail::Access::step(d, t), t += 1'000'000; };
+  // A pose x m along x, turned `a` rad about z (q = [x, y, z, w]).
+  const auto cp = [&](double x, double a = 0, double w_scale = 1) {
+    Pose p;
+    p.position = {x, 0, 0};
+    p.orientation = {0, 0, std::sin(a / 2), w_scale * std::cos(a / 2)};
+    servo_cp->execute(&p);
+    step();
+    return d.last;
+  };
+  StateCommand enable = StateCommand::enable;
+  d.provided("arm")->find_command("state_command")->execute(&enable);
+  step();
+  ASSERT_TRUE(d.following());
+  EXPECT_EQ(cp(0.0001).mode, ServoMode::cp) << "0.1 mm from the measured pose (the origin)";
+  EXPECT_EQ(d.last.pose.position[0], 0.0001);
+  EXPECT_EQ(cp(0.0002, 0.0005).mode, ServoMode::cp) << "0.1 mm and 0.5 mrad: within both speeds";
+  EXPECT_EQ(cp(0.0010, 0.0005).mode, ServoMode::none) << "0.8 mm in a cycle: faster than 0.2 m/s";
+  EXPECT_EQ(cp(0.0002, 0.01).mode, ServoMode::none) << "10 mrad in a cycle: faster than 1 rad/s";
+  EXPECT_EQ(cp(0.0002, -0.0005).mode, ServoMode::cp)
+      << "1 mrad from the last accepted, 3 ms (the command timeout) since";
+  EXPECT_EQ(cp(0.0002, -0.0005, 1.1).mode, ServoMode::none) << "not a unit quaternion: no rotation";
+  EXPECT_EQ(cp(NAN).mode, ServoMode::none);
+  EXPECT_EQ(cp(0.2).mode, ServoMode::none) << "outside the workspace";
+  const RefusedCommands& r = d.device_status().refused;
+  EXPECT_EQ(r.over_limit, 4u);
+  EXPECT_EQ(r.not_finite, 1u);
+  // After the refusals the step is judged from the last accepted pose, not the refused ones.
+  EXPECT_EQ(cp(0.0003, -0.0005).mode, ServoMode::cp);
+  DeviceConfig plain = ScriptedDevice::config();
+  ScriptedDevice p("plain", plain);
+  EXPECT_EQ(p.provided("arm")->find_command("servo_cp"), nullptr) << "not declared, not provided";
+}
+
 TEST_F(DeviceBase, StartAndStopGoThroughTheSafeState) {
   dev.startup();
   EXPECT_EQ(dev.opened, 1);

@@ -104,7 +104,7 @@ inline constexpr Read<Twist> measured_cv{"measured_cv"};
 inline constexpr Read<JointState> measured_js{"measured_js"};  // with the joints' names
 using crtk::operating_state;
 inline constexpr Write<Wrench> servo_cf{"servo_cf"};
-inline constexpr Write<Pose> servo_cp{"servo_cp"};  // CRTK's; no sawrt device serves it yet
+inline constexpr Write<Pose> servo_cp{"servo_cp"};  // a device with DeviceConfig::servo_cp
 // CRTK's joint-space servo commands and the setpoint they became.
 inline constexpr Read<JointState> setpoint_js{"setpoint_js"};
 inline constexpr Write<JointState> servo_jp{"servo_jp"};  // positions

@@ -41,6 +41,7 @@ enum class ServoMode : std::uint8_t {
   jp,    // servo_jp: joint positions
   jv,    // servo_jv: joint velocities
   jf,    // servo_jf: joint efforts
+  cp,    // servo_cp: a Cartesian pose
 };
 const char* to_string(ServoMode m) noexcept;  // "servo_cf", ...
 
@@ -50,6 +51,7 @@ struct Setpoint {
   ServoMode mode = ServoMode::none;
   Wrench wrench{};                                      // cf
   std::array<double, JointState::max_joints> joints{};  // jp, jv, jf: SI units
+  Pose pose{};                                          // cp: a unit quaternion, in the workspace
 };
 
 // What a hardware call came to. `why` is a literal (it is kept and logged from RT code);
@@ -92,6 +94,15 @@ struct DeviceConfig {
   double max_force = 0;             // servo_cf: |force| above this (N) is refused; 0: not bounded here
   std::vector<JointLimits> joints;  // measured_js's joints, 1..8
   bool servo_jp = false, servo_jv = false, servo_jf = false;
+  // servo_cp (needs cartesian): a pose inside the workspace box, moving from the last accepted
+  // pose (or, first, the measured one) no faster than these speeds (m/s, rad/s).
+  bool servo_cp = false;
+  double max_linear_speed = std::numeric_limits<double>::infinity();
+  double max_angular_speed = std::numeric_limits<double>::infinity();
+  Vec3 workspace_min{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                     -std::numeric_limits<double>::infinity()};
+  Vec3 workspace_max{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                     std::numeric_limits<double>::infinity()};
   // With no fresh servo command for this long, the device takes its safe output (zero force,
   // hold) and says so; with fault_on_command_timeout it also goes to FAULT. 0: 3 periods.
   TimeNs command_timeout = 0;
@@ -138,7 +149,7 @@ struct DeviceStatus {
 };
 
 // A device as a periodic task. The base provides the CRTK interface (measured_cp/cv/js,
-// operating_state, fault, command_timeout, watchdog_trips reads; servo_cf/jp/jv/jf as declared,
+// operating_state, fault, command_timeout, watchdog_trips reads; servo_cf/cp/jp/jv/jf as declared,
 // state_command writes; operating_state, fault, clutch, operator_present events), runs the
 // operating-state machine (enable, disable, pause, resume, home), checks every command before
 // the driver sees it, runs the command watchdog, and drives the safe state on watchdog, fault,
@@ -229,6 +240,7 @@ class Device : public Task {
   void provide_interfaces();
   void servo_cf(const Wrench& w) noexcept;
   void servo_joints(const JointState& js, ServoMode mode) noexcept;
+  void servo_cp(const Pose& p) noexcept;
   void refuse(std::uint64_t& counter) noexcept;
   void state_command(StateCommand c) noexcept;
   void set_state(OperatingStateValue s) noexcept;
@@ -251,6 +263,9 @@ class Device : public Task {
   std::array<double, JointState::max_joints> last_jp_{};
   TimeNs last_jp_time_ = 0;
   bool has_jp_ = false;
+  Pose last_cp_{};
+  TimeNs last_cp_time_ = 0;
+  bool has_cp_ = false;
   OperatingState state_{};
   FaultInfo fault_{};
   DeviceStatus status_{};

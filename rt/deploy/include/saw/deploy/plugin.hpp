@@ -11,7 +11,7 @@ namespace saw::deploy {
 // old headers would misbehave (class layouts, virtual functions, the registry's API). saw-rt
 // refuses a plug-in whose version differs, naming both.
 inline constexpr std::uint32_t plugin_abi_version =
-    6;  // 3: saw::Device; 4: LawModel::describe; 5: LawModel::wave_impedance; 6: TaskConfig::history
+    6;  // 3: saw::Device; 4: LawModel::describe; 5: LawModel::wave_impedance; 6: TaskConfig::history, servo_cp
 
 }  // namespace saw::deploy
 
