@@ -3,7 +3,7 @@
 # both. Packages are loaded by saw-rt at run time (saw_package), never linked into it.
 function(saw_check_layering)
   set(framework saw_rt saw_deploy saw_teleop saw-rt)
-  set(forbidden "^(saw::|sawrt::)?(saw_)?(bridge|can|canopen|canopen_sim|drivers_sim|drivers_falcon|falcon_kinematics|gateway|msgs|security)$")
+  set(forbidden "^(saw::|sawrt::)?(saw_)?(bridge|can|canopen|canopen_sim|drivers_[a-z0-9_]+|falcon_kinematics|gateway|msgs|security)$")
   foreach(t IN LISTS framework)
     foreach(property LINK_LIBRARIES INTERFACE_LINK_LIBRARIES)
       get_target_property(libs ${t} ${property})
@@ -27,7 +27,7 @@ function(saw_check_layering)
           continue()
         endif()
         foreach(l IN LISTS libs)
-          if(l MATCHES "^(saw::|sawrt::)?(saw_)?(teleop|teleop_mappings|canopen|drivers_sim|drivers_falcon)$")
+          if(l MATCHES "^(saw::|sawrt::)?(saw_)?(teleop|teleop_mappings|canopen|drivers_[a-z0-9_]+)$")
             message(FATAL_ERROR "layering: ${t} links ${l}; the gateway links no component package: "
                                 "map the package's types in its mapping module (saw_mapping_module)")
           endif()

@@ -1,0 +1,102 @@
+// DvrkArm: a da Vinci Research Kit arm (an MTM or a PSM, dVRK 2.x) as a sawrt device; its hardware
+// is the "dvrk" interface of the gateway's import of the arm's CRTK topics (no DDS in this process).
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <tuple>
+
+#include "saw/device.hpp"
+#include "saw/functions.hpp"
+
+namespace saw::drivers::dvrk {
+
+enum class ArmKind : std::uint8_t { mtm, psm };
+
+// What reaches the arm when our commands stop (disable, a fault, the command watchdog, a stop):
+// once, after the last motion command, and nothing after it (the dVRK keeps its last goal).
+enum class SafeCommand : std::uint8_t {
+  zero_wrench,        // MTM: servo_cf zero (gravity compensation keeps the handle floating)
+  hold,               // PSM (or MTM): the dVRK's `hold`, at its current setpoint
+  servo_cp_measured,  // PSM without `hold`: servo_cp at its last measured pose
+};
+
+struct DvrkArmConfig {
+  ArmKind kind = ArmKind::mtm;
+  SafeCommand safe_command = SafeCommand::zero_wrench;
+  double max_force = 3.0;                  // N: MTM servo_cf above this is refused
+  TimeNs command_timeout = 0;              // no servo command for this long: the safe command; 0: 3 periods
+  TimeNs stale_timeout = 50'000'000;       // measured_cp older than this while following: FAULT
+  TimeNs enable_timeout = 10'000'000'000;  // the dVRK powers an arm in a few s
+  TimeNs home_timeout = 60'000'000'000;
+  bool home = false;           // send `home` to an arm that is not homed (it moves!)
+  bool start_enabled = false;  // real hardware: the operator enables
+  // PSM servo_cp: from the last accepted pose no faster than these (m/s, rad/s), in the box.
+  double max_linear_speed = 0.2;
+  double max_angular_speed = 3.0;
+  Vec3 workspace_min{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                     -std::numeric_limits<double>::infinity()};
+  Vec3 workspace_max{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                     std::numeric_limits<double>::infinity()};
+};
+
+// What went to the arm, for the run's summary and a GUI.
+struct DvrkSummary {
+  static constexpr std::string_view type_name = "saw::dvrk::DvrkSummary";
+  static constexpr std::uint32_t layout_version = 1;
+  std::uint64_t commands = 0;       // motion commands sent (servo_cf, servo_cp)
+  std::uint64_t safe_commands = 0;  // safe commands sent
+  std::uint64_t held_busy = 0;      // motion commands held back while the arm was busy
+  std::uint64_t not_sent = 0;       // commands the import's queue did not take (full)
+  std::uint64_t bad_poses = 0;      // measured_cp samples refused (not finite, not a rotation)
+  OperatingState arm{};             // the dVRK's own operating state, as last read
+  static constexpr auto fields =
+      std::tuple{&DvrkSummary::commands, &DvrkSummary::safe_commands, &DvrkSummary::held_busy,
+                 &DvrkSummary::not_sent, &DvrkSummary::bad_poses,     &DvrkSummary::arm};
+};
+
+// Requires "dvrk" (the import: measured_cp, operating_state, state_command; servo_cf for an MTM,
+// servo_cp for a PSM; measured_cv and hold when there). Enabling walks the dVRK's handshake:
+// `enable` sent once and ENABLED awaited; a not-homed arm homed (`home: true`, only once ENABLED)
+// or refused; no motion command reaches the arm before it is ENABLED, homed and not busy, nor
+// while it is busy. Following, an arm that leaves ENABLED, loses its homing, stops publishing
+// (stale_timeout) or whose import is gone is this device's FAULT, naming which.
+class DvrkArm final : public Device {
+ public:
+  DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config);
+
+  const DvrkArmConfig& arm_config() const noexcept { return arm_config_; }
+  const DvrkSummary& summary() const noexcept { return summary_; }
+
+ protected:
+  void open() override;
+  Outcome read() override;
+  Outcome write(const Setpoint& s) override;
+  Outcome enable() override;
+  Outcome home() override;
+  void enter_safe_state(SafeReason why) override;
+  bool accepts(ServoMode m) const noexcept override;
+
+ private:
+  Outcome send_state(StateCommand c, bool& sent, const char* why) noexcept;
+  Status send_safe() noexcept;
+
+  DvrkArmConfig arm_config_;
+  FunctionRead<Pose> read_cp_;
+  FunctionRead<Twist> read_cv_;
+  FunctionRead<OperatingState> read_state_;
+  FunctionWrite<Wrench> write_cf_;
+  FunctionWrite<Pose> write_cp_;
+  FunctionWrite<StateCommand> write_state_;
+  FunctionVoid hold_;
+  DvrkSummary summary_{};
+  bool have_state_ = false;
+  TimeNs cp_time_ = -1;  // the newest measured_cp's row time (its arrival at the import)
+  bool enable_sent_ = false, home_sent_ = false;
+  bool commanded_ = false;  // a motion command went out since the last safe command
+  int not_sent_in_a_row_ = 0;
+};
+
+}  // namespace saw::drivers::dvrk

@@ -1,0 +1,222 @@
+#include "saw/drivers/dvrk/dvrk_arm.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "saw/crtk_arm.hpp"
+
+namespace saw::drivers::dvrk {
+namespace {
+
+constexpr std::string_view source = "dvrk";
+constexpr int max_not_sent = 10;  // the import's queue full this many cycles in a row: FAULT
+
+DvrkArmConfig checked(DvrkArmConfig c) {
+  const bool psm = c.kind == ArmKind::psm;
+  if (psm && c.safe_command == SafeCommand::zero_wrench)
+    throw std::invalid_argument("a PSM's safe command is hold or servo_cp_measured (a zero wrench drops it)");
+  if (!psm && c.safe_command == SafeCommand::servo_cp_measured)
+    throw std::invalid_argument("an MTM's safe command is zero_wrench or hold");
+  if (!(c.stale_timeout > 0)) throw std::invalid_argument("stale_timeout must be positive");
+  return c;
+}
+
+// The contract the base runs for it: an MTM takes wrenches (safe at zero force), a PSM poses
+// (safe where it holds).
+DeviceConfig contract_of(const DvrkArmConfig& c) {
+  DeviceConfig d;
+  const bool psm = c.kind == ArmKind::psm;
+  d.safe_state = psm ? SafeState::hold : SafeState::zero_force;
+  d.servo_cf = !psm;
+  d.max_force = c.max_force;
+  d.servo_cp = psm;
+  d.max_linear_speed = c.max_linear_speed;
+  d.max_angular_speed = c.max_angular_speed;
+  d.workspace_min = c.workspace_min;
+  d.workspace_max = c.workspace_max;
+  d.command_timeout = c.command_timeout;
+  d.start_enabled = c.start_enabled;
+  d.enable_timeout = c.enable_timeout;
+  d.home_timeout = c.home_timeout;
+  return d;
+}
+
+bool finite(const Pose& p) noexcept {
+  for (double v : p.position)
+    if (!std::isfinite(v)) return false;
+  for (double v : p.orientation)
+    if (!std::isfinite(v)) return false;
+  return Pose::valid(p);
+}
+
+}  // namespace
+
+DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
+    : Device(std::move(name), task, contract_of(checked(config))), arm_config_(checked(std::move(config))) {
+  namespace arm = crtk::arm;
+  const bool psm = arm_config_.kind == ArmKind::psm;
+  auto& r = require(std::string(source));
+  crtk::require(r, arm::measured_cp, read_cp_);
+  crtk::require(r, arm::measured_cv, read_cv_, Need::optional);
+  crtk::require(r, arm::operating_state, read_state_);
+  crtk::require(r, arm::state_command, write_state_);
+  if (!psm) crtk::require(r, arm::servo_cf, write_cf_);
+  if (psm || arm_config_.safe_command == SafeCommand::servo_cp_measured)
+    crtk::require(r, arm::servo_cp, write_cp_);
+  r.add_function("hold", hold_,
+                 arm_config_.safe_command == SafeCommand::hold ? Need::required : Need::optional);
+  provide("dvrk").add_command_read("summary",
+                                   state_table().add_column("summary", &summary_, ColumnUse::summary));
+}
+
+void DvrkArm::open() {
+  // Connected by the deployment to the arm's import; a missing one is a failed start, said.
+  if (!read_cp_.is_bound() || !read_state_.is_bound() || !write_state_.is_bound())
+    throw std::runtime_error(
+        "its 'dvrk' interface is not connected to the arm's import (saw-gateway --import)");
+}
+
+Outcome DvrkArm::read() {
+  Pose cp;
+  RowStamp stamp;
+  const Status s = read_cp_(cp, stamp);
+  if (s == Status::ok) {
+    if (finite(cp)) {
+      measured().cp = cp;
+      cp_time_ = stamp.time;
+    } else {
+      ++summary_.bad_poses;  // refused, never used: the last good pose stands
+    }
+  }
+  Twist cv;
+  if (read_cv_.is_bound() && read_cv_(cv) == Status::ok) {
+    bool ok = true;
+    for (std::size_t k = 0; k < 3; ++k)
+      ok = ok && std::isfinite(cv.linear[k]) && std::isfinite(cv.angular[k]);
+    if (ok) measured().cv = cv;
+  }
+  OperatingState arm;
+  if (read_state_(arm) == Status::ok) {
+    summary_.arm = arm;
+    have_state_ = true;
+  }
+  if (!following()) return Outcome::done();  // enable() and home() judge what they need
+  if (s == Status::disconnected)
+    return Outcome::failed(FaultCode::device_lost, "the arm's import is gone (its gateway stopped)", source);
+  const TimeNs age = cp_time_ < 0 ? arm_config_.stale_timeout + 1 : now() - cp_time_;
+  if (age > arm_config_.stale_timeout)
+    return Outcome::failed(FaultCode::input_stale, "measured_cp stale: the dVRK stopped publishing",
+                           "measured_cp", 0, age);
+  if (summary_.arm.state == OperatingStateValue::fault)
+    return Outcome::failed(FaultCode::device_fault, "the dVRK arm is in FAULT", source);
+  if (summary_.arm.state != OperatingStateValue::enabled)
+    return Outcome::failed(FaultCode::device_disabled, "the dVRK arm left ENABLED", source);
+  if (!summary_.arm.is_homed)
+    return Outcome::failed(FaultCode::device_fault, "the dVRK arm is no longer homed", source);
+  return Outcome::done();
+}
+
+Outcome DvrkArm::send_state(StateCommand c, bool& sent, const char* why) noexcept {
+  if (sent) return Outcome::pending();
+  const Status s = write_state_(c);
+  if (s == Status::disconnected) return Outcome::failed(FaultCode::device_lost, why, source);
+  sent = s == Status::ok;  // a full queue: tried again next cycle
+  return Outcome::pending();
+}
+
+Outcome DvrkArm::enable() {
+  // Nothing known of the arm yet: wait (enable_timeout says when that is too long).
+  if (!have_state_ || cp_time_ < 0) return Outcome::pending();
+  const OperatingState& arm = summary_.arm;
+  // The dVRK takes an `enable` in FAULT but does nothing with it until a `disable`: an operator's
+  // decision, at the arm's console (ours never powers an arm off).
+  if (arm.state == OperatingStateValue::fault)
+    return Outcome::failed(FaultCode::device_fault,
+                           "the dVRK arm is in FAULT: clear it at its console (disable, then enable)",
+                           source);
+  if (arm.state != OperatingStateValue::enabled)
+    return send_state(StateCommand::enable, enable_sent_, "the enable did not reach the arm's import");
+  if (arm.is_busy) return Outcome::pending();  // powering, or homing from the dVRK's console
+  enable_sent_ = false;
+  if (!arm.is_homed) {
+    if (!arm_config_.home)
+      return Outcome::failed(FaultCode::device_disabled,
+                             "not homed: home it from the dVRK console, or set home: true (it moves)",
+                             source);
+    start_homing();  // home() sends `home`, now that it is ENABLED
+  }
+  return Outcome::done();
+}
+
+Outcome DvrkArm::home() {
+  const OperatingState& arm = summary_.arm;
+  // The dVRK homes only an ENABLED arm.
+  if (arm.state != OperatingStateValue::enabled)
+    return Outcome::failed(FaultCode::device_disabled, "the dVRK arm is not ENABLED: enable it before homing",
+                           source);
+  // Homed and idle: done (an operator's `home` to a homed arm sends nothing: it would move it).
+  if (arm.is_homed && !arm.is_busy) {
+    home_sent_ = false;
+    return Outcome::done();
+  }
+  return send_state(StateCommand::home, home_sent_, "the home did not reach the arm's import");
+}
+
+Outcome DvrkArm::write(const Setpoint& s) {
+  if (s.mode == ServoMode::none) {
+    (void)send_safe();
+    return Outcome::done();
+  }
+  // The dVRK takes motion while busy (a servo command cancels a move, disturbs a homing): held
+  // back here instead.
+  if (summary_.arm.is_busy) {
+    ++summary_.held_busy;
+    return Outcome::done();
+  }
+  const Status st = s.mode == ServoMode::cf ? write_cf_(s.wrench) : write_cp_(s.pose);
+  if (st == Status::disconnected)
+    return Outcome::failed(FaultCode::device_lost, "the arm's import is gone (its gateway stopped)", source);
+  if (st != Status::ok) {
+    ++summary_.not_sent;
+    if (++not_sent_in_a_row_ >= max_not_sent)
+      return Outcome::failed(FaultCode::device_error,
+                             "the arm's import takes no commands (its queue stays full)", source);
+    return Outcome::done();
+  }
+  not_sent_in_a_row_ = 0;
+  ++summary_.commands;
+  commanded_ = true;
+  return Outcome::done();
+}
+
+Status DvrkArm::send_safe() noexcept {
+  if (!commanded_) return Status::ok;  // nothing of ours to undo: the arm holds what it had
+  Status s = Status::ok;
+  switch (arm_config_.safe_command) {
+    case SafeCommand::zero_wrench:
+      s = write_cf_(Wrench{});
+      break;
+    case SafeCommand::hold:
+      s = hold_();
+      break;
+    case SafeCommand::servo_cp_measured:
+      s = write_cp_(measured().cp);
+      break;
+  }
+  if (s == Status::ok) {
+    commanded_ = false;
+    ++summary_.safe_commands;
+  }
+  return s;  // not taken (a full queue): tried again in the next write(none)
+}
+
+void DvrkArm::enter_safe_state(SafeReason) {
+  (void)send_safe();
+  enable_sent_ = home_sent_ = false;
+}
+
+bool DvrkArm::accepts(ServoMode m) const noexcept {
+  return m == (arm_config_.kind == ArmKind::psm ? ServoMode::cp : ServoMode::cf);
+}
+
+}  // namespace saw::drivers::dvrk

@@ -1,0 +1,108 @@
+// The dVRK package's type for deployments: each parameter read, range-checked and located.
+#include "saw/drivers/dvrk/registration.hpp"
+
+#include <cstdio>
+
+#include "saw/drivers/dvrk/dvrk_arm.hpp"
+
+namespace saw::drivers::dvrk {
+namespace {
+
+using namespace std::chrono_literals;
+using deploy::Params;
+
+struct DvrkArmSpec {
+  TaskConfig task;
+  DvrkArmConfig arm;
+};
+
+TimeNs duration_in(const Params& p, const std::string& key, TimeNs fallback, TimeNs lo, TimeNs hi,
+                   const char* what) {
+  const TimeNs v = p.get_or<std::chrono::nanoseconds>(key, std::chrono::nanoseconds(fallback)).count();
+  if (v < lo || v > hi) p.fail_at(key, what);
+  return v;
+}
+
+DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
+  DvrkArmSpec s;
+  s.task = deploy::periodic_task(ctx, p, "dvrk_arm");
+  const TimeNs period = s.task.period.count();
+  DvrkArmConfig& c = s.arm;
+  c.kind = p.get_enum<ArmKind>("kind", {{"mtm", ArmKind::mtm}, {"psm", ArmKind::psm}}, ArmKind::mtm);
+  if (!p.has("kind")) p.fail_at("kind", "say which arm this is: mtm or psm");
+  const bool psm = c.kind == ArmKind::psm;
+  c.safe_command = p.get_enum<SafeCommand>("safe_command",
+                                           {{"zero_wrench", SafeCommand::zero_wrench},
+                                            {"hold", SafeCommand::hold},
+                                            {"servo_cp_measured", SafeCommand::servo_cp_measured}},
+                                           psm ? SafeCommand::hold : SafeCommand::zero_wrench);
+  if (psm && c.safe_command == SafeCommand::zero_wrench)
+    p.fail_at("safe_command", "a PSM's is hold or servo_cp_measured (a zero wrench lets it drop)");
+  if (!psm && c.safe_command == SafeCommand::servo_cp_measured)
+    p.fail_at("safe_command", "an MTM's is zero_wrench or hold");
+  c.max_force = p.get_in_range("max_force", 0.1, 20, c.max_force);
+  c.command_timeout =
+      duration_in(p, "command_timeout", 3 * period, period, std::chrono::nanoseconds(1s).count(),
+                  "at least one period and at most 1 s");
+  // The dVRK publishes at 100 Hz by default (its -p 0.01): three samples' worth at least.
+  c.stale_timeout =
+      duration_in(p, "stale_timeout", c.stale_timeout, 3 * period, std::chrono::nanoseconds(2s).count(),
+                  "at least three periods and at most 2 s");
+  c.enable_timeout = duration_in(p, "enable_timeout", c.enable_timeout, period,
+                                 std::chrono::nanoseconds(60s).count(), "in (0, 60 s]");
+  c.home_timeout = duration_in(p, "home_timeout", c.home_timeout, period,
+                               std::chrono::nanoseconds(600s).count(), "in (0, 600 s]");
+  c.home = p.get_or<bool>("home", false);
+  c.start_enabled = p.get_or<bool>("start_enabled", false);
+  if (psm) {
+    c.max_linear_speed = p.get_in_range("max_linear_speed", 1e-3, 2, c.max_linear_speed);
+    c.max_angular_speed = p.get_in_range("max_angular_speed", 1e-3, 20, c.max_angular_speed);
+    if (p.has("workspace")) {
+      const Params w = p.child("workspace");
+      c.workspace_min = w.get<Vec3>("min");
+      c.workspace_max = w.get<Vec3>("max");
+      for (std::size_t k = 0; k < 3; ++k)
+        if (!(c.workspace_min[k] < c.workspace_max[k])) w.fail_at("max", "must be above min on every axis");
+    }
+  }
+  return s;
+}
+
+const char* state_name(OperatingStateValue v) {
+  switch (v) {
+    case OperatingStateValue::disabled:
+      return "DISABLED";
+    case OperatingStateValue::enabled:
+      return "ENABLED";
+    case OperatingStateValue::paused:
+      return "PAUSED";
+    case OperatingStateValue::fault:
+      return "FAULT";
+  }
+  return "?";
+}
+
+std::string summary_line(const DvrkSummary& s) {
+  char b[300];
+  std::snprintf(b, sizeof b,
+                "%llu motion commands, %llu safe commands, %llu held back while the arm was busy, %llu not "
+                "taken by the import, %llu poses refused; the dVRK arm last %s%s%s",
+                static_cast<unsigned long long>(s.commands), static_cast<unsigned long long>(s.safe_commands),
+                static_cast<unsigned long long>(s.held_busy), static_cast<unsigned long long>(s.not_sent),
+                static_cast<unsigned long long>(s.bad_poses), state_name(s.arm.state),
+                s.arm.is_homed ? ", homed" : "", s.arm.is_busy ? ", busy" : "");
+  return b;
+}
+
+}  // namespace
+
+void register_components(deploy::ComponentRegistry& registry) {
+  registry.add("dvrk_arm",
+               "a dVRK arm (MTM: servo_cf; PSM: servo_cp) through the gateway's import of its CRTK topics",
+               parse_dvrk_arm, [](const std::string& name, const DvrkArmSpec& s) {
+                 return std::make_unique<DvrkArm>(name, s.task, s.arm);
+               });
+  registry.add_summary_format<DvrkSummary>(summary_line);
+}
+
+}  // namespace saw::drivers::dvrk

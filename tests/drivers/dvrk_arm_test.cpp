@@ -1,0 +1,315 @@
+// DvrkArm against a scripted stand-in for the gateway's import of a dVRK arm, on the stepped
+// clock: the dVRK's handshake before any motion, a FAULT for each way the arm can go wrong, and
+// the safe command on each stop path, once.
+#include "saw/drivers/dvrk/dvrk_arm.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "fake_dvrk_import.hpp"
+#include "saw/component.hpp"
+#include "saw/crtk_arm.hpp"
+#include "saw/deploy/deployment.hpp"
+#include "saw/drivers/dvrk/registration.hpp"
+#include "saw/manager.hpp"
+
+namespace saw::drivers::dvrk {
+namespace {
+
+using testing::FakeImport;
+
+struct Rig {
+  explicit Rig(DvrkArmConfig c) : arm("arm", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c) {
+    manager.add(import);
+    manager.add(arm);
+    manager.connect("arm", "dvrk", "import", "dvrk");
+    manager.start_stepped();
+  }
+  ~Rig() { manager.stop(); }
+  // n periods; the import publishing unless the dVRK went silent.
+  void step(int n = 1, bool publish = true) {
+    for (int i = 0; i < n; ++i) {
+      if (publish) import.publish(t);
+      manager.step_until(t);
+      t += 1'000'000;
+    }
+  }
+  void state_command(StateCommand c) { arm.provided("arm")->find_command("state_command")->execute(&c); }
+  void servo_cf(Vec3 f) {
+    Wrench w;
+    w.force = f;
+    arm.provided("arm")->find_command("servo_cf")->execute(&w);
+  }
+  void servo_cp(const Pose& p) { arm.provided("arm")->find_command("servo_cp")->execute(&p); }
+  OperatingStateValue state() const { return arm.operating_state().state; }
+
+  FakeImport import{"import"};
+  DvrkArm arm;
+  Manager manager;
+  TimeNs t = 0;
+};
+
+DvrkArmConfig mtm(bool home = true) {
+  DvrkArmConfig c;
+  c.kind = ArmKind::mtm;
+  c.home = home;
+  return c;
+}
+
+DvrkArmConfig psm(SafeCommand safe = SafeCommand::hold) {
+  DvrkArmConfig c;
+  c.kind = ArmKind::psm;
+  c.safe_command = safe;
+  c.home = true;
+  return c;
+}
+
+// Enables and waits until following (the import powers and homes the arm), a wrench offered
+// each cycle all along.
+void enable_mtm(Rig& r) {
+  r.state_command(StateCommand::enable);
+  for (int i = 0; i < 100 && !r.arm.following(); ++i) {
+    r.servo_cf({0.5, 0, 0});
+    r.step();
+  }
+  ASSERT_TRUE(r.arm.following()) << "state " << static_cast<int>(r.state());
+}
+
+TEST(DvrkArm, NothingButStateCommandsReachTheArmBeforeItIsEnabledHomedAndIdle) {
+  Rig r(mtm());
+  r.step(3);
+  enable_mtm(r);
+  ASSERT_GE(r.import.received.size(), 2u);
+  EXPECT_EQ(r.import.received[0].what, "enable");
+  EXPECT_EQ(r.import.received[1].what, "home");
+  EXPECT_EQ(r.import.received[1].arm.state, OperatingStateValue::enabled) << "home only once ENABLED";
+  EXPECT_EQ(r.import.count("enable"), 1) << "sent once, not every cycle";
+  EXPECT_EQ(r.import.count("home"), 1);
+  for (const auto& x : r.import.received)
+    if (x.what == "servo_cf" &&
+        !(x.arm.state == OperatingStateValue::enabled && x.arm.is_homed && !x.arm.is_busy))
+      ADD_FAILURE() << "a wrench reached the arm while it was " << static_cast<int>(x.arm.state)
+                    << (x.arm.is_homed ? " homed" : " not homed") << (x.arm.is_busy ? " busy" : "");
+  const int before = r.import.count("servo_cf");
+  for (int i = 0; i < 5; ++i) {
+    r.servo_cf({0.5, 0, 0});
+    r.step();
+  }
+  EXPECT_EQ(r.import.count("servo_cf"), before + 5);
+  EXPECT_EQ(r.import.received.back().wrench.force[0], 0.5);
+  EXPECT_TRUE(r.import.received.back().arm.is_homed);
+}
+
+TEST(DvrkArm, AnArmNotHomedIsRefusedUnlessTheDeploymentLetsItHome) {
+  Rig r(mtm(/*home=*/false));
+  r.state_command(StateCommand::enable);
+  r.step(20);
+  EXPECT_EQ(r.state(), OperatingStateValue::fault);
+  EXPECT_EQ(r.arm.fault().code, FaultCode::device_disabled);
+  EXPECT_EQ(r.import.count("home"), 0) << "homing moves the arm: never unasked";
+}
+
+TEST(DvrkArm, AnArmInFaultIsNotEnabledButSaidToBeClearedAtItsConsole) {
+  Rig r(mtm());
+  r.import.state = {OperatingStateValue::fault, true, false};
+  r.step(2);
+  r.state_command(StateCommand::enable);
+  r.step(5);
+  EXPECT_EQ(r.state(), OperatingStateValue::fault);
+  EXPECT_EQ(r.arm.fault().code, FaultCode::device_fault);
+  EXPECT_EQ(r.import.count("enable"), 0) << "the dVRK ignores an enable in FAULT until a disable";
+}
+
+TEST(DvrkArm, AnArmAlreadyEnabledAndHomedIsFollowedWithoutACommand) {
+  Rig r(mtm(/*home=*/false));
+  r.import.state = {OperatingStateValue::enabled, true, false};
+  r.step(2);
+  enable_mtm(r);
+  EXPECT_EQ(r.import.count("enable"), 0);
+  EXPECT_EQ(r.import.count("home"), 0);
+}
+
+TEST(DvrkArm, AnArmThatLeavesEnabledFaultsTheDeviceAndGetsOneZeroWrench) {
+  Rig r(mtm());
+  enable_mtm(r);
+  r.servo_cf({1, 0, 0});
+  r.step();
+  r.import.state.state = OperatingStateValue::disabled;  // the dVRK's console powered it off
+  for (int i = 0; i < 10; ++i) {
+    r.servo_cf({1, 0, 0});
+    r.step();
+  }
+  EXPECT_EQ(r.state(), OperatingStateValue::fault);
+  EXPECT_EQ(r.arm.fault().code, FaultCode::device_disabled);
+  const auto& last = r.import.received.back();
+  EXPECT_EQ(last.what, "servo_cf");
+  EXPECT_EQ(last.wrench.force[0], 0.0) << "the safe command is the last thing sent";
+  EXPECT_EQ(r.arm.summary().safe_commands, 1u) << "once, not every cycle";
+}
+
+TEST(DvrkArm, AnArmInFaultOrUnhomedFaultsTheDevice) {
+  for (const bool fault : {true, false}) {
+    Rig r(mtm());
+    enable_mtm(r);
+    if (fault)
+      r.import.state.state = OperatingStateValue::fault;
+    else
+      r.import.state.is_homed = false;
+    r.step(3);
+    EXPECT_EQ(r.state(), OperatingStateValue::fault);
+    EXPECT_EQ(r.arm.fault().code, FaultCode::device_fault);
+  }
+}
+
+TEST(DvrkArm, ADvrkThatStopsPublishingFaultsAtTheStaleTimeout) {
+  DvrkArmConfig c = mtm();
+  c.stale_timeout = 20'000'000;
+  Rig r(c);
+  enable_mtm(r);
+  int cycles = 0;
+  while (r.state() != OperatingStateValue::fault && cycles < 100) {
+    r.servo_cf({1, 0, 0});
+    r.step(1, /*publish=*/false);
+    ++cycles;
+  }
+  EXPECT_EQ(r.arm.fault().code, FaultCode::input_stale);
+  EXPECT_GE(cycles, 20);
+  EXPECT_LE(cycles, 22);
+  EXPECT_EQ(r.import.received.back().wrench.force[0], 0.0);
+}
+
+TEST(DvrkArm, WhenCommandsStopTheArmGetsOneZeroWrench) {
+  Rig r(mtm());
+  enable_mtm(r);
+  r.servo_cf({1, 0, 0});
+  r.step();
+  const auto sent = r.import.received.size();
+  r.step(50);  // the teleoperation went silent
+  // The last command stands until the watchdog (command_timeout: 3 periods), then one safe
+  // command, then nothing.
+  ASSERT_GT(r.import.received.size(), sent);
+  ASSERT_LE(r.import.received.size(), sent + 4);
+  int zeros = 0;
+  for (auto i = sent; i < r.import.received.size(); ++i) zeros += r.import.received[i].wrench.force[0] == 0.0;
+  EXPECT_EQ(zeros, 1);
+  EXPECT_EQ(r.import.received.back().wrench.force[0], 0.0);
+  EXPECT_EQ(r.arm.watchdog_trips(), 1u);
+  EXPECT_EQ(r.state(), OperatingStateValue::enabled) << "a pause in commands is not a fault";
+}
+
+TEST(DvrkArm, MotionIsHeldBackWhileTheArmIsBusy) {
+  Rig r(mtm());
+  enable_mtm(r);
+  r.import.state.is_busy = true;
+  r.step();
+  const int before = r.import.count("servo_cf");
+  for (int i = 0; i < 5; ++i) {
+    r.servo_cf({1, 0, 0});
+    r.step();
+  }
+  EXPECT_EQ(r.import.count("servo_cf"), before);
+  EXPECT_GE(r.arm.summary().held_busy, 5u);
+}
+
+TEST(DvrkArm, APsmFollowsPosesAndHoldsOnDisableAndStop) {
+  Rig r(psm());
+  r.import.pose.position = {0.01, 0, -0.1};
+  r.state_command(StateCommand::enable);
+  r.step(40);
+  ASSERT_TRUE(r.arm.following());
+  Pose p = r.import.pose;
+  for (int i = 0; i < 5; ++i) {
+    p.position[0] += 0.0001;  // 0.1 mm a cycle: 0.1 m/s
+    r.servo_cp(p);
+    r.step();
+  }
+  EXPECT_EQ(r.import.count("servo_cp"), 5);
+  EXPECT_NEAR(r.import.received.back().pose.position[0], 0.0105, 1e-12);
+  Pose jump = p;
+  jump.position[0] += 0.01;  // 1 cm in a cycle
+  r.servo_cp(jump);
+  r.step();
+  EXPECT_EQ(r.import.count("servo_cp"), 5) << "a step faster than max_linear_speed never leaves";
+  EXPECT_EQ(r.import.count("hold"), 1) << "the refusal's safe output: hold";
+  r.servo_cp(p);
+  r.step();
+  r.state_command(StateCommand::disable);
+  r.step();
+  EXPECT_EQ(r.import.count("hold"), 2);
+  EXPECT_EQ(r.import.count("other"), 0) << "our disable never powers the dVRK arm off";
+}
+
+TEST(DvrkArm, APsmWithoutHoldGetsItsMeasuredPose) {
+  Rig r(psm(SafeCommand::servo_cp_measured));
+  r.import.pose.position = {0.02, 0.01, -0.12};
+  r.import.follows = false;
+  r.state_command(StateCommand::enable);
+  r.step(40);
+  ASSERT_TRUE(r.arm.following());
+  Pose p = r.import.pose;
+  p.position[2] += 0.0001;
+  r.servo_cp(p);
+  r.step();
+  r.import.pose.position[2] = -0.125;  // pushed away from its goal (a collision, a hand)
+  r.step(10);                          // commands stop
+  const auto& last = r.import.received.back();
+  EXPECT_EQ(last.what, "servo_cp");
+  EXPECT_EQ(last.pose.position[2], -0.125) << "where it was measured, not the last goal";
+  EXPECT_EQ(r.import.count("hold"), 0);
+}
+
+TEST(DvrkArm, AWrongKindOfCommandIsRefused) {
+  Rig r(psm());
+  EXPECT_EQ(r.arm.provided("arm")->find_command("servo_cf"), nullptr) << "a PSM takes poses";
+  Rig m(mtm());
+  EXPECT_EQ(m.arm.provided("arm")->find_command("servo_cp"), nullptr) << "an MTM takes wrenches";
+}
+
+TEST(DvrkArm, AnUnconnectedArmIsAFailedStartSayingWhy) {
+  DvrkArm a("alone", TaskConfig::periodic(std::chrono::milliseconds(1), 0), mtm());
+  a.state_table().finalize();
+  try {
+    a.startup();
+    ADD_FAILURE() << "started without its import";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("not connected to the arm's import"), std::string::npos) << e.what();
+  }
+}
+
+// A deployment's mistakes name file, line and key.
+TEST(DvrkArmDeployment, ParameterErrorsNameFileLineAndKey) {
+  deploy::ComponentRegistry registry;
+  register_components(registry);
+  const std::string file =
+      "deployment: {name: d, clock: stepped}\ncomponents:\n  - name: psm1\n    type: dvrk_arm\n"
+      "    task: {period: 1ms}\n    params: ";
+  const std::pair<const char*, const char*> cases[] = {
+      {"{safe_command: hold}", "key 'components[0].params.kind': say which arm this is: mtm or psm"},
+      {"{kind: ecm}", "key 'components[0].params.kind': 'ecm' is not one of: mtm, psm"},
+      {"{kind: psm, safe_command: zero_wrench}", "key 'components[0].params.safe_command': a PSM's is hold"},
+      {"{kind: mtm, safe_command: servo_cp_measured}",
+       "key 'components[0].params.safe_command': an MTM's is"},
+      {"{kind: mtm, stale_timeout: 1ms}", "key 'components[0].params.stale_timeout': at least three periods"},
+      {"{kind: mtm, max_force: 50}", "key 'components[0].params.max_force'"},
+      {"{kind: psm, workspace: {min: [0, 0, 0], max: [1, -1, 1]}}",
+       "key 'components[0].params.workspace.max': must be above min"},
+      {"{kind: mtm, max_linear_speed: 1}", "key 'components[0].params.max_linear_speed': unknown parameter"},
+  };
+  for (const auto& [params, expect] : cases) {
+    try {
+      (void)deploy::make_deployment(file + params + "\n", "d.yaml", registry, "");
+      ADD_FAILURE() << "no error for " << params;
+    } catch (const deploy::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("d.yaml:6:", 0), 0u) << what;
+      EXPECT_NE(what.find(expect), std::string::npos) << what << "\nexpected: " << expect;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace saw::drivers::dvrk

@@ -1,0 +1,90 @@
+// FakeImport: a scripted stand-in for the gateway's import of a dVRK arm (its "dvrk" interface),
+// playing the dVRK's operating-state machine and recording what reached it.
+#pragma once
+
+#include <array>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "saw/component.hpp"
+#include "saw/crtk_arm.hpp"
+
+namespace saw::drivers::dvrk::testing {
+
+// What the import serves of a dVRK 2.x arm, played as the dVRK's state machine does (its
+// operating_state: DISABLED → enable → busy while powering → ENABLED; home only when ENABLED,
+// busy while homing), recording every command that reached it, with the arm's state then.
+class FakeImport : public Component {
+ public:
+  struct Received {
+    std::string_view what;  // "enable", "home", "disable", "servo_cf", "servo_cp", "hold"
+    OperatingState arm;
+    Wrench wrench{};
+    Pose pose{};
+  };
+
+  explicit FakeImport(std::string name) : Component(std::move(name)) {
+    namespace arm = crtk::arm;
+    auto& p = provide("dvrk");
+    crtk::provide(p, arm::measured_cp, state_table(), &cp_);
+    crtk::provide(p, arm::measured_cv, state_table(), &cv_);
+    crtk::provide(p, arm::operating_state, state_table(), &state_);
+    crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { got({"servo_cf", state, w, {}}); });
+    crtk::provide(p, arm::servo_cp, [this](const Pose& x) {
+      got({"servo_cp", state, {}, x});
+      if (follows) pose = x;  // a PSM reaches its servo goal by its next sample
+    });
+    crtk::provide(p, arm::state_command, [this](const StateCommand& c) { command(c); });
+    p.add_command_void("hold", [this] { got({"hold", state, {}, {}}); });
+  }
+
+  // One sample of the arm as the import would have it at t (the dVRK publishing).
+  void publish(TimeNs t) {
+    if (powering_ > 0 && --powering_ == 0) state = {OperatingStateValue::enabled, state.is_homed, false};
+    if (homing_ > 0 && --homing_ == 0) state = {OperatingStateValue::enabled, true, false};
+    cp_ = pose;
+    state_ = state;
+    state_table().advance(t);
+  }
+  int count(std::string_view what) const {
+    for (std::size_t i = 0; i < kinds.size(); ++i)
+      if (kinds[i] == what) return counts[i];
+    return -1;
+  }
+
+  OperatingState state{OperatingStateValue::disabled, false, false};
+  Pose pose{};
+  int power_cycles = 5, home_cycles = 10;
+  bool follows = true;  // measured_cp is the last servo_cp goal
+  bool record = true;   // every command kept (allocates); off, only counted (the RT guard's runs)
+  std::vector<Received> received;
+
+ private:
+  static constexpr std::array<std::string_view, 6> kinds{"enable",   "home",     "other",
+                                                         "servo_cf", "servo_cp", "hold"};
+  std::array<int, kinds.size()> counts{};
+  void got(const Received& r) {
+    for (std::size_t i = 0; i < kinds.size(); ++i)
+      if (kinds[i] == r.what) ++counts[i];
+    if (record) received.push_back(r);
+  }
+  void command(StateCommand c) {
+    got({c == StateCommand::enable ? "enable" : c == StateCommand::home ? "home" : "other", state, {}, {}});
+    if (c == StateCommand::enable && state.state != OperatingStateValue::enabled) {
+      state.is_busy = true;
+      powering_ = power_cycles;
+    }
+    // The dVRK homes only an ENABLED arm (its ValidCommand table).
+    if (c == StateCommand::home && state.state == OperatingStateValue::enabled) {
+      state.is_busy = true;
+      homing_ = home_cycles;
+    }
+  }
+  int powering_ = 0, homing_ = 0;
+  Pose cp_{};
+  Twist cv_{};
+  OperatingState state_{};
+};
+
+}  // namespace saw::drivers::dvrk::testing
