@@ -144,6 +144,41 @@ TEST(Deployment, EveryPeriodicTaskHasADeadlinePolicyUnlessItSaysOff) {
   EXPECT_EQ(policy("teleop").window, 500u) << "1 s of 2 ms periods";
 }
 
+// `deployment: {deadline: ...}` is every periodic task's policy unless its `task:` says another;
+// a task's keys override the deployment's one by one.
+TEST(Deployment, TheDeploymentsDeadlineIsEveryTasksDefault) {
+  const std::string head = "deployment: {name: t, clock: stepped}";
+  const std::string teleop_task = "task: {period: 1ms}\n    params: {gains";
+  std::string text = good;
+  text.replace(text.find(head), head.size(),
+               "deployment: {name: t, clock: stepped, deadline: {in_a_row: 5, share: 0.02, window: 2s}}");
+  text.replace(text.find(teleop_task), teleop_task.size(),
+               "task: {period: 2ms, deadline: {in_a_row: 7}}\n    params: {gains");
+  text.replace(text.find("task: {period: 1ms}"), 19, "task: {period: 1ms, deadline: off}");
+  auto d = build(text, "cfg.yaml", registry());
+  const auto policy = [&](const char* name) { return d.find<saw::Task>(name)->config().deadline; };
+  EXPECT_FALSE(policy("master").enabled()) << "its own deadline: off";
+  EXPECT_EQ(policy("slave").in_a_row, 5u) << "the deployment's";
+  EXPECT_EQ(policy("slave").share, 0.02);
+  EXPECT_EQ(policy("slave").window, 2000u) << "2 s of 1 ms periods";
+  EXPECT_EQ(policy("teleop").in_a_row, 7u) << "its own key";
+  EXPECT_EQ(policy("teleop").share, 0.02) << "the deployment's key";
+  EXPECT_EQ(policy("teleop").window, 1000u) << "2 s of 2 ms periods";
+
+  std::string off = good;
+  off.replace(off.find(head), head.size(), "deployment: {name: t, clock: stepped, deadline: off}");
+  auto o = build(off, "cfg.yaml", registry());
+  EXPECT_FALSE(o.find<saw::Task>("slave")->config().deadline.enabled());
+
+  const Case cases[] = {
+      {head.c_str(), "deployment: {name: t, clock: stepped, deadline: {window: 5ms}}",
+       R"(^cfg\.yaml:1:\d+: key 'deployment\.deadline\.window': the share is judged over at least 10 periods)"},
+      {head.c_str(), "deployment: {name: t, clock: stepped, deadline: sometimes}",
+       R"(^cfg\.yaml:1:\d+: key 'deployment\.deadline': expected off, or)"},
+  };
+  for (const auto& c : cases) expect_error(c);
+}
+
 // `history:` sizes a task's state table: how far a recorder or another history reader may fall
 // behind before it loses rows.
 TEST(Deployment, ATasksHistoryIsAsLongAsItSays) {

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -17,37 +18,66 @@ Location location_of(const YAML::Node& n, const std::string& file, const std::st
   return {file, line, column, key};
 }
 
-// `deadline:` under `task:`: off, or {in_a_row, share, window}; the standard policy unless said.
-DeadlinePolicy parse_deadline(const Params& t, std::chrono::nanoseconds period) {
+// A deadline policy as written, before a task's period turns its window into periods: the
+// deployment's default (`deployment: {deadline: ...}`), or the standard one.
+struct DeadlineDefault {
+  bool off = false;
+  std::uint32_t in_a_row = DeadlinePolicy::standard().in_a_row;
+  double share = DeadlinePolicy::standard().share;
+  std::optional<std::chrono::nanoseconds> window;  // none: the standard number of periods
+  std::optional<Params> at;                        // where it was written, for errors
+};
+
+// `deadline:` of `d` (a `task:` or the `deployment:` mapping): off, or {in_a_row, share, window},
+// each key defaulting to `base`'s.
+DeadlineDefault parse_deadline_keys(const Params& t, const DeadlineDefault& base) {
+  if (!t.has("deadline")) {
+    t.mark_used("deadline");
+    return base;
+  }
+  DeadlineDefault r = base;
+  if (!t.has_map("deadline")) {
+    // `off`: lateness is counted and logged, never a fault.
+    if (const auto v = t.get<std::string>("deadline"); v == "off" || v == "false") {
+      r.off = true;
+      return r;
+    }
+    t.fail_at("deadline", "expected off, or {in_a_row: N, share: S, window: T}");
+  }
+  const Params d = t.child("deadline");
+  r.off = false;
+  r.at = d;
+  const double in_a_row = d.get_in_range("in_a_row", 0, 1e6, base.in_a_row);
+  if (in_a_row != static_cast<double>(static_cast<std::uint32_t>(in_a_row)))
+    d.fail_at("in_a_row", "expected a whole number of periods (0: not checked)");
+  r.in_a_row = static_cast<std::uint32_t>(in_a_row);
+  r.share = d.get_in_range("share", 0, 0.99, base.share);
+  if (d.has("window")) r.window = d.get<std::chrono::nanoseconds>("window");
+  return r;
+}
+
+// A task's policy: its `deadline:` over the deployment's default; the window in its periods.
+DeadlinePolicy parse_deadline(const Params& t, std::chrono::nanoseconds period, const DeadlineDefault& base) {
   if (period.count() == 0) {
     if (t.has("deadline")) t.fail_at("deadline", "a continuous task (no period) has no deadline");
     t.mark_used("deadline");
     return {};
   }
-  if (!t.has("deadline")) {
-    t.mark_used("deadline");
-    return DeadlinePolicy::standard();
+  const DeadlineDefault d = parse_deadline_keys(t, base);
+  if (d.off) return {};
+  DeadlinePolicy policy{d.in_a_row, d.share, DeadlinePolicy::standard().window};
+  if (d.window) {
+    if (*d.window < 10 * period || *d.window > 3600 * std::chrono::seconds(1)) {
+      const std::string why = "the share is judged over at least 10 periods and at most an hour";
+      if (d.at) d.at->fail_at("window", why + " (a " + std::to_string(period.count()) + " ns period here)");
+      t.fail_at("deadline", why);
+    }
+    policy.window = static_cast<std::uint32_t>(*d.window / period);
   }
-  if (!t.has_map("deadline")) {
-    // `off`: lateness is counted and logged, never a fault.
-    if (const auto v = t.get<std::string>("deadline"); v == "off" || v == "false") return {};
-    t.fail_at("deadline", "expected off, or {in_a_row: N, share: S, window: T}");
-  }
-  const Params d = t.child("deadline");
-  DeadlinePolicy policy = DeadlinePolicy::standard();
-  const double in_a_row = d.get_in_range("in_a_row", 0, 1e6, policy.in_a_row);
-  if (in_a_row != static_cast<double>(static_cast<std::uint32_t>(in_a_row)))
-    d.fail_at("in_a_row", "expected a whole number of periods (0: not checked)");
-  policy.in_a_row = static_cast<std::uint32_t>(in_a_row);
-  policy.share = d.get_in_range("share", 0, 0.99, policy.share);
-  const auto window = d.get_or<std::chrono::nanoseconds>("window", policy.window * period);
-  if (window < 10 * period || window > 3600 * std::chrono::seconds(1))
-    d.fail_at("window", "the share is judged over at least 10 periods and at most an hour");
-  policy.window = static_cast<std::uint32_t>(window / period);
   return policy;
 }
 
-std::optional<TaskConfig> parse_task(Params& p) {
+std::optional<TaskConfig> parse_task(Params& p, const DeadlineDefault& deadline) {
   if (!p.has("task")) {
     (void)p.child("task");
     return std::nullopt;
@@ -62,7 +92,7 @@ std::optional<TaskConfig> parse_task(Params& p) {
   c.offset = t.get_or<std::chrono::nanoseconds>("offset", std::chrono::nanoseconds(0));
   if (c.offset.count() < 0 || (c.offset.count() != 0 && c.offset >= c.period))
     t.fail_at("offset", "the phase must be at least 0 and less than the period");
-  c.deadline = parse_deadline(t, c.period);
+  c.deadline = parse_deadline(t, c.period, deadline);
   c.history = t.get_or<std::chrono::nanoseconds>("history", std::chrono::nanoseconds(0));
   if (c.history.count() != 0 &&
       (c.period.count() == 0 || c.history > 60 * std::chrono::seconds(1) || c.history < c.period))
@@ -95,7 +125,7 @@ void load_plugins(const YAML::Node& root, const Params& top, const std::string& 
 // The `components:` list: each parsed by its type's parser; another host's only checked for
 // its name and host.
 void parse_components(const YAML::Node& root, const Params& top, const ComponentRegistry& registry,
-                      Placement& place, DeploymentSpec& spec) {
+                      Placement& place, const DeadlineDefault& deadline, DeploymentSpec& spec) {
   top.mark_used("components");
   const YAML::Node list = root["components"];
   if (!list.IsDefined() || !list.IsSequence() || list.size() == 0)
@@ -126,7 +156,7 @@ void parse_components(const YAML::Node& root, const Params& top, const Component
     } else if (entry.has("host")) {
       entry.fail_at("host", "placing a component needs a hosts: section");
     }
-    ComponentContext ctx{name, parse_task(entry), spec.directory};
+    ComponentContext ctx{name, parse_task(entry, deadline), spec.directory};
     Params params = entry.child("params");
     std::any config;
     try {
@@ -309,7 +339,10 @@ DeploymentSpec parse_tree(const YAML::Node& root, const std::string& file, Compo
   for (const auto& [key, section] : registry.sections())
     host_keys.insert(host_keys.end(), section.host_keys.begin(), section.host_keys.end());
   Placement place = parse_placement(root, top, host, host_keys);
-  parse_components(root, top, registry, place, spec);
+  // Every periodic task's deadline policy unless its `task:` says another (a qualified PC
+  // tightens them all here).
+  const DeadlineDefault deadline = parse_deadline_keys(head, DeadlineDefault{});
+  parse_components(root, top, registry, place, deadline, spec);
   parse_exports(root, top, spec);
   parse_sections(root, top, place, registry, spec);
   parse_connections(root, top, place, spec);
