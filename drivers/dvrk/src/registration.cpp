@@ -68,20 +68,6 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
   return s;
 }
 
-const char* state_name(OperatingStateValue v) {
-  switch (v) {
-    case OperatingStateValue::disabled:
-      return "DISABLED";
-    case OperatingStateValue::enabled:
-      return "ENABLED";
-    case OperatingStateValue::paused:
-      return "PAUSED";
-    case OperatingStateValue::fault:
-      return "FAULT";
-  }
-  return "?";
-}
-
 std::string summary_line(const DvrkSummary& s) {
   char b[300];
   std::snprintf(b, sizeof b,
@@ -89,7 +75,7 @@ std::string summary_line(const DvrkSummary& s) {
                 "taken by the import, %llu poses refused; the dVRK arm last %s%s%s",
                 static_cast<unsigned long long>(s.commands), static_cast<unsigned long long>(s.safe_commands),
                 static_cast<unsigned long long>(s.held_busy), static_cast<unsigned long long>(s.not_sent),
-                static_cast<unsigned long long>(s.bad_poses), state_name(s.arm.state),
+                static_cast<unsigned long long>(s.bad_poses), to_string(s.arm.state).data(),
                 s.arm.is_homed ? ", homed" : "", s.arm.is_busy ? ", busy" : "");
   return b;
 }
