@@ -15,6 +15,7 @@ namespace {
 
 using saw::deploy::ConfigError;
 using saw::gateway::GatewaySettings;
+using saw::gateway::ImportSettings;
 
 saw::deploy::ComponentRegistry& registry() {
   static saw::deploy::ComponentRegistry r = [] {
@@ -104,7 +105,14 @@ TEST(GatewaySection, ItsSerializedFormReadsBackTheSameThroughTheSameParser) {
   GatewaySettings s;
   s.attach = {"a", "b"};
   s.mirrors = {"m=local"};
-  s.imports = {{"MTML", "MTML"}, {"PSM", "PSM1"}};
+  ImportSettings mtm, psm;
+  mtm.component = mtm.arm = "MTML";
+  psm.component = "PSM";
+  psm.arm = "PSM1";
+  psm.commands = {"servo_cp", "hold"};
+  psm.safe_command = "servo_cp_measured";
+  psm.command_timeout = 20'000'000;
+  s.imports = {mtm, psm};
   s.ros_namespace = "dvrk";
   s.clutch_topic = "";
   s.operator_present_topic = "rt/head";
@@ -122,6 +130,34 @@ TEST(GatewaySection, ItsSerializedFormReadsBackTheSameThroughTheSameParser) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("'domian': unknown parameter"), std::string::npos) << e.what();
   }
+}
+
+TEST(GatewaySection, AnImportThatSendsCommandsSaysWhichAndItsSafeCommandFollows) {
+  const auto read = [&](const std::string& entry) {
+    return settings_of(parse(std::string(good) + exported + "gateway:\n  import: [" + entry + "]\n"))
+        .imports.at(0);
+  };
+  const ImportSettings mtm = read("{component: MTML, commands: [servo_cf, hold]}");
+  EXPECT_EQ(mtm.safe_command, "zero_wrench") << "an MTM's wrench is zeroed";
+  EXPECT_EQ(mtm.command_timeout, 50'000'000);
+  EXPECT_EQ(read("{component: PSM1, commands: [servo_cp, hold]}").safe_command, "hold");
+  EXPECT_EQ(read("{component: PSM1, commands: [servo_cp]}").safe_command, "servo_cp_measured");
+  EXPECT_TRUE(read("{component: MTML}").commands.empty()) << "read-only unless it says";
+  const auto bad = [&](const std::string& entry, const std::string& pattern) {
+    expect_error(exported + "gateway:\n  import: [" + entry + "]\n", pattern.c_str());
+  };
+  bad("{component: MTML, commands: [servo_jf]}",
+      R"(^cfg\.yaml:18:\d+: key 'gateway\.import\[0\]\.commands': 'servo_jf' is not one of)");
+  bad("{component: MTML, commands: [servo_cf, servo_cp]}",
+      R"(key 'gateway\.import\[0\]\.commands': servo_cf .* not both)");
+  bad("{component: PSM1, commands: [servo_cp], safe_command: hold}",
+      R"(key 'gateway\.import\[0\]\.safe_command': hold needs hold in commands)");
+  bad("{component: MTML, commands: [servo_cf], safe_command: brake}",
+      R"(key 'gateway\.import\[0\]\.safe_command': 'brake' is not one of)");
+  bad("{component: MTML, safe_command: hold}",
+      R"(key 'gateway\.import\[0\]\.safe_command': only for an import that sends commands)");
+  bad("{component: MTML, commands: [servo_cf], command_timeout: 1ms}",
+      R"(key 'gateway\.import\[0\]\.command_timeout': must be from 0\.002 to 1 s)");
 }
 
 TEST(GatewaySection, OffLoopbackNeedsAnEnclaveOrSaysSecurityNone) {

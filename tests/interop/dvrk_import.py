@@ -33,7 +33,10 @@ class SyntheticMaster(threading.Thread):
         p = client.participant
         self.cp = DataWriter(p, client._topic(f"rt/{arm}/measured_cp", msgs.PoseStamped), qos=qos)
         self.cv = DataWriter(p, client._topic(f"rt/{arm}/measured_cv", msgs.TwistStamped), qos=qos)
-        self.state = DataWriter(p, client._topic(f"rt/{arm}/operating_state", msgs.OperatingState), qos=qos)
+        # The dVRK latches its operating state (transient local), as the import requires.
+        latched = Qos(Policy.Reliability.Reliable(10**9), Policy.History.KeepLast(1),
+                      Policy.Durability.TransientLocal, Policy.DataRepresentation(use_cdrv0_representation=True))
+        self.state = DataWriter(p, client._topic(f"rt/{arm}/operating_state", msgs.OperatingState), qos=latched)
         self.running = True
         self.sent = 0
 

@@ -31,14 +31,7 @@ namespace params {
 
 TimeNs duration(const Params& p, const std::string& key, std::chrono::nanoseconds fallback,
                 std::chrono::nanoseconds lo, std::chrono::nanoseconds hi) {
-  const auto d = p.get_or<std::chrono::nanoseconds>(key, fallback);
-  if (d < lo || d > hi) {
-    char b[128];
-    std::snprintf(b, sizeof b, "must be from %g to %g s", static_cast<double>(lo.count()) * 1e-9,
-                  static_cast<double>(hi.count()) * 1e-9);
-    p.fail_at(key, b);
-  }
-  return d.count();
+  return p.get_duration_in(key, fallback, lo, hi);
 }
 
 cia402::Mode parse_mode(const Params& p) {

@@ -105,8 +105,8 @@ Outcome DvrkArm::read() {
     return Outcome::failed(FaultCode::device_lost, "the arm's import is gone (its gateway stopped)", source);
   const TimeNs age = cp_time_ < 0 ? arm_config_.stale_timeout + 1 : now() - cp_time_;
   if (age > arm_config_.stale_timeout)
-    return Outcome::failed(FaultCode::input_stale, "measured_cp stale: the dVRK stopped publishing",
-                           "measured_cp", 0, age);
+    return Outcome::failed(FaultCode::input_stale, "stale: the dVRK stopped publishing", "measured_cp", 0,
+                           age);
   if (summary_.arm.state == OperatingStateValue::fault)
     return Outcome::failed(FaultCode::device_fault, "the dVRK arm is in FAULT", source);
   if (summary_.arm.state != OperatingStateValue::enabled)

@@ -18,9 +18,8 @@ struct DvrkArmSpec {
 
 TimeNs duration_in(const Params& p, const std::string& key, TimeNs fallback, TimeNs lo, TimeNs hi,
                    const char* what) {
-  const TimeNs v = p.get_or<std::chrono::nanoseconds>(key, std::chrono::nanoseconds(fallback)).count();
-  if (v < lo || v > hi) p.fail_at(key, what);
-  return v;
+  using ns = std::chrono::nanoseconds;
+  return p.get_duration_in(key, ns(fallback), ns(lo), ns(hi), what);
 }
 
 DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {

@@ -60,8 +60,8 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
     imports_ = std::make_unique<Imports>();
     for (const auto& i : config_.imports) {
       imports_->arms.push_back(std::make_unique<ImportedArm>(ctx, i));
-      imports_->exporters.push_back(
-          std::make_unique<bridge::Exporter>(*imports_->arms.back(), std::string(crtk::arm::interface_name)));
+      imports_->exporters.push_back(std::make_unique<bridge::Exporter>(
+          *imports_->arms.back(), imports_->arms.back()->interface_name()));
       imports_->manager.add(*imports_->arms.back());
       const auto& e = imports_->arms.back()->endpoints();
       endpoints_.insert(endpoints_.end(), e.begin(), e.end());
@@ -95,7 +95,13 @@ Gateway::~Gateway() {
   // the manifest, which reads them all), and before the DDS entities go.
   for (auto& a : attachments_) a->stop();
   attachments_.clear();
-  if (imports_ != nullptr) imports_->manager.stop();
+  if (imports_ != nullptr) {
+    imports_->manager.stop();
+    // An arm the client (saw-rt) was moving gets its safe command from here, whatever ended the
+    // client: the dVRK keeps a last wrench or goal for ever (docs/devices.md).
+    const TimeNs deadline = monotonic_now() + 300'000'000;
+    for (auto& a : imports_->arms) a->leave_safely(deadline);
+  }
   imports_.reset();
   delete_participant(dds_->context.participant);
 }

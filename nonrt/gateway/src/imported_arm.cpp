@@ -1,5 +1,8 @@
 #include "imported_arm.hpp"
 
+#include <algorithm>
+#include <cstdio>
+
 namespace saw::gateway {
 namespace {
 
@@ -17,7 +20,10 @@ fdds::DataReader* ImportedArm::reader(M member, const std::string& topic, Flow f
 }
 
 ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
-    : Task(config.component, TaskConfig::periodic(std::chrono::milliseconds(1), 0)), dds_(dds) {
+    : Task(config.component, TaskConfig::periodic(std::chrono::milliseconds(1), 0)),
+      dds_(dds),
+      config_(config),
+      interface_(config.commands.empty() ? std::string(crtk::arm::interface_name) : "dvrk") {
   namespace arm = crtk::arm;
   const std::string prefix =
       "rt/" + (config.ros_namespace.empty() ? "" : config.ros_namespace + "/") + config.arm + "/";
@@ -26,14 +32,16 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
   cp_ = topic(arm::measured_cp);
   cv_ = topic(arm::measured_cv);
   js_ = topic(arm::measured_js);
-  state_ =
-      reader(arm::operating_state_event, prefix + std::string(arm::operating_state_event.name), Flow::event);
+  // The dVRK latches its operating state: a gateway started after the arm was enabled gets it at
+  // once (a volatile reader would wait for the next change).
+  state_ = reader(arm::operating_state_event, prefix + std::string(arm::operating_state_event.name),
+                  Flow::latched);
   if (!config.clutch_topic.empty()) clutch_ = reader(arm::clutch, config.clutch_topic, Flow::event);
   if (!config.operator_present_topic.empty())
     operator_ = reader(arm::operator_present, config.operator_present_topic, Flow::event);
 
   auto& st = state_table();
-  auto& p = provide(std::string(arm::interface_name));
+  auto& p = provide(interface_);
   crtk::provide(p, arm::measured_cp, st, &measured_cp_);
   crtk::provide(p, arm::measured_cv, st, &measured_cv_);
   crtk::provide(p, arm::measured_js, st, &measured_js_);
@@ -41,6 +49,124 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
   state_event_ = &crtk::provide(p, arm::operating_state_event);
   clutch_event_ = &crtk::provide(p, arm::clutch);
   operator_event_ = &crtk::provide(p, arm::operator_present);
+  if (!config.commands.empty()) provide_commands(p, prefix);
+}
+
+void ImportedArm::provide_commands(ProvidedInterface& p, const std::string& prefix) {
+  namespace arm = crtk::arm;
+  const auto allowed = [&](std::string_view c) {
+    return std::find(config_.commands.begin(), config_.commands.end(), c) != config_.commands.end();
+  };
+  state_command_ = writer("state_command", prefix + "state_command", mapping_of(arm::state_command));
+  crtk::provide(p, arm::state_command, [this](const StateCommand& c) {
+    if (c == StateCommand::enable) gravity_sent_ = false;
+    if (matched(state_command_))
+      send(state_command_, &c);
+    else
+      pending_state_command_ = c;  // sent once the arm's subscription matches (run())
+  });
+  // The dVRK has no plain servo_cf: its Cartesian wrench is body/servo_cf.
+  if (allowed("servo_cf")) {
+    servo_cf_ = writer("servo_cf", prefix + "body/servo_cf", mapping_of(arm::servo_cf));
+    // A wrench-commanded MTM floats only with the dVRK's gravity compensation on (its own
+    // teleoperation turns it on as it engages): sent once matched, again after each enable.
+    gravity_ = writer("use_gravity_compensation", prefix + "use_gravity_compensation",
+                      *find_mapping(type_info_of<bool>().name));
+    crtk::provide(p, arm::servo_cf, [this](const Wrench& w) {
+      const bool zero = w.force == Vec3{} && w.torque == Vec3{};
+      command(servo_cf_, &w, /*motion=*/!zero);
+    });
+  }
+  if (allowed("servo_cp")) {
+    servo_cp_ = writer("servo_cp", prefix + "servo_cp", mapping_of(arm::servo_cp));
+    crtk::provide(p, arm::servo_cp, [this](const Pose& x) { command(servo_cp_, &x, true); });
+  }
+  if (allowed("hold")) {
+    hold_ = writer("hold", prefix + "hold", empty_mapping());
+    p.add_command_void("hold", [this] { command(hold_, nullptr, false); });
+  }
+}
+
+ImportedArm::Writer ImportedArm::writer(const std::string& name, const std::string& topic, const Mapping& m) {
+  EndpointInfo e;
+  e.component = this->name();
+  e.interface_name = interface_;
+  e.name = name;
+  e.kind = "import_command";
+  e.saw_type = m.saw_type();
+  e.saw_size = static_cast<std::uint32_t>(m.size());
+  e.saw_version = m.saw_version();
+  e.dds_type = m.dds_type();
+  e.topic = topic;
+  endpoints_.push_back(std::move(e));
+  // Reliable: the dVRK's subscriptions are (a best-effort writer would match none of them).
+  auto* w = dds_.publisher->create_datawriter(dds_.topic(topic, m), DdsContext::writer_qos(Flow::command));
+  if (w == nullptr) throw std::runtime_error("import: could not publish " + topic);
+  return {w, &m};
+}
+
+bool ImportedArm::matched(const Writer& w) {
+  fdds::PublicationMatchedStatus status;
+  return w.writer != nullptr &&
+         w.writer->get_publication_matched_status(status) == ReturnCode_t::RETCODE_OK &&
+         status.current_count > 0;
+}
+
+bool ImportedArm::send(const Writer& w, const void* value) {
+  const bool ok = w.mapping->write(*w.writer, value, wall_from_monotonic(now()), config_.arm);
+  if (ok) sent_.fetch_add(1, std::memory_order_relaxed);
+  return ok;
+}
+
+void ImportedArm::command(const Writer& w, const void* value, bool motion) {
+  last_command_ = now();
+  cycles_since_command_ = 0;
+  if (send(w, value)) moving_ = motion;
+}
+
+bool ImportedArm::send_safe_command() {
+  bool ok = false;
+  if (config_.safe_command == "zero_wrench") {
+    const Wrench zero{};
+    ok = send(servo_cf_, &zero);
+  } else if (config_.safe_command == "hold") {
+    ok = send(hold_, nullptr);
+  } else if (config_.safe_command == "servo_cp_measured" && has_cp_) {
+    ok = send(servo_cp_, &measured_cp_);
+  }
+  if (ok) {
+    moving_ = false;
+    safe_sent_.fetch_add(1, std::memory_order_relaxed);
+  }
+  return ok;
+}
+
+// The client (saw-rt's device) sends a command every cycle while it moves the arm, and its safe
+// command when it stops: silence while moving means it hangs or died. Counted in this task's
+// own cycles too, so that a stall of the gateway (whose client's commands then wait in the ring)
+// is not taken for the client's.
+void ImportedArm::watch_client() {
+  if (!moving_) return;
+  const int cycles = static_cast<int>(config_.command_timeout / 1'000'000);
+  if (++cycles_since_command_ < cycles || now() - last_command_ < config_.command_timeout) return;
+  if (send_safe_command())
+    std::fprintf(
+        stderr, "saw-gateway: import %s: its client sent nothing for %lld ms while moving the arm: %s sent\n",
+        name().c_str(), static_cast<long long>(config_.command_timeout / 1'000'000),
+        config_.safe_command.c_str());
+}
+
+void ImportedArm::leave_safely(TimeNs deadline) {
+  if (config_.commands.empty() || !moving_) return;
+  if (!send_safe_command()) return;
+  std::fprintf(stderr, "saw-gateway: import %s: exiting while its client moved the arm: %s sent\n",
+               name().c_str(), config_.safe_command.c_str());
+  const Writer& w = config_.safe_command == "zero_wrench" ? servo_cf_
+                    : config_.safe_command == "hold"      ? hold_
+                                                          : servo_cp_;
+  const TimeNs left = std::max<TimeNs>(deadline - monotonic_now(), 0);
+  (void)w.writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+      static_cast<std::int32_t>(left / 1'000'000'000), static_cast<std::uint32_t>(left % 1'000'000'000)));
 }
 
 fdds::DataReader* ImportedArm::reader(const std::string& name, const std::string& topic, const Mapping& m,
@@ -84,7 +210,10 @@ bool ImportedArm::take_newest(fdds::DataReader* r, T& out) {
 }
 
 void ImportedArm::run() {
-  if (take_newest(cp_, measured_cp_)) cp_arrival_ = now();
+  if (take_newest(cp_, measured_cp_)) {
+    cp_arrival_ = now();
+    has_cp_ = true;
+  }
   (void)take_newest(cv_, measured_cv_);
   (void)take_newest(js_, measured_js_);
   OperatingState s;
@@ -102,6 +231,15 @@ void ImportedArm::run() {
     for (auto t = m.take(*r, &b, why); t != Mapping::Take::none; t = m.take(*r, &b, why))
       if (t == Mapping::Take::ok) (void)(*e)(b);
   }
+  if (pending_state_command_ && matched(state_command_)) {
+    send(state_command_, &*pending_state_command_);
+    pending_state_command_.reset();
+  }
+  if (gravity_.writer != nullptr && !gravity_sent_ && matched(gravity_)) {
+    const bool on = true;
+    gravity_sent_ = send(gravity_, &on);
+  }
+  watch_client();
   // No measured_cp yet, or none for a while: the row keeps the last arrival, and ages.
   stamp_row(cp_arrival_);
 }

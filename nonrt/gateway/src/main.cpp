@@ -35,6 +35,9 @@ saw::gateway::GatewayConfig config_of(const saw::gateway::GatewaySettings& s) {
     i.ros_namespace = s.ros_namespace;
     i.clutch_topic = s.clutch_topic;
     i.operator_present_topic = s.operator_present_topic;
+    i.commands = im.commands;
+    i.safe_command = im.safe_command;
+    i.command_timeout = im.command_timeout;
     c.imports.push_back(i);
   }
   c.dds.domain = s.domain;
@@ -109,7 +112,10 @@ int main(int argc, char** argv) {
   }
   for (const auto& i : imports) {
     const auto eq = i.find('=');
-    s.imports.push_back({i.substr(0, eq), eq == std::string::npos ? i.substr(0, eq) : i.substr(eq + 1)});
+    saw::gateway::ImportSettings im;
+    im.component = i.substr(0, eq);
+    im.arm = eq == std::string::npos ? im.component : i.substr(eq + 1);
+    s.imports.push_back(im);
   }
   if (s.attach.empty() && s.imports.empty() && s.mirrors.empty()) {
     std::fprintf(stderr, "saw-gateway: nothing to do: give --attach, --import or --mirror\n");

@@ -136,7 +136,7 @@ std::vector<EndpointInfo> find_remote(DdsContext& dds, const std::string& compon
       std::vector<EndpointInfo> mine;
       for (const auto& e : m.endpoints())
         if (e.component_name() == component && !e.topic().empty() && e.kind() != "import" &&
-            e.kind() != "mirror")
+            e.kind() != "import_command" && e.kind() != "mirror")
           mine.push_back({e.component_name(), e.interface_name(), e.name(), e.kind(), e.saw_type(),
                           e.saw_size(), e.saw_version(), e.dds_type(), e.topic(), e.result_type(),
                           e.result_size(), e.result_version(), e.limited(), e.limit_min(), e.limit_max(),

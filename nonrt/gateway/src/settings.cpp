@@ -32,6 +32,38 @@ void check_enclave(const Params& p, const std::string& key, const std::string& d
                          " (make one with: sawctl security enroll KEYSTORE NAME --role gateway)");
 }
 
+// A read-write import's keys: what its client may send the arm, and what the import sends when
+// that client falls silent or the gateway exits.
+void read_import_commands(const Params& im, ImportSettings& s) {
+  using namespace std::chrono_literals;
+  s.commands = im.get_or<std::vector<std::string>>("commands", {});
+  const auto allowed = [&](const std::string& c) {
+    return std::find(s.commands.begin(), s.commands.end(), c) != s.commands.end();
+  };
+  for (const auto& c : s.commands)
+    if (c != "servo_cf" && c != "servo_cp" && c != "hold")
+      im.fail_at("commands", "'" + c + "' is not one of: servo_cf (an MTM), servo_cp (a PSM), hold");
+  if (allowed("servo_cf") && allowed("servo_cp"))
+    im.fail_at("commands", "servo_cf (an MTM's wrench) or servo_cp (a PSM's pose), not both");
+  if (s.commands.empty()) {
+    for (const char* k : {"safe_command", "command_timeout"})
+      if (im.has(k)) im.fail_at(k, "only for an import that sends commands (commands: [...])");
+    return;
+  }
+  const char* fallback = allowed("servo_cf") ? "zero_wrench" : allowed("hold") ? "hold" : "servo_cp_measured";
+  s.safe_command = im.get_or<std::string>("safe_command", fallback);
+  const std::string needs = s.safe_command == "zero_wrench"         ? "servo_cf"
+                            : s.safe_command == "hold"              ? "hold"
+                            : s.safe_command == "servo_cp_measured" ? "servo_cp"
+                                                                    : "";
+  if (needs.empty())
+    im.fail_at("safe_command",
+               "'" + s.safe_command + "' is not one of: zero_wrench, hold, servo_cp_measured");
+  if (!allowed(needs)) im.fail_at("safe_command", s.safe_command + " needs " + needs + " in commands");
+  s.command_timeout =
+      im.get_duration_in("command_timeout", std::chrono::nanoseconds(s.command_timeout), 2ms, 1s);
+}
+
 // Every key of the section; `exported` (a deployment's) is the default of attach.
 void read_keys(Params& g, const YAML::Node& node, const std::string& directory,
                const std::vector<std::string>& exported, GatewaySettings& gw) {
@@ -47,6 +79,7 @@ void read_keys(Params& g, const YAML::Node& node, const std::string& directory,
       ImportSettings s;
       s.component = im.get<std::string>("component");
       s.arm = im.get_or<std::string>("arm", s.component);
+      read_import_commands(im, s);
       im.check_all_used();
       gw.imports.push_back(s);
     }
@@ -131,9 +164,15 @@ std::string to_yaml(const GatewaySettings& s) {
   out << YAML::Key << "mirror" << YAML::Value << s.mirrors;
   if (!s.imports.empty()) {
     out << YAML::Key << "import" << YAML::Value << YAML::BeginSeq;
-    for (const auto& im : s.imports)
+    for (const auto& im : s.imports) {
       out << YAML::BeginMap << YAML::Key << "component" << YAML::Value << im.component << YAML::Key << "arm"
-          << YAML::Value << im.arm << YAML::EndMap;
+          << YAML::Value << im.arm;
+      if (!im.commands.empty())
+        out << YAML::Key << "commands" << YAML::Value << im.commands << YAML::Key << "safe_command"
+            << YAML::Value << im.safe_command << YAML::Key << "command_timeout" << YAML::Value
+            << (std::to_string(im.command_timeout) + "ns");
+      out << YAML::EndMap;
+    }
     out << YAML::EndSeq;
   }
   out << YAML::Key << "namespace" << YAML::Value << s.ros_namespace;

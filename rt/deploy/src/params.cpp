@@ -200,6 +200,18 @@ void Params::check_all_used() const {
   for (const auto& c : *children_) c.check_all_used();
 }
 
+std::int64_t Params::get_duration_in(const std::string& key, std::chrono::nanoseconds fallback,
+                                     std::chrono::nanoseconds lo, std::chrono::nanoseconds hi,
+                                     const char* what) const {
+  const auto d = get_or<std::chrono::nanoseconds>(key, fallback);
+  if (d >= lo && d <= hi) return d.count();
+  if (what != nullptr) fail_at(key, what);
+  char b[128];
+  std::snprintf(b, sizeof b, "must be from %g to %g s", static_cast<double>(lo.count()) * 1e-9,
+                static_cast<double>(hi.count()) * 1e-9);
+  fail_at(key, b);
+}
+
 double seconds_in_range(const Params& p, const std::string& key, std::chrono::nanoseconds fallback, double lo,
                         double hi) {
   const double s = static_cast<double>(p.get_or<std::chrono::nanoseconds>(key, fallback).count()) * 1e-9;

@@ -41,9 +41,7 @@ struct DelaySpec {
 };
 
 TimeNs duration_in(const Params& p, const std::string& key, std::chrono::nanoseconds fallback) {
-  const auto d = p.get_or<std::chrono::nanoseconds>(key, fallback);
-  if (d > 10s || d < 0ns) p.fail_at(key, "from 0 to 10 s");
-  return d.count();
+  return p.get_duration_in(key, fallback, 0ns, 10s, "from 0 to 10 s");
 }
 
 // One direction of the link: `delay` (required for the measurements), `jitter`, `loss`.

@@ -16,11 +16,16 @@ namespace saw::gateway {
 // A foreign CRTK arm (a dVRK master published by the dVRK's ROS 2 stack) to present through
 // the bridge as component `component`, provided interface "arm", read-only.
 struct ImportConfig {
-  std::string component;      // its name on this host, e.g. "MTML"
-  std::string ros_namespace;  // "" or e.g. "dvrk": topics rt/<ns>/<arm>/measured_cp, ...
-  std::string arm;            // e.g. "MTML"
-  std::string clutch_topic = "rt/footpedals/clutch";                     // sensor_msgs/Joy; "" for none
-  std::string operator_present_topic = "rt/footpedals/operatorpresent";  // sensor_msgs/Joy; "" for none
+  std::string component;                           // its name on this host, e.g. "MTML"
+  std::string ros_namespace;                       // "" or e.g. "dvrk": topics rt/<ns>/<arm>/measured_cp, ...
+  std::string arm;                                 // e.g. "MTML"
+  std::string clutch_topic = "rt/console/clutch";  // sensor_msgs/Joy; "" for none
+  std::string operator_present_topic = "rt/console/operator_present";  // sensor_msgs/Joy; "" for none
+  // Read-write (settings.hpp's ImportSettings says each): the commands it may send, its safe
+  // command (never "": settings derive it) and how long its client may stay silent.
+  std::vector<std::string> commands;
+  std::string safe_command;
+  TimeNs command_timeout = 50'000'000;
 };
 
 // A live plot redrawn at 20–25 Hz loses nothing it can show at 50 samples/s.

@@ -1,6 +1,7 @@
 // GatewaySettings: everything a gateway is told, declared once; the deployment's `gateway:` section.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -9,10 +10,17 @@
 
 namespace saw::gateway {
 
-// A foreign CRTK arm (a dVRK master) presented on this host as a component, read-only.
+// A foreign CRTK arm (a dVRK arm) presented on this host as a component: read-only, or
+// read-write for one client (a dvrk_arm device in saw-rt) when `commands` names what it may send.
 struct ImportSettings {
   std::string component;  // its name here
   std::string arm;        // topics rt/[namespace/]<arm>/...
+  // servo_cf (an MTM's body/servo_cf), servo_cp (a PSM's), hold; state_command comes with any.
+  std::vector<std::string> commands;
+  // What the import sends when its client falls silent while moving the arm, and when the
+  // gateway exits: zero_wrench (servo_cf), hold, servo_cp_measured (servo_cp at the measured pose).
+  std::string safe_command;
+  std::int64_t command_timeout = 50'000'000;  // ns of silence from the client that count as gone
   bool operator==(const ImportSettings&) const = default;
 };
 
@@ -24,9 +32,10 @@ struct GatewaySettings {
   // Components served by gateways on other hosts, presented on this host: NAME or NAME=LOCAL.
   std::vector<std::string> mirrors;
   std::vector<ImportSettings> imports;
-  std::string ros_namespace;                          // of the imported arms' topics
-  std::string clutch_topic = "rt/footpedals/clutch";  // sensor_msgs/Joy; "" for none
-  std::string operator_present_topic = "rt/footpedals/operatorpresent";
+  std::string ros_namespace;  // of the imported arms' topics
+  // The dVRK 2.x console's pedals (sensor_msgs/Joy); "" for none.
+  std::string clutch_topic = "rt/console/clutch";
+  std::string operator_present_topic = "rt/console/operator_present";
   int domain = 0;
   std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
   int decimation = 1;                                // publish state every Nth row

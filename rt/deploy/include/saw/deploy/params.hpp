@@ -39,6 +39,11 @@ class Params {
     return has(key) ? get<T>(key) : fallback;
   }
   double get_in_range(const std::string& key, double lo, double hi, double fallback) const;
+  // A duration within [lo, hi] (fallback when absent), in ns; outside it, an error naming the
+  // range in seconds, or `what` when given (\"at least three periods\").
+  std::int64_t get_duration_in(const std::string& key, std::chrono::nanoseconds fallback,
+                               std::chrono::nanoseconds lo, std::chrono::nanoseconds hi,
+                               const char* what = nullptr) const;
   template <class E>
   E get_enum(const std::string& key, const std::vector<std::pair<std::string, E>>& values, E fallback) const {
     if (!has(key)) return fallback;
