@@ -211,6 +211,11 @@ TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
       // Another law's setting is not this law's: an unknown parameter.
       {"params: {gains: {master: 100, slave: 100}}", "params: {law: position_position, gains: {master: 1}}",
        R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.gains': unknown parameter)"},
+      // A slave that follows a pose needs a law that gives one.
+      {"params: {gains: {master: 100, slave: 100}}", "params: {slave_command: servo_cp}",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.slave_command': law 'collaborative' gives the slave a force only)"},
+      {"params: {gains: {master: 100, slave: 100}}", "params: {slave_command: servo_jp}",
+       R"(key 'components\[2\]\.params\.slave_command': 'servo_jp' is not one of: servo_cf, servo_cp)"},
       {"params: {gains: {master: 100, slave: 100}}", "params: {mirror: [1, 0.5, 1]}",
        R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.mirror': each entry must be 1 or -1)"},
   };

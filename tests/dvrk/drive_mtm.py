@@ -19,12 +19,9 @@ usage: drive_mtm.py SAW_RT
 """
 import csv
 import os
-import re
 import signal
-import subprocess
 import sys
 import tempfile
-import threading
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -32,59 +29,13 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "interop"))
 import sim_arm as S  # noqa: E402  (first: it sets CYCLONEDDS_URI before cyclonedds is loaded)
 from harness import check, dds_domain, exit_code  # noqa: E402
+from saw_run import SawRt, shipped  # noqa: E402
 
 ARM = "MTML"
 WRENCH = "body/servo_cf"
 
 
-CONFIG = os.path.join(HERE, "..", "..", "config", "dvrk-mtm-slave.yaml")
-
-
-def deployment(tag, domain):
-    """The shipped file, with this test's names (the bridge's are host-wide) and DDS domain."""
-    text = open(CONFIG).read()
-    for name in ("sim_master", "mtm_teleop", "MTML_dds", "dvrk-mtm-slave"):
-        text = text.replace(name, name + tag)
-    text = re.sub(r"\bmtml\b", "mtml" + tag, text)
-    return text.replace("domain: 0 ", f"domain: {domain} ")
-
-
-class SawRt:
-    """saw-rt (and its gateway, whose output it shares) with every output line kept and timed."""
-
-    def __init__(self, saw_rt, path, record):
-        self.lines = []
-        self.p = subprocess.Popen([saw_rt, path, "--record", record], stdout=subprocess.PIPE,
-                                  stderr=subprocess.STDOUT, text=True)
-        self.reader = threading.Thread(target=self._read, daemon=True)
-        self.reader.start()
-
-    def _read(self):
-        for line in self.p.stdout:
-            self.lines.append((time.monotonic(), line.rstrip()))
-
-    def wait_line(self, needle, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            for t, line in list(self.lines):
-                if needle in line:
-                    return t, line
-            time.sleep(0.01)
-        return None
-
-    def text(self):
-        return "\n".join(line for _, line in self.lines)
-
-    def stop(self, sig=signal.SIGTERM, timeout=20):
-        if self.p.poll() is None:
-            self.p.send_signal(sig)
-        try:
-            self.p.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            self.p.kill()
-            self.p.wait()
-        self.reader.join(timeout=5)
-        return self.p.returncode
+NAMES = ("sim_master", "mtml", "mtm_teleop", "MTML_dds", "dvrk-mtm-slave")
 
 
 def nonzero(w):
@@ -110,7 +61,7 @@ def last_wrench_is_zero(sim):
 def start(saw_rt, work, tag, domain, name):
     path = os.path.join(work, f"{name}.yaml")
     with open(path, "w") as f:
-        f.write(deployment(tag, domain))
+        f.write(shipped("dvrk-mtm-slave.yaml", tag, domain, NAMES))
     return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
 
 

@@ -108,6 +108,39 @@ TEST(PositionPositionLaw, TheTaskStillOwnsClutchAndFaults) {
   EXPECT_EQ(norm(rig.slave.force), 0.0);
 }
 
+// A PSM follows a pose, not a force: the law's goal, at the slave's orientation when it engaged.
+TEST(PositionPositionLaw, ASlaveThatFollowsAPoseGetsGoalsWithoutAStep) {
+  saw::teleop::TeleopConfig c;
+  c.slave_servo_cp = true;
+  PpRig rig(c, saw::teleop::law_spec<PositionPositionLaw>(pp_settings()));
+  rig.master.position = {0.05, 0.01, 0};
+  rig.slave.position = {-0.02, 0.03, 0.01};
+  const saw::Quat turned{0, 0, std::sin(0.25), std::cos(0.25)};
+  rig.slave.orientation = turned;
+  rig.step(3);
+  ASSERT_GT(rig.slave.goals, 0) << "the slave gets goals";
+  EXPECT_EQ(rig.slave.commands, 0) << "and no force";
+  EXPECT_LT(saw::testing::dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "engaging: no step";
+  EXPECT_EQ(rig.slave.goal.orientation, turned);
+  rig.master.position[0] += 0.01;
+  rig.slave.orientation = {0, 0, 0, 1};  // the slave turning does not turn its goal
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.goal.position[0], -0.01, 1e-12) << "the master's 1 cm, scale 1";
+  EXPECT_EQ(rig.slave.goal.orientation, turned);
+  // Clutched, nothing is sent (the device's watchdog holds the arm); released, no step.
+  rig.master.press_clutch(true);
+  rig.step(1);
+  const int before = rig.slave.goals;
+  rig.master.position[1] += 0.05;
+  rig.slave.position = {0.0, 0.0, 0.0};
+  rig.step(3);
+  EXPECT_EQ(rig.slave.goals, before) << "no goal while clutched";
+  rig.master.press_clutch(false);
+  rig.step(2);
+  EXPECT_GT(rig.slave.goals, before);
+  EXPECT_LT(norm(rig.slave.goal.position), 1e-12) << "releasing the clutch: the goal is where the slave is";
+}
+
 TEST(TeleopSeam, TheTaskDescribesItselfAndItsRoles) {
   PpRig rig(saw::teleop::TeleopConfig{}, saw::teleop::law_spec<PositionPositionLaw>(pp_settings()));
   rig.step(1);

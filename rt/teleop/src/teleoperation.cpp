@@ -142,7 +142,10 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   crtk::require(r, crtk::arm::measured_cv, s.cv);
   // A master may be read-only (a da Vinci master through the dVRK's research API): then the
   // operator feels no force, and the law still drives the slave.
-  crtk::require(r, crtk::arm::servo_cf, s.cf, s.side == FaultSide::master ? Need::optional : Need::required);
+  const bool follows_pose = s.side == FaultSide::slave && config_.slave_servo_cp;
+  crtk::require(r, crtk::arm::servo_cf, s.cf,
+                s.side == FaultSide::master || follows_pose ? Need::optional : Need::required);
+  if (follows_pose) crtk::require(r, crtk::arm::servo_cp, s.goal);
   crtk::require(r, delayed_arm::source_time, s.source_time, Need::optional);
   crtk::require(r, delayed_arm::delay, s.delay, Need::optional);
   crtk::require(r, crtk::operating_state, s.state, Need::optional);
@@ -313,6 +316,7 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
       st = Status::invalid;
     } else {
       s.last.position = position;
+      s.orientation = pose.orientation;
       s.last.velocity = velocity;
       s.energy = std::max(s.energy, energy);  // only grows: a late row tells nothing new
       // A wave is new when its row is: one shown again (nothing arrived) is no wave.
@@ -354,9 +358,11 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   return true;
 }
 
-void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept {
+void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave,
+                                const Eigen::Vector3d* slave_goal) noexcept {
   Eigen::Vector3d fm = f_master, fs = f_slave;
-  if (!fm.allFinite() || !fs.allFinite()) {  // the last check before a device
+  const bool finite = fm.allFinite() && fs.allFinite() && (slave_goal == nullptr || slave_goal->allFinite());
+  if (!finite) {  // the last check before a device
     raise_fault(
         fault_on(fm.allFinite() ? FaultSide::slave : FaultSide::master, FaultCode::output_not_finite));
     fm.setZero();
@@ -365,9 +371,18 @@ void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Ve
   Wrench w;
   w.force = to_vec3(fm);
   if (master_.cf.is_bound() && master_.cf(w) != Status::ok) ++refused_sends_;
+  master_force_ = to_vec3(fm);
+  if (config_.slave_servo_cp) {
+    // A slave that follows a pose gets only goals: while the law holds, nothing (its device's
+    // command watchdog holds it).
+    if (finite && slave_goal != nullptr &&
+        slave_.goal(Pose{to_vec3(*slave_goal), held_orientation_}) != Status::ok)
+      ++refused_sends_;
+    slave_force_ = {};
+    return;
+  }
   w.force = to_vec3(fs);
   if (slave_.cf(w) != Status::ok) ++refused_sends_;
-  master_force_ = to_vec3(fm);
   slave_force_ = to_vec3(fs);
 }
 
@@ -493,6 +508,7 @@ void Teleoperation::cycle_body() noexcept {
   }
   if (engage_pending_) {
     law_->reset(in);
+    held_orientation_ = slave_.orientation;
     engage_pending_ = false;
   }
   const LawCommand law = law_->step(in);
@@ -510,7 +526,7 @@ void Teleoperation::cycle_body() noexcept {
     (void)master_.remote_energy(law.slave_port_energy);
   if (law.sends_wave && master_.remote_wave.is_bound())
     (void)master_.remote_wave(to_vec3(law.master_wave_out));
-  send_forces(law.master_force, law.slave_force);
+  send_forces(law.master_force, law.slave_force, &law.slave_goal);
 }
 
 }  // namespace saw::teleop

@@ -48,6 +48,9 @@ struct LawCommand {
   // For a law that `uses_waves`: the wave to send back to the master's port (v).
   Eigen::Vector3d master_wave_out = Eigen::Vector3d::Zero();
   bool sends_wave = false;
+  // For a law that `gives_slave_goal`: where the slave should be (m), for a slave that follows a
+  // pose (servo_cp, a PSM) rather than a force; slave_force is then not sent.
+  Eigen::Vector3d slave_goal = Eigen::Vector3d::Zero();
   // False when the law's arithmetic overflowed (a huge input): the task then faults with zero
   // force, naming `bad_side`.
   bool finite = true;
@@ -80,6 +83,8 @@ struct LawContext {
 //                                              // (its input energy in, the slave's sent to it)
 //     static constexpr bool uses_waves = true;  // the same, with wave variables, and then
 //     double wave_impedance() const noexcept;   // its b: the master port's must be the same
+//     static constexpr bool gives_slave_goal = true;  // sets LawCommand::slave_goal: it can drive
+//                                              // a slave that follows a pose (slave_command: servo_cp)
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {

@@ -33,6 +33,8 @@ class LawModel {
   // The law exchanges energies with a passivity port at the master (law.hpp).
   virtual bool uses_ports() const noexcept = 0;
   virtual bool uses_waves() const noexcept = 0;
+  // The law sets LawCommand::slave_goal: a slave that follows a pose can be driven by it.
+  virtual bool gives_slave_goal() const noexcept = 0;
   // For a law that uses_waves: its wave impedance b (N·s/m), which the master's port must share
   // (the task refuses to start otherwise); 0 for other laws.
   virtual double wave_impedance() const noexcept = 0;
@@ -75,6 +77,12 @@ class LawHolder final : public LawModel {
   bool uses_ports() const noexcept override {
     if constexpr (requires { L::uses_ports; })
       return L::uses_ports;
+    else
+      return false;
+  }
+  bool gives_slave_goal() const noexcept override {
+    if constexpr (requires { L::gives_slave_goal; })
+      return L::gives_slave_goal;
     else
       return false;
   }

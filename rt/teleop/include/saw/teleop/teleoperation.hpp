@@ -28,6 +28,10 @@ struct TeleopConfig {
   // side. Meanwhile the task is busy and drives nothing.
   double device_timeout = 5.0;
   bool start_enabled = true;
+  // The slave follows a pose (servo_cp: a PSM) rather than a force: the law's slave_goal, at the
+  // slave's orientation when the law engaged; nothing is sent to it while the law holds (its
+  // device's command watchdog then holds it). Needs a law that gives_slave_goal.
+  bool slave_servo_cp = false;
 };
 
 // What a run of the task comes to (its "summary" column, ColumnUse::summary): state and why,
@@ -130,6 +134,7 @@ class Teleoperation : public Task {
     FunctionRead<Pose> cp;
     FunctionRead<Twist> cv;
     FunctionWrite<Wrench> cf;
+    FunctionWrite<Pose> goal;                 // a slave that follows a pose (slave_servo_cp)
     FunctionRead<TimeNs> source_time, delay;  // bound when a DelayTask sits in between
     FunctionRead<OperatingState> state;       // bound when the device reports its state
     FunctionRead<double> port_energy;         // bound when the device has a passivity port
@@ -144,7 +149,8 @@ class Teleoperation : public Task {
     Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();
     bool wave_fresh = false;  // a new wave arrived with this cycle's row
     SideSample last{};
-    TimeNs time = 0;  // of the last good input: its row's, or its source row's plus the delay
+    Quat orientation{0, 0, 0, 1};  // of the last good input
+    TimeNs time = 0;               // of the last good input: its row's, or its source row's plus the delay
     bool valid = false, not_finite = false;
     bool busy = false;    // the device said it is busy (homing): not driven meanwhile
     bool enabled = true;  // the device said it is enabled (or says nothing of its state)
@@ -166,7 +172,9 @@ class Teleoperation : public Task {
   void set_operating_state(OperatingStateValue s) noexcept;
   void raise_fault(FaultInfo why) noexcept;
   void on_input_failure(const FaultInfo& why) noexcept;
-  void send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave) noexcept;
+  // The slave's goal (slave_servo_cp) instead of its force when `slave_goal` is given.
+  void send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave,
+                   const Eigen::Vector3d* slave_goal = nullptr) noexcept;
   void note_refusals() noexcept;
   void account(const LawCommand& law) noexcept;
   void cycle_body() noexcept;
@@ -177,8 +185,9 @@ class Teleoperation : public Task {
   bool clutched_ = false, ratcheting_ = false;
   bool deadline_breached_ = false;
   DeadlineBreach deadline_breach_{};
-  bool engage_pending_ = true;  // the next engaged cycle (re-)engages the law: reset, not step
-  bool inputs_seen_ = false;    // a producer that has not published yet is not a fault, for a while
+  Quat held_orientation_{0, 0, 0, 1};  // the slave's at engagement (slave_servo_cp)
+  bool engage_pending_ = true;         // the next engaged cycle (re-)engages the law: reset, not step
+  bool inputs_seen_ = false;           // a producer that has not published yet is not a fault, for a while
   TimeNs start_time_ = -1;
   TimeNs waiting_since_ = -1;  // enabled, a device not: since when
   FaultInfo fault_{};

@@ -22,12 +22,17 @@ class FakeDevice : public Component {
       force = w.force;
       ++commands;
     });
+    crtk::provide(p, arm::servo_cp, [this](const Pose& x) {
+      goal = x;
+      ++goals;
+    });
     clutch_ = &crtk::provide(p, arm::clutch);
     crtk::provide(p, arm::operating_state, state_table(), &state_);
   }
   // Publishes the current position and velocity as a row stamped t (what a device cycle does).
   void publish(TimeNs t) {
     pose_.position = position;
+    pose_.orientation = orientation;
     twist_.linear = velocity;
     state_.state = operating;
     state_.is_busy = busy;
@@ -36,6 +41,9 @@ class FakeDevice : public Component {
   void press_clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
 
   Vec3 position{}, velocity{}, force{};
+  Quat orientation{0, 0, 0, 1};
+  Pose goal{};  // the last servo_cp
+  int goals = 0;
   OperatingStateValue operating = OperatingStateValue::enabled;
   bool busy = false;  // operating_state's is_busy (homing)
   int commands = 0;

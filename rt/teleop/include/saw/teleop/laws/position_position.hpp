@@ -10,7 +10,8 @@
 
 namespace saw::teleop {
 
-// Unilateral: f_s = −k·e_s − b·v_s saturated to lim, e_s = p_s + o − scale·p_m; f_m = 0.
+// Unilateral: f_s = −k·e_s − b·v_s saturated to lim, e_s = p_s + o − scale·p_m; f_m = 0. For a
+// slave that follows a pose (a PSM), the goal scale·p_m − o instead of the force.
 // The offset o cancels e_s while the task holds and on engaging (no force step), and is
 // re-expressed when the scale changes (e_s kept).
 class PositionPositionLaw {
@@ -22,6 +23,7 @@ class PositionPositionLaw {
     double force_limit = 3.0;  // N
   };
   static constexpr std::string_view name = "position_position";
+  static constexpr bool gives_slave_goal = true;
   static constexpr std::string_view description =
       "the slave tracks the scaled master position (a spring and damper); no force feedback";
   static constexpr auto declared_settings = std::tuple{
@@ -55,7 +57,9 @@ class PositionPositionLaw {
     out.slave_force = saturate(f, s_.force_limit);
     out.limiting = f.norm() > s_.force_limit;
     out.slave_offset = offset_;
-    out.finite = out.slave_error.allFinite() && f.allFinite() && std::isfinite(f.norm());
+    out.slave_goal = s_.scale * in.master.position - offset_;
+    out.finite =
+        out.slave_error.allFinite() && f.allFinite() && std::isfinite(f.norm()) && out.slave_goal.allFinite();
     if (!out.finite) out.bad_side = in.master.position.allFinite() ? FaultSide::slave : FaultSide::master;
     return out;
   }
