@@ -165,6 +165,22 @@ TEST(DvrkArm, AnArmInFaultOrUnhomedFaultsTheDevice) {
   }
 }
 
+// The dVRK latches its last errors: those from before the arm was driven are not this run's.
+TEST(DvrkArm, AnErrorOfTheArmWhileDrivenFaultsTheDevice) {
+  Rig r(mtm());
+  r.import.errors = 2;
+  enable_mtm(r);
+  r.servo_cf({0.5, 0, 0});
+  r.step(3);
+  EXPECT_EQ(r.state(), OperatingStateValue::enabled) << "errors before the enable are not a fault";
+  r.import.errors = 3;
+  r.step(2);
+  EXPECT_EQ(r.state(), OperatingStateValue::fault);
+  EXPECT_EQ(r.arm.fault().code, FaultCode::device_error);
+  EXPECT_EQ(r.import.received.back().what, "servo_cf");
+  EXPECT_EQ(r.import.received.back().wrench.force[0], 0.0) << "the zero wrench";
+}
+
 TEST(DvrkArm, ADvrkThatStopsPublishingFaultsAtTheStaleTimeout) {
   DvrkArmConfig c = mtm();
   c.stale_timeout = 20'000'000;

@@ -37,6 +37,7 @@ class FakeImport : public Component {
     });
     crtk::provide(p, arm::state_command, [this](const StateCommand& c) { command(c); });
     p.add_command_void("hold", [this] { got({"hold", state, {}, {}}); });
+    p.add_command_read("errors", state_table().add_column("errors", &errors_));
   }
 
   // One sample of the arm as the import would have it at t (the dVRK publishing).
@@ -45,6 +46,7 @@ class FakeImport : public Component {
     if (homing_ > 0 && --homing_ == 0) state = {OperatingStateValue::enabled, true, false};
     cp_ = pose;
     state_ = state;
+    errors_ = errors;
     state_table().advance(t);
   }
   int count(std::string_view what) const {
@@ -56,8 +58,9 @@ class FakeImport : public Component {
   OperatingState state{OperatingStateValue::disabled, false, false};
   Pose pose{};
   int power_cycles = 5, home_cycles = 10;
-  bool follows = true;  // measured_cp is the last servo_cp goal
-  bool record = true;   // every command kept (allocates); off, only counted (the RT guard's runs)
+  std::uint64_t errors = 0;  // error messages the arm sent (the import counts them)
+  bool follows = true;       // measured_cp is the last servo_cp goal
+  bool record = true;        // every command kept (allocates); off, only counted (the RT guard's runs)
   std::vector<Received> received;
 
  private:
@@ -85,6 +88,7 @@ class FakeImport : public Component {
   Pose cp_{};
   Twist cv_{};
   OperatingState state_{};
+  std::uint64_t errors_ = 0;
 };
 
 }  // namespace saw::drivers::dvrk::testing

@@ -11,7 +11,9 @@ shipped config/dvrk-mtm-slave.yaml (renamed for this run, on this test's DDS dom
     saw-rt's SIGTERM (the device's safe command), `kill -9` of saw-rt (the gateway's exit path,
     through its PDEATHSIG), saw-rt frozen (SIGSTOP: the import's own watchdog);
 (d) each way the arm goes wrong is the device's FAULT naming it, with the zero wrench: its
-    stream stops (stale), it faults.
+    stream stops, or goes on stamped 0 (the dVRK's invalid data) or with one stamp repeated (stale
+    by its header stamps, as by arrival), it reports an error (its words in saw-rt's log), it
+    faults.
 
 Each check is printed; the exit code is 1 if any failed. Waits are polls with a bound.
 
@@ -192,7 +194,12 @@ def kill_paths(saw_rt, work, tag, domain):
 
 
 def arm_faults(saw_rt, work, tag, domain):
+    # The stream stops; it goes on stamped 0 (the dVRK's invalid data); it repeats one stamp; the arm
+    # faults.
     for name, act, needle in (("stale", lambda s: s.pause_publishing(), "stale"),
+                              ("invalid stamps", lambda s: s.set_invalid_stamps(True), "stale"),
+                              ("frozen stamps", lambda s: s.freeze_stamps(True), "stale"),
+                              ("error", lambda s: s.report_error("simulated tracking error"), "reported an error"),
                               ("fault", lambda s: s.fault("simulated encoder error"), "in FAULT")):
         print(f"-- (d) the arm goes wrong: {name}")
         with S.SimArm(ARM, domain, kind="mtm", rate=500.0) as sim:
@@ -207,14 +214,21 @@ def arm_faults(saw_rt, work, tag, domain):
             said = rt.wait_line(needle, 5.0)
             check(said is not None and "FAULT" in said[1],
                   f"{name}: the device's FAULT names it: {said[1] if said else rt.text()[-400:]}")
-            if name == "stale":  # the arm still takes commands: the device's zero wrench reaches it
+            if name != "fault":  # the arm still takes commands: the device's zero wrench reaches it
                 z = zero_after(sim, t, 2.0)
                 check(z is not None and last_wrench_is_zero(sim), f"{name}: the last wrench on the arm is zero")
             else:  # in FAULT the arm takes nothing (and is powered off): nothing after the fault
                 late = [c for c in sim.commands(WRENCH, since=t + 0.05) if nonzero(c.value)]
                 check(not late, f"{name}: no wrench after the arm's FAULT ({len(late)})")
+            if name == "error":
+                said = rt.wait_line("simulated tracking error", 5.0)
+                check(said is not None, f"{name}: the arm's words are in saw-rt's log: {said[1] if said else ''}")
             rc = rt.stop(signal.SIGTERM)
             check(rc == 0, f"{name}: saw-rt stopped in order (exit {rc})")
+            if "stamps" in name:
+                stats = [line for _, line in rt.lines if "badly stamped" in line]
+                check(bool(stats) and " 0 badly stamped" not in stats[-1],
+                      f"{name}: the gateway counted them: {stats[-1] if stats else '(no statistics)'}")
 
 
 def main(saw_rt):

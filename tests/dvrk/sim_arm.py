@@ -278,6 +278,12 @@ class SimArm:
             self._send_error(f"{self.arm}: {why}")
             self._publish_operating_state()
 
+    def report_error(self, text):
+        """An error message on ARM/error without a state change (as the dVRK reports, e.g., a
+        tracking error it recovers from)."""
+        with self._lock:
+            self._send_error(f"{self.arm}: {text}")
+
     def press(self, button):
         self._button(button, PRESSED)
 

@@ -63,6 +63,7 @@ DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
   if (!psm) crtk::require(r, arm::servo_cf, write_cf_);
   if (psm || arm_config_.safe_command == SafeCommand::servo_cp_measured)
     crtk::require(r, arm::servo_cp, write_cp_);
+  r.add_function("errors", read_errors_, Need::optional);
   r.add_function("hold", hold_,
                  arm_config_.safe_command == SafeCommand::hold ? Need::required : Need::optional);
   provide("dvrk").add_command_read("summary",
@@ -100,7 +101,13 @@ Outcome DvrkArm::read() {
     summary_.arm = arm;
     have_state_ = true;
   }
-  if (!following()) return Outcome::done();  // enable() and home() judge what they need
+  std::uint64_t errors = 0;
+  const bool errors_read = read_errors_.is_bound() && read_errors_(errors) == Status::ok;
+  // The arm's errors before it was driven (the dVRK latches its last ones) are not this run's.
+  if (!following()) {
+    if (errors_read) errors_before_ = errors;
+    return Outcome::done();  // enable() and home() judge what they need
+  }
   if (s == Status::disconnected)
     return Outcome::failed(FaultCode::device_lost, "the arm's import is gone (its gateway stopped)", source);
   const TimeNs age = cp_time_ < 0 ? arm_config_.stale_timeout + 1 : now() - cp_time_;
@@ -113,6 +120,9 @@ Outcome DvrkArm::read() {
     return Outcome::failed(FaultCode::device_disabled, "the dVRK arm left ENABLED", source);
   if (!summary_.arm.is_homed)
     return Outcome::failed(FaultCode::device_fault, "the dVRK arm is no longer homed", source);
+  if (errors_read && errors > errors_before_)
+    return Outcome::failed(FaultCode::device_error,
+                           "the dVRK arm reported an error (its words: the gateway's log)", source);
   return Outcome::done();
 }
 

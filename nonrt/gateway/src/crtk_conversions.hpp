@@ -281,7 +281,9 @@ struct FaultInfoConv {
   static std::string text(const FaultInfo& f) { return to_string(f); }
 };
 
-// Buttons as the dVRK publishes them: sensor_msgs/Joy with buttons[0] = 1 pressed, 0 released.
+// Buttons as the dVRK publishes them: sensor_msgs/Joy with buttons[0] = 1 pressed, 0 released,
+// 2 a quick tap (cisst-ros's CLICKED, sent beside the press and release): not a state of the
+// button, so no event (taken as pressed it would leave a clutch held that the operator let go).
 struct ButtonConv {
   static bool parse(std::string_view t, ButtonEvent& b, std::string& why) {
     const auto w = trimmed(t);
@@ -302,7 +304,12 @@ struct ButtonConv {
       why = "no button in the message";
       return false;
     }
-    b.pressed = m.buttons()[0] != 0;
+    if (m.buttons()[0] != 0 && m.buttons()[0] != 1) {
+      why = "buttons[0] " + std::to_string(m.buttons()[0]) +
+            ": 1 pressed, 0 released (2, a quick tap, is neither)";
+      return false;
+    }
+    b.pressed = m.buttons()[0] == 1;
     return true;
   }
   static std::string text(const ButtonEvent& b) { return b.pressed ? "pressed" : "released"; }

@@ -119,6 +119,9 @@ GatewayStats Gateway::stats() const {
     for (const auto& a : imports_->arms) {
       s.imported += a->samples();
       s.imported_rejected += a->rejected();
+      s.imported_bad_stamps += a->invalid_stamps() + a->repeated_stamps();
+      s.arm_commands += a->commands_sent();
+      s.arm_safe_commands += a->safe_commands();
     }
   if (imports_ != nullptr)
     for (const auto& m : imports_->mirrors) s.mirrored += m->samples();

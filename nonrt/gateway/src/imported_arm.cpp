@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "crtk_conversions.hpp"
+#include "std_msgs/msg/StringPubSubTypes.h"
+
 namespace saw::gateway {
 namespace {
 
@@ -49,7 +52,39 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
   state_event_ = &crtk::provide(p, arm::operating_state_event);
   clutch_event_ = &crtk::provide(p, arm::clutch);
   operator_event_ = &crtk::provide(p, arm::operator_present);
-  if (!config.commands.empty()) provide_commands(p, prefix);
+  if (!config.commands.empty()) {
+    provide_commands(p, prefix);
+    // What the dVRK says (std_msgs/String, latched): printed, and errors counted for the device,
+    // which faults on one while it drives the arm.
+    error_ = text_reader(prefix + "error");
+    warning_ = text_reader(prefix + "warning");
+    p.add_command_read("errors", st.add_column("errors", &errors_));
+  }
+}
+
+fdds::DataReader* ImportedArm::text_reader(const std::string& name) {
+  fdds::TypeSupport type(new std_msgs::msg::StringPubSubType());
+  type.register_type(dds_.participant);
+  fdds::Topic* t = dds_.participant->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+  if (t == nullptr) throw std::runtime_error("import: could not create topic " + name);
+  auto* r = dds_.subscriber->create_datareader(t, DdsContext::reader_qos(Flow::log));
+  if (r == nullptr) throw std::runtime_error("import: could not subscribe to " + name);
+  return r;
+}
+
+// Another process's text, printed on a terminal: one line, printable, bounded.
+void ImportedArm::take_text(fdds::DataReader* r, const char* kind, bool is_error) {
+  if (r == nullptr) return;
+  std_msgs::msg::String m;
+  fdds::SampleInfo info;
+  while (r->take_next_sample(&m, &info) == ReturnCode_t::RETCODE_OK) {
+    if (!info.valid_data) continue;
+    std::string text = m.data().substr(0, 240);
+    for (char& ch : text)
+      if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) ch = ' ';
+    std::fprintf(stderr, "saw-gateway: import %s: the arm's %s: %s\n", name().c_str(), kind, text.c_str());
+    if (is_error) ++errors_;
+  }
 }
 
 void ImportedArm::provide_commands(ProvidedInterface& p, const std::string& prefix) {
@@ -209,8 +244,42 @@ bool ImportedArm::take_newest(fdds::DataReader* r, T& out) {
   return got;
 }
 
+// measured_cp also by its header stamp, as the dVRK sends it: stamp 0 is its "no valid data"
+// (cisst-ros sends an invalid sample so), and a stamp not newer than the last one's is a source
+// that repeats itself. Neither is a new sample: the row's arrival stamp then ages, and the
+// device faults at its stale_timeout, as it does when the stream stops.
+bool ImportedArm::take_cp() {
+  geometry_msgs::msg::PoseStamped m;
+  fdds::SampleInfo info;
+  bool got = false;
+  while (cp_->take_next_sample(&m, &info) == ReturnCode_t::RETCODE_OK) {
+    if (!info.valid_data) continue;
+    const auto& t = m.header().stamp();
+    const std::int64_t stamp = static_cast<std::int64_t>(t.sec()) * 1'000'000'000 + t.nanosec();
+    if (stamp == 0) {
+      invalid_stamps_.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    if (stamp <= last_cp_stamp_) {
+      repeated_stamps_.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    Pose p;
+    std::string why;
+    if (!conversions::PoseConv::from_msg(m, p, why)) {
+      rejected_.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    last_cp_stamp_ = stamp;
+    measured_cp_ = p;
+    got = true;
+    samples_.fetch_add(1, std::memory_order_relaxed);
+  }
+  return got;
+}
+
 void ImportedArm::run() {
-  if (take_newest(cp_, measured_cp_)) {
+  if (take_cp()) {
     cp_arrival_ = now();
     has_cp_ = true;
   }
@@ -239,6 +308,8 @@ void ImportedArm::run() {
     const bool on = true;
     gravity_sent_ = send(gravity_, &on);
   }
+  take_text(error_, "error", true);
+  take_text(warning_, "warning", false);
   watch_client();
   // No measured_cp yet, or none for a while: the row keeps the last arrival, and ages.
   stamp_row(cp_arrival_);

@@ -16,7 +16,8 @@ namespace saw::gateway {
 // measured_cv, measured_js, operating_state (reads); operating_state, clutch, operator_present
 // (events).
 // Read-write (ImportConfig::commands), the provided "dvrk" for one client, a dvrk_arm device in
-// saw-rt: the same reads, and state_command, servo_cf (the arm's body/servo_cf), servo_cp, hold
+// saw-rt: the same reads and `errors` (how many error messages the arm sent; each, and each
+// warning, printed), and state_command, servo_cf (the arm's body/servo_cf), servo_cp, hold
 // forwarded to reliable writers as the dVRK's subscriptions require. The device keeps the
 // contract; the import keeps what a process must do for a client that can no longer: the safe
 // command when the client falls silent while moving the arm, and on the gateway's exit (its
@@ -32,6 +33,10 @@ class ImportedArm : public Task {
   const std::string& interface_name() const noexcept { return interface_; }
   std::uint64_t samples() const noexcept { return samples_.load(std::memory_order_relaxed); }
   std::uint64_t rejected() const noexcept { return rejected_.load(std::memory_order_relaxed); }
+  // measured_cp samples not taken for their header stamp: 0 (the dVRK's invalid data), or not
+  // newer than the last one's.
+  std::uint64_t invalid_stamps() const noexcept { return invalid_stamps_.load(std::memory_order_relaxed); }
+  std::uint64_t repeated_stamps() const noexcept { return repeated_stamps_.load(std::memory_order_relaxed); }
   // Commands written to the arm, and safe commands the import sent of itself (silence, exit).
   std::uint64_t commands_sent() const noexcept { return sent_.load(std::memory_order_relaxed); }
   std::uint64_t safe_commands() const noexcept { return safe_sent_.load(std::memory_order_relaxed); }
@@ -52,6 +57,9 @@ class ImportedArm : public Task {
   Writer writer(const std::string& name, const std::string& topic, const Mapping& m);
   template <class T>
   bool take_newest(fdds::DataReader* r, T& out);
+  bool take_cp();
+  fdds::DataReader* text_reader(const std::string& topic);
+  void take_text(fdds::DataReader* r, const char* kind, bool is_error);
   void provide_commands(ProvidedInterface& p, const std::string& prefix);
   static bool matched(const Writer& w);
   bool send(const Writer& w, const void* value);
@@ -65,6 +73,8 @@ class ImportedArm : public Task {
   fdds::DataReader *cp_ = nullptr, *cv_ = nullptr, *js_ = nullptr, *state_ = nullptr, *clutch_ = nullptr,
                    *operator_ = nullptr;
   Writer state_command_, servo_cf_, servo_cp_, hold_, gravity_;
+  fdds::DataReader *error_ = nullptr, *warning_ = nullptr;
+  std::uint64_t errors_ = 0;  // error messages of the arm (a state column: "errors")
   bool gravity_sent_ = false;
   Pose measured_cp_;
   bool has_cp_ = false;
@@ -81,7 +91,9 @@ class ImportedArm : public Task {
   int cycles_since_command_ = 0;
   EventWrite<OperatingState>* state_event_ = nullptr;
   EventWrite<ButtonEvent>*clutch_event_ = nullptr, *operator_event_ = nullptr;
-  std::atomic<std::uint64_t> samples_{0}, rejected_{0}, sent_{0}, safe_sent_{0};
+  std::atomic<std::uint64_t> samples_{0}, rejected_{0}, sent_{0}, safe_sent_{0}, invalid_stamps_{0},
+      repeated_stamps_{0};
+  std::int64_t last_cp_stamp_ = 0;
   std::vector<EndpointInfo> endpoints_;
 };
 

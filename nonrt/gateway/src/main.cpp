@@ -149,9 +149,11 @@ int main(int argc, char** argv) {
     std::printf(
         "saw-gateway: published %llu state samples (and %llu on display streams; %llu rows skipped), %llu "
         "events; %llu commands in, %llu rejected; %llu reconnects; %llu queries; imported %llu samples, "
-        "%llu rejected; mirrored %llu samples\n",
+        "%llu rejected, %llu badly stamped; %llu commands to arms (%llu safe, of the imports' own); mirrored "
+        "%llu samples\n",
         u(st.published), u(st.displayed), u(st.rows_skipped), u(st.events), u(st.commands), u(st.rejected),
-        u(st.reconnects), u(st.queries), u(st.imported), u(st.imported_rejected), u(st.mirrored));
+        u(st.reconnects), u(st.queries), u(st.imported), u(st.imported_rejected), u(st.imported_bad_stamps),
+        u(st.arm_commands), u(st.arm_safe_commands), u(st.mirrored));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "saw-gateway: %s\n", e.what());
     return 1;

@@ -82,6 +82,10 @@ struct GatewayStats {
   std::uint64_t queries = 0;            // qualified reads answered
   std::uint64_t imported = 0;           // samples taken from imported arms' topics
   std::uint64_t imported_rejected = 0;  // of which not valid values (dropped, counted)
+  // measured_cp samples stamped 0 (the dVRK's invalid data) or not newer than the last (dropped).
+  std::uint64_t imported_bad_stamps = 0;
+  std::uint64_t arm_commands = 0;       // commands written to imported arms
+  std::uint64_t arm_safe_commands = 0;  // of which the imports' own safe commands (client silent)
   std::uint64_t mirrored = 0;           // state samples taken for mirrored components
 };
 

@@ -62,7 +62,8 @@ struct DvrkSummary {
 // `enable` sent once and ENABLED awaited; a not-homed arm homed (`home: true`, only once ENABLED)
 // or refused; no motion command reaches the arm before it is ENABLED, homed and not busy, nor
 // while it is busy. Following, an arm that leaves ENABLED, loses its homing, stops publishing
-// (stale_timeout) or whose import is gone is this device's FAULT, naming which.
+// (stale_timeout), reports an error (the import's `errors` grows) or whose import is gone is this
+// device's FAULT, naming which.
 class DvrkArm final : public Device {
  public:
   DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config);
@@ -87,6 +88,8 @@ class DvrkArm final : public Device {
   FunctionRead<Pose> read_cp_;
   FunctionRead<Twist> read_cv_;
   FunctionRead<OperatingState> read_state_;
+  FunctionRead<std::uint64_t> read_errors_;  // the import's count of the arm's error messages
+  std::uint64_t errors_before_ = 0;          // the count when the arm was last not driven
   FunctionWrite<Wrench> write_cf_;
   FunctionWrite<Pose> write_cp_;
   FunctionWrite<StateCommand> write_state_;
