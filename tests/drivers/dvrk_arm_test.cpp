@@ -181,6 +181,34 @@ TEST(DvrkArm, AnErrorOfTheArmWhileDrivenFaultsTheDevice) {
   EXPECT_EQ(r.import.received.back().wrench.force[0], 0.0) << "the zero wrench";
 }
 
+// A pose that is not one (NaN, a quaternion off the unit sphere) is never used: the last good one
+// stands, and a stream of them is no stream (stale).
+TEST(DvrkArm, APoseThatIsNotOneIsRefusedAndAStreamOfThemGoesStale) {
+  DvrkArmConfig c = mtm();
+  c.stale_timeout = 20'000'000;
+  Rig r(c);
+  enable_mtm(r);
+  r.import.pose.position[0] = std::nan("");
+  int cycles = 0;
+  while (r.state() != OperatingStateValue::fault && cycles < 100) {
+    r.servo_cf({1, 0, 0});
+    r.step();
+    ++cycles;
+    if (cycles == 5) {
+      EXPECT_GE(r.arm.summary().bad_poses, 4u) << "refused, never used";
+    }
+  }
+  EXPECT_EQ(r.arm.fault().code, FaultCode::input_stale);
+  EXPECT_GE(cycles, 19);
+  EXPECT_LE(cycles, 22);
+  r.import.pose.position[0] = 0;
+  r.import.pose.orientation = {0, 0, 0, 2};  // not a rotation
+  const auto before = r.arm.summary().bad_poses;
+  r.step(2);
+  EXPECT_EQ(r.arm.summary().bad_poses, before + 2);
+  EXPECT_EQ(r.import.received.back().wrench.force[0], 0.0);
+}
+
 TEST(DvrkArm, ADvrkThatStopsPublishingFaultsAtTheStaleTimeout) {
   DvrkArmConfig c = mtm();
   c.stale_timeout = 20'000'000;

@@ -30,13 +30,19 @@ class FakeImport : public Component {
     crtk::provide(p, arm::measured_cp, state_table(), &cp_);
     crtk::provide(p, arm::measured_cv, state_table(), &cv_);
     crtk::provide(p, arm::operating_state, state_table(), &state_);
-    crtk::provide(p, arm::servo_cf, [this](const Wrench& w) { got({"servo_cf", state, w, {}}); });
+    crtk::provide(p, arm::servo_cf, [this](const Wrench& w) {
+      got({"servo_cf", state, w, {}});
+      wrench = w;  // the dVRK applies the last wrench for ever
+    });
     crtk::provide(p, arm::servo_cp, [this](const Pose& x) {
       got({"servo_cp", state, {}, x});
       if (follows) pose = x;  // a PSM reaches its servo goal by its next sample
     });
     crtk::provide(p, arm::state_command, [this](const StateCommand& c) { command(c); });
-    p.add_command_void("hold", [this] { got({"hold", state, {}, {}}); });
+    p.add_command_void("hold", [this] {
+      got({"hold", state, {}, {}});
+      wrench = {};
+    });
     p.add_command_read("errors", state_table().add_column("errors", &errors_));
   }
 
@@ -59,6 +65,7 @@ class FakeImport : public Component {
   Pose pose{};
   int power_cycles = 5, home_cycles = 10;
   std::uint64_t errors = 0;  // error messages the arm sent (the import counts them)
+  Wrench wrench{};           // what the arm applies: the last servo_cf (zeroed by hold)
   bool follows = true;       // measured_cp is the last servo_cp goal
   bool record = true;        // every command kept (allocates); off, only counted (the RT guard's runs)
   std::vector<Received> received;
