@@ -79,6 +79,52 @@ void enable_mtm(Rig& r) {
   ASSERT_TRUE(r.arm.following()) << "state " << static_cast<int>(r.state());
 }
 
+// A PSM's jaw goes with its pose, checked; an MTM's gripper is read through.
+TEST(DvrkArm, APsmsJawFollowsWithItsPoseWithinItsLimitsAndAnMtmsGripperIsRead) {
+  Rig r(psm());
+  r.import.pose.position = {0.01, 0, -0.1};
+  auto jaw = [&](double angle) {
+    JointState j;
+    j.size = 1;
+    j.position[0] = angle;
+    r.arm.provided("arm")->find_command("jaw_servo_jp")->execute(&j);
+  };
+  jaw(0.5);
+  r.step(2);
+  EXPECT_EQ(r.import.count("jaw_servo_jp"), 0) << "not before the arm is driven";
+  r.state_command(StateCommand::enable);
+  r.step(40);
+  ASSERT_TRUE(r.arm.following());
+  Pose p = r.import.pose;
+  for (const double angle : {0.6, 2.0, std::nan(""), -1.0, 0.7}) {
+    jaw(angle);
+    p.position[0] += 0.0001;
+    r.servo_cp(p);
+    r.step();
+  }
+  EXPECT_EQ(r.import.count("jaw_servo_jp"), 2) << "0.6 and 0.7; 2 rad, NaN and -1 rad refused";
+  EXPECT_EQ(r.import.received.back().what, "jaw_servo_jp");
+  EXPECT_EQ(r.import.received.back().jaw, 0.7);
+  EXPECT_EQ(r.arm.summary().jaw_refused, 3u);
+  r.import.state.is_busy = true;  // held back with the pose
+  r.step();
+  jaw(0.8);
+  r.servo_cp(p);
+  r.step(2);
+  EXPECT_EQ(r.import.count("jaw_servo_jp"), 2);
+
+  Rig m(mtm());
+  m.import.jaw = 0.3;
+  m.step(2);
+  JointState g;
+  const auto* gripper = m.arm.provided("arm")->find_command("gripper_measured_js");
+  ASSERT_NE(gripper, nullptr);
+  ASSERT_EQ(gripper->read(nullptr, &g), Status::ok);
+  EXPECT_EQ(g.size, 1u);
+  EXPECT_EQ(g.position[0], 0.3) << "the import's gripper, read through";
+  EXPECT_EQ(m.arm.provided("arm")->find_command("jaw_servo_jp"), nullptr) << "an MTM has no jaw";
+}
+
 TEST(DvrkArm, NothingButStateCommandsReachTheArmBeforeItIsEnabledHomedAndIdle) {
   Rig r(mtm());
   r.step(3);

@@ -18,10 +18,11 @@ namespace saw::drivers::dvrk::testing {
 class FakeImport : public Component {
  public:
   struct Received {
-    std::string_view what;  // "enable", "home", "disable", "servo_cf", "servo_cp", "hold"
+    std::string_view what;  // "enable", "home", "disable", "servo_cf", "servo_cp", "jaw_servo_jp", "hold"
     OperatingState arm;
     Wrench wrench{};
     Pose pose{};
+    double jaw = 0;
   };
 
   explicit FakeImport(std::string name) : Component(std::move(name)) {
@@ -39,6 +40,14 @@ class FakeImport : public Component {
       if (follows) pose = x;  // a PSM reaches its servo goal by its next sample
     });
     crtk::provide(p, arm::state_command, [this](const StateCommand& c) { command(c); });
+    crtk::provide(p, arm::jaw_servo_jp, [this](const JointState& j) {
+      Received r{"jaw_servo_jp", state, {}, {}};
+      r.jaw = j.position[0];
+      got(r);
+    });
+    // An MTM's gripper and a PSM's jaw: one joint each, `jaw` below.
+    crtk::provide(p, arm::gripper_measured_js, state_table(), &jaw_js_);
+    crtk::provide(p, arm::jaw_measured_js, state_table(), &jaw_js_);
     p.add_command_void("hold", [this] {
       got({"hold", state, {}, {}});
       wrench = {};
@@ -53,6 +62,8 @@ class FakeImport : public Component {
     cp_ = pose;
     state_ = state;
     errors_ = errors;
+    jaw_js_.size = 1;
+    jaw_js_.position[0] = jaw;
     state_table().advance(t);
   }
   int count(std::string_view what) const {
@@ -65,14 +76,15 @@ class FakeImport : public Component {
   Pose pose{};
   int power_cycles = 5, home_cycles = 10;
   std::uint64_t errors = 0;  // error messages the arm sent (the import counts them)
+  double jaw = 0.5;          // the gripper's or the jaw's angle, rad
   Wrench wrench{};           // what the arm applies: the last servo_cf (zeroed by hold)
   bool follows = true;       // measured_cp is the last servo_cp goal
   bool record = true;        // every command kept (allocates); off, only counted (the RT guard's runs)
   std::vector<Received> received;
 
  private:
-  static constexpr std::array<std::string_view, 6> kinds{"enable",   "home",     "other",
-                                                         "servo_cf", "servo_cp", "hold"};
+  static constexpr std::array<std::string_view, 7> kinds{"enable",   "home", "other",       "servo_cf",
+                                                         "servo_cp", "hold", "jaw_servo_jp"};
   std::array<int, kinds.size()> counts{};
   void got(const Received& r) {
     for (std::size_t i = 0; i < kinds.size(); ++i)
@@ -96,6 +108,7 @@ class FakeImport : public Component {
   Twist cv_{};
   OperatingState state_{};
   std::uint64_t errors_ = 0;
+  JointState jaw_js_{};
 };
 
 }  // namespace saw::drivers::dvrk::testing

@@ -4,7 +4,7 @@ deployed by the shipped config/dvrk-psm.yaml (renamed for this run, on this test
 
 (a) the handshake: `enable`, then `home`, and no motion command before the arm is ENABLED, homed
     and not busy (the simulated arm warns of every early one);
-(b) the PSM follows half the Omni's hand motion; the tracking error is printed;
+(b) the PSM follows half the Omni's hand motion; the tracking error is printed; its jaw is read;
 (c) every stop path ends with `hold` (the PSM's safe command) and the arm still: saw-rt's SIGTERM
     (the device), `kill -9` of saw-rt (the gateway's exit path), saw-rt frozen (the import's
     watchdog).
@@ -101,6 +101,9 @@ def follow_and_sigterm(saw_rt, work, tag, domain):
             print(f"figure: PSM tracking error while ENABLED ({len(e)} cycles): RMS {rms * 1000:.2f} mm, "
                   f"max {e[-1] * 1000:.2f} mm (scale 0.5, the sim's 20 ms tracking lag included)")
             check(rms < 0.01, f"tracking error RMS {rms * 1000:.2f} mm < 10 mm")
+            # The last second's: the jaw's topic may match a little after measured_cp's.
+            jaws = {r[f"psm1{tag}.jaw_measured_js.q0"] for r in rows[-1000:]}
+            check(jaws == {"0.5"}, f"the PSM's jaw (0.5 rad in the sim) reads through the device: {sorted(jaws)[:3]}")
         else:
             check(False, "the record has the teleoperation ENABLED")
 

@@ -66,6 +66,17 @@ DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
   r.add_function("errors", read_errors_, Need::optional);
   r.add_function("hold", hold_,
                  arm_config_.safe_command == SafeCommand::hold ? Need::required : Need::optional);
+  // The gripper (MTM) or the jaw (PSM), passed on checked.
+  auto& a = *provided(std::string(arm::interface_name));
+  if (psm) {
+    crtk::require(r, arm::jaw_measured_js, read_jaw_, Need::optional);
+    crtk::require(r, arm::jaw_servo_jp, write_jaw_, Need::optional);
+    crtk::provide(a, arm::jaw_measured_js, state_table(), &jaw_);
+    crtk::provide(a, arm::jaw_servo_jp, [this](const JointState& j) { on_jaw(j); });
+  } else {
+    crtk::require(r, arm::gripper_measured_js, read_jaw_, Need::optional);
+    crtk::provide(a, arm::gripper_measured_js, state_table(), &jaw_);
+  }
   provide("dvrk").add_command_read("summary",
                                    state_table().add_column("summary", &summary_, ColumnUse::summary));
 }
@@ -96,6 +107,9 @@ Outcome DvrkArm::read() {
       ok = ok && std::isfinite(cv.linear[k]) && std::isfinite(cv.angular[k]);
     if (ok) measured().cv = cv;
   }
+  JointState jaw;
+  if (read_jaw_.is_bound() && read_jaw_(jaw) == Status::ok && jaw.size >= 1 && std::isfinite(jaw.position[0]))
+    jaw_ = jaw;
   OperatingState arm;
   if (read_state_(arm) == Status::ok) {
     summary_.arm = arm;
@@ -172,8 +186,21 @@ Outcome DvrkArm::home() {
   return send_state(StateCommand::home, home_sent_, "the home did not reach the arm's import");
 }
 
+void DvrkArm::on_jaw(const JointState& j) noexcept {
+  if (j.size < 1 || !std::isfinite(j.position[0]) || j.position[0] < arm_config_.jaw_min ||
+      j.position[0] > arm_config_.jaw_max) {
+    ++summary_.jaw_refused;
+    return;
+  }
+  jaw_goal_ = JointState{};
+  jaw_goal_.size = 1;
+  jaw_goal_.position[0] = j.position[0];
+  jaw_pending_ = true;
+}
+
 Outcome DvrkArm::write(const Setpoint& s) {
   if (s.mode == ServoMode::none) {
+    jaw_pending_ = false;  // a jaw goal goes only with the arm's motion
     (void)send_safe();
     return Outcome::done();
   }
@@ -196,6 +223,8 @@ Outcome DvrkArm::write(const Setpoint& s) {
   not_sent_in_a_row_ = 0;
   ++summary_.commands;
   commanded_ = true;
+  if (jaw_pending_ && write_jaw_.is_bound() && write_jaw_(jaw_goal_) == Status::ok) ++summary_.jaw_commands;
+  jaw_pending_ = false;
   return Outcome::done();
 }
 

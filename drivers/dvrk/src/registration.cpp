@@ -54,6 +54,9 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
   c.home = p.get_or<bool>("home", false);
   c.start_enabled = p.get_or<bool>("start_enabled", false);
   if (psm) {
+    c.jaw_min = p.get_in_range("jaw_min", -1, 2, c.jaw_min);
+    c.jaw_max = p.get_in_range("jaw_max", -1, 2, c.jaw_max);
+    if (!(c.jaw_min < c.jaw_max)) p.fail_at("jaw_max", "must be above jaw_min");
     c.max_linear_speed = p.get_in_range("max_linear_speed", 1e-3, 2, c.max_linear_speed);
     c.max_angular_speed = p.get_in_range("max_angular_speed", 1e-3, 20, c.max_angular_speed);
     if (p.has("workspace")) {
@@ -71,10 +74,12 @@ std::string summary_line(const DvrkSummary& s) {
   char b[300];
   std::snprintf(b, sizeof b,
                 "%llu motion commands, %llu safe commands, %llu held back while the arm was busy, %llu not "
-                "taken by the import, %llu poses refused; the dVRK arm last %s%s%s",
+                "taken by the import, %llu poses refused, %llu jaw commands (%llu refused); the dVRK arm "
+                "last %s%s%s",
                 static_cast<unsigned long long>(s.commands), static_cast<unsigned long long>(s.safe_commands),
                 static_cast<unsigned long long>(s.held_busy), static_cast<unsigned long long>(s.not_sent),
-                static_cast<unsigned long long>(s.bad_poses), to_string(s.arm.state).data(),
+                static_cast<unsigned long long>(s.bad_poses), static_cast<unsigned long long>(s.jaw_commands),
+                static_cast<unsigned long long>(s.jaw_refused), to_string(s.arm.state).data(),
                 s.arm.is_homed ? ", homed" : "", s.arm.is_busy ? ", busy" : "");
   return b;
 }

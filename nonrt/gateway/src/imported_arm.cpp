@@ -35,6 +35,9 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
   cp_ = topic(arm::measured_cp);
   cv_ = topic(arm::measured_cv);
   js_ = topic(arm::measured_js);
+  // An MTM's gripper, a PSM's jaw: whichever the arm publishes.
+  gripper_ = reader(arm::gripper_measured_js, prefix + "gripper/measured_js", Flow::state);
+  jaw_ = reader(arm::jaw_measured_js, prefix + "jaw/measured_js", Flow::state);
   // The dVRK latches its operating state: a gateway started after the arm was enabled gets it at
   // once (a volatile reader would wait for the next change).
   state_ = reader(arm::operating_state_event, prefix + std::string(arm::operating_state_event.name),
@@ -48,6 +51,8 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
   crtk::provide(p, arm::measured_cp, st, &measured_cp_);
   crtk::provide(p, arm::measured_cv, st, &measured_cv_);
   crtk::provide(p, arm::measured_js, st, &measured_js_);
+  crtk::provide(p, arm::gripper_measured_js, st, &gripper_js_);
+  crtk::provide(p, arm::jaw_measured_js, st, &jaw_js_);
   crtk::provide(p, arm::operating_state, st, &operating_state_);
   state_event_ = &crtk::provide(p, arm::operating_state_event);
   clutch_event_ = &crtk::provide(p, arm::clutch);
@@ -115,6 +120,10 @@ void ImportedArm::provide_commands(ProvidedInterface& p, const std::string& pref
   if (allowed("servo_cp")) {
     servo_cp_ = writer("servo_cp", prefix + "servo_cp", mapping_of(arm::servo_cp));
     crtk::provide(p, arm::servo_cp, [this](const Pose& x) { command(servo_cp_, &x, true); });
+  }
+  if (allowed("jaw_servo_jp")) {
+    jaw_servo_jp_ = writer("jaw_servo_jp", prefix + "jaw/servo_jp", mapping_of(arm::jaw_servo_jp));
+    crtk::provide(p, arm::jaw_servo_jp, [this](const JointState& j) { command(jaw_servo_jp_, &j, true); });
   }
   if (allowed("hold")) {
     hold_ = writer("hold", prefix + "hold", empty_mapping());
@@ -285,6 +294,8 @@ void ImportedArm::run() {
   }
   (void)take_newest(cv_, measured_cv_);
   (void)take_newest(js_, measured_js_);
+  (void)take_newest(gripper_, gripper_js_);
+  (void)take_newest(jaw_, jaw_js_);
   OperatingState s;
   if (take_newest(state_, s)) {
     const bool changed = s.state != operating_state_.state;

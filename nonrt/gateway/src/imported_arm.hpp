@@ -13,11 +13,12 @@
 namespace saw::gateway {
 
 // Read-only (as the paper's research API was), the provided "arm" (crtk_arm.hpp): measured_cp,
-// measured_cv, measured_js, operating_state (reads); operating_state, clutch, operator_present
-// (events).
+// measured_cv, measured_js, gripper_measured_js (an MTM's), jaw_measured_js (a PSM's),
+// operating_state (reads); operating_state, clutch, operator_present (events).
 // Read-write (ImportConfig::commands), the provided "dvrk" for one client, a dvrk_arm device in
 // saw-rt: the same reads and `errors` (how many error messages the arm sent; each, and each
-// warning, printed), and state_command, servo_cf (the arm's body/servo_cf), servo_cp, hold
+// warning, printed), and state_command, servo_cf (the arm's body/servo_cf), servo_cp,
+// jaw_servo_jp (jaw/servo_jp), hold
 // forwarded to reliable writers as the dVRK's subscriptions require. The device keeps the
 // contract; the import keeps what a process must do for a client that can no longer: the safe
 // command when the client falls silent while moving the arm, and on the gateway's exit (its
@@ -71,15 +72,15 @@ class ImportedArm : public Task {
   ImportConfig config_;
   std::string interface_;
   fdds::DataReader *cp_ = nullptr, *cv_ = nullptr, *js_ = nullptr, *state_ = nullptr, *clutch_ = nullptr,
-                   *operator_ = nullptr;
-  Writer state_command_, servo_cf_, servo_cp_, hold_, gravity_;
+                   *operator_ = nullptr, *gripper_ = nullptr, *jaw_ = nullptr;
+  Writer state_command_, servo_cf_, servo_cp_, jaw_servo_jp_, hold_, gravity_;
   fdds::DataReader *error_ = nullptr, *warning_ = nullptr;
   std::uint64_t errors_ = 0;  // error messages of the arm (a state column: "errors")
   bool gravity_sent_ = false;
   Pose measured_cp_;
   bool has_cp_ = false;
   Twist measured_cv_;
-  JointState measured_js_;
+  JointState measured_js_, gripper_js_, jaw_js_;
   OperatingState operating_state_;
   TimeNs cp_arrival_ = 0;
   // The client's last state command while the arm's subscription was not matched yet: a

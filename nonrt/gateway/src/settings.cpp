@@ -41,8 +41,10 @@ void read_import_commands(const Params& im, ImportSettings& s) {
     return std::find(s.commands.begin(), s.commands.end(), c) != s.commands.end();
   };
   for (const auto& c : s.commands)
-    if (c != "servo_cf" && c != "servo_cp" && c != "hold")
-      im.fail_at("commands", "'" + c + "' is not one of: servo_cf (an MTM), servo_cp (a PSM), hold");
+    if (c != "servo_cf" && c != "servo_cp" && c != "jaw_servo_jp" && c != "hold")
+      im.fail_at(
+          "commands",
+          "'" + c + "' is not one of: servo_cf (an MTM), servo_cp (a PSM), jaw_servo_jp (its jaw), hold");
   if (allowed("servo_cf") && allowed("servo_cp"))
     im.fail_at("commands", "servo_cf (an MTM's wrench) or servo_cp (a PSM's pose), not both");
   if (s.commands.empty()) {

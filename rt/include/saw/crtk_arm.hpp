@@ -114,6 +114,11 @@ using crtk::operating_state_event;
 using crtk::state_command;
 inline constexpr Event<ButtonEvent> clutch{"clutch"};                      // a foot pedal
 inline constexpr Event<ButtonEvent> operator_present{"operator_present"};  // the head sensor
+// A surgical instrument's jaw (a dVRK PSM's jaw/measured_js and jaw/servo_jp) and the master's
+// gripper that commands it (a dVRK MTM's gripper/measured_js): one joint, rad. Not every arm's.
+inline constexpr Read<JointState> jaw_measured_js{"jaw_measured_js"};
+inline constexpr Write<JointState> jaw_servo_jp{"jaw_servo_jp"};
+inline constexpr Read<JointState> gripper_measured_js{"gripper_measured_js"};
 
 inline constexpr std::array members{
     member(measured_cp), member(measured_cv),      member(measured_js),   member(operating_state),

@@ -15,7 +15,8 @@ namespace saw::gateway {
 struct ImportSettings {
   std::string component;  // its name here
   std::string arm;        // topics rt/[namespace/]<arm>/...
-  // servo_cf (an MTM's body/servo_cf), servo_cp (a PSM's), hold; state_command comes with any.
+  // servo_cf (an MTM's body/servo_cf), servo_cp (a PSM's), jaw_servo_jp (its jaw/servo_jp), hold;
+  // state_command comes with any.
   std::vector<std::string> commands;
   // What the import sends when its client falls silent while moving the arm, and when the
   // gateway exits: zero_wrench (servo_cf), hold, servo_cp_measured (servo_cp at the measured pose).

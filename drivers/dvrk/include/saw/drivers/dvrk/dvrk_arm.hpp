@@ -40,27 +40,35 @@ struct DvrkArmConfig {
                      -std::numeric_limits<double>::infinity()};
   Vec3 workspace_max{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                      std::numeric_limits<double>::infinity()};
+  // PSM jaw_servo_jp: its angle (rad) within these, else refused (the dVRK's large needle
+  // driver opens to about 80 degrees and closes a little past zero to grip).
+  double jaw_min = -0.35, jaw_max = 1.4;
 };
 
 // What went to the arm, for the run's summary and a GUI.
 struct DvrkSummary {
   static constexpr std::string_view type_name = "saw::dvrk::DvrkSummary";
-  static constexpr std::uint32_t layout_version = 1;
-  std::uint64_t commands = 0;       // motion commands sent (servo_cf, servo_cp)
-  std::uint64_t safe_commands = 0;  // safe commands sent
-  std::uint64_t held_busy = 0;      // motion commands held back while the arm was busy
-  std::uint64_t not_sent = 0;       // commands the import's queue did not take (full)
-  std::uint64_t bad_poses = 0;      // measured_cp samples refused (not finite, not a rotation)
-  OperatingState arm{};             // the dVRK's own operating state, as last read
-  static constexpr auto fields =
-      std::tuple{&DvrkSummary::commands, &DvrkSummary::safe_commands, &DvrkSummary::held_busy,
-                 &DvrkSummary::not_sent, &DvrkSummary::bad_poses,     &DvrkSummary::arm};
+  static constexpr std::uint32_t layout_version = 2;  // 2: jaw
+  std::uint64_t commands = 0;                         // motion commands sent (servo_cf, servo_cp)
+  std::uint64_t safe_commands = 0;                    // safe commands sent
+  std::uint64_t held_busy = 0;                        // motion commands held back while the arm was busy
+  std::uint64_t not_sent = 0;                         // commands the import's queue did not take (full)
+  std::uint64_t bad_poses = 0;     // measured_cp samples refused (not finite, not a rotation)
+  std::uint64_t jaw_commands = 0;  // jaw_servo_jp sent
+  std::uint64_t jaw_refused = 0;   // jaw_servo_jp refused (not one finite angle within the limits)
+  OperatingState arm{};            // the dVRK's own operating state, as last read
+  static constexpr auto fields = std::tuple{
+      &DvrkSummary::commands,  &DvrkSummary::safe_commands, &DvrkSummary::held_busy,   &DvrkSummary::not_sent,
+      &DvrkSummary::bad_poses, &DvrkSummary::jaw_commands,  &DvrkSummary::jaw_refused, &DvrkSummary::arm};
 };
 
 // Requires "dvrk" (the import: measured_cp, operating_state, state_command; servo_cf for an MTM,
-// servo_cp for a PSM; measured_cv and hold when there). Enabling walks the dVRK's handshake:
-// `enable` sent once and ENABLED awaited; a not-homed arm homed (`home: true`, only once ENABLED)
-// or refused; no motion command reaches the arm before it is ENABLED, homed and not busy, nor
+// servo_cp for a PSM; measured_cv, hold, errors, and the gripper (MTM) or the jaw (PSM) when
+// there). Provides, besides the device's "arm": an MTM's gripper_measured_js; a PSM's
+// jaw_measured_js and jaw_servo_jp (one finite angle within jaw_min/max, else refused and
+// counted; sent with the cycle's pose, only while the arm is driven, never while it is busy). Enabling walks
+// the dVRK's handshake: `enable` sent once and ENABLED awaited; a not-homed arm homed (`home: true`, only
+// once ENABLED) or refused; no motion command reaches the arm before it is ENABLED, homed and not busy, nor
 // while it is busy. Following, an arm that leaves ENABLED, loses its homing, stops publishing
 // (stale_timeout), reports an error (the import's `errors` grows) or whose import is gone is this
 // device's FAULT, naming which.
@@ -82,6 +90,7 @@ class DvrkArm final : public Device {
 
  private:
   Outcome send_state(StateCommand c, bool& sent, const char* why) noexcept;
+  void on_jaw(const JointState& j) noexcept;
   Status send_safe() noexcept;
 
   DvrkArmConfig arm_config_;
@@ -94,6 +103,10 @@ class DvrkArm final : public Device {
   FunctionWrite<Pose> write_cp_;
   FunctionWrite<StateCommand> write_state_;
   FunctionVoid hold_;
+  FunctionRead<JointState> read_jaw_;  // the gripper (MTM) or the jaw (PSM)
+  FunctionWrite<JointState> write_jaw_;
+  JointState jaw_{}, jaw_goal_{};  // the last good gripper/jaw sample; the last accepted jaw goal
+  bool jaw_pending_ = false;
   DvrkSummary summary_{};
   bool have_state_ = false;
   TimeNs cp_time_ = -1;  // the newest measured_cp's row time (its arrival at the import)
