@@ -125,6 +125,41 @@ TEST(DvrkArm, APsmsJawFollowsWithItsPoseWithinItsLimitsAndAnMtmsGripperIsRead) {
   EXPECT_EQ(m.arm.provided("arm")->find_command("jaw_servo_jp"), nullptr) << "an MTM has no jaw";
 }
 
+// The console's clutch, as the teleoperation takes it from its master: the arm's event.
+TEST(DvrkArm, TheConsolesClutchIsTheArmsEvent) {
+  struct Observer : Component {
+    Observer() : Component("observer") {
+      crtk::require(require("arm"), crtk::arm::clutch,
+                    [this](const ButtonEvent& b) { seen.push_back(b.pressed); });
+    }
+    std::vector<bool> seen;
+  } observer;
+  FakeImport import{"import"};
+  DvrkArm arm("arm", TaskConfig::periodic(std::chrono::milliseconds(1), 0), mtm());
+  Manager manager;
+  manager.add(import);
+  manager.add(arm);
+  manager.add(observer);
+  manager.connect("arm", "dvrk", "import", "dvrk");
+  manager.connect("observer", "arm", "arm", "arm");
+  manager.start_stepped();
+  TimeNs t = 0;
+  const auto step = [&] {
+    import.publish(t);
+    manager.step_until(t);
+    t += 1'000'000;
+  };
+  step();
+  import.clutch(true);
+  step();
+  step();
+  import.clutch(false);
+  step();
+  step();
+  manager.stop();
+  EXPECT_EQ(observer.seen, (std::vector<bool>{true, false}));
+}
+
 TEST(DvrkArm, NothingButStateCommandsReachTheArmBeforeItIsEnabledHomedAndIdle) {
   Rig r(mtm());
   r.step(3);

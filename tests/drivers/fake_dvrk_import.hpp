@@ -53,6 +53,7 @@ class FakeImport : public Component {
       wrench = {};
     });
     p.add_command_read("errors", state_table().add_column("errors", &errors_));
+    clutch_ = &crtk::provide(p, arm::clutch);
   }
 
   // One sample of the arm as the import would have it at t (the dVRK publishing).
@@ -66,6 +67,8 @@ class FakeImport : public Component {
     jaw_js_.position[0] = jaw;
     state_table().advance(t);
   }
+  // The console's clutch pedal, as the import passes it on.
+  void clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
   int count(std::string_view what) const {
     for (std::size_t i = 0; i < kinds.size(); ++i)
       if (kinds[i] == what) return counts[i];
@@ -109,6 +112,7 @@ class FakeImport : public Component {
   OperatingState state_{};
   std::uint64_t errors_ = 0;
   JointState jaw_js_{};
+  EventWrite<ButtonEvent>* clutch_ = nullptr;
 };
 
 }  // namespace saw::drivers::dvrk::testing

@@ -66,6 +66,12 @@ DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
   r.add_function("errors", read_errors_, Need::optional);
   r.add_function("hold", hold_,
                  arm_config_.safe_command == SafeCommand::hold ? Need::required : Need::optional);
+  // The console's pedals (the import's events), as this device's buttons.
+  crtk::require(
+      r, arm::clutch, [this](const ButtonEvent& b) { button(Button::clutch, b.pressed); }, Need::optional);
+  crtk::require(
+      r, arm::operator_present, [this](const ButtonEvent& b) { button(Button::operator_present, b.pressed); },
+      Need::optional);
   // The gripper (MTM) or the jaw (PSM), passed on checked.
   auto& a = *provided(std::string(arm::interface_name));
   if (psm) {

@@ -64,7 +64,8 @@ struct DvrkSummary {
 
 // Requires "dvrk" (the import: measured_cp, operating_state, state_command; servo_cf for an MTM,
 // servo_cp for a PSM; measured_cv, hold, errors, and the gripper (MTM) or the jaw (PSM) when
-// there). Provides, besides the device's "arm": an MTM's gripper_measured_js; a PSM's
+// there; the console's clutch and operator_present, which become this device's events). Provides,
+// besides the device's "arm": an MTM's gripper_measured_js; a PSM's
 // jaw_measured_js and jaw_servo_jp (one finite angle within jaw_min/max, else refused and
 // counted; sent with the cycle's pose, only while the arm is driven, never while it is busy). Enabling walks
 // the dVRK's handshake: `enable` sent once and ENABLED awaited; a not-homed arm homed (`home: true`, only
