@@ -67,6 +67,17 @@ def start(saw_rt, work, tag, domain, name):
     return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
 
 
+def driven(saw_rt, work, tag, domain, name, sim):
+    """saw-rt started and driving the arm, or None (said, and stopped)."""
+    rt = start(saw_rt, work, tag, domain, name)
+    if following(sim) is not None:
+        return rt
+    check(False, f"{name}: the teleoperation drives the simulated MTM first")
+    print(rt.text())
+    rt.stop()
+    return None
+
+
 def handshake_and_follow(saw_rt, work, tag, domain):
     print("-- (a) handshake, (b) force feedback, (c) SIGTERM")
     with S.SimArm(ARM, domain, kind="mtm", rate=500.0) as sim:
@@ -151,11 +162,8 @@ def report_figures(record, tag, seen):
 def kill_paths(saw_rt, work, tag, domain):
     print("-- (c) kill -9 of saw-rt: the gateway's exit path")
     with S.SimArm(ARM, domain, kind="mtm", rate=500.0) as sim:
-        rt = start(saw_rt, work, tag, domain, "kill")
-        if following(sim) is None:
-            check(False, "the teleoperation drives the simulated MTM before the kill")
-            print(rt.text())
-            rt.stop()
+        rt = driven(saw_rt, work, tag, domain, "kill", sim)
+        if rt is None:
             return
         t_kill = time.monotonic()
         rt.p.kill()
@@ -172,11 +180,8 @@ def kill_paths(saw_rt, work, tag, domain):
 
     print("-- (c) saw-rt frozen (SIGSTOP): the import's watchdog")
     with S.SimArm(ARM, domain, kind="mtm", rate=500.0) as sim:
-        rt = start(saw_rt, work, tag, domain, "stop")
-        if following(sim) is None:
-            check(False, "the teleoperation drives the simulated MTM before the freeze")
-            print(rt.text())
-            rt.stop()
+        rt = driven(saw_rt, work, tag, domain, "stop", sim)
+        if rt is None:
             return
         t_stop = time.monotonic()
         os.kill(rt.p.pid, signal.SIGSTOP)
@@ -203,11 +208,8 @@ def arm_faults(saw_rt, work, tag, domain):
                               ("fault", lambda s: s.fault("simulated encoder error"), "in FAULT")):
         print(f"-- (d) the arm goes wrong: {name}")
         with S.SimArm(ARM, domain, kind="mtm", rate=500.0) as sim:
-            rt = start(saw_rt, work, tag, domain, name)
-            if following(sim) is None:
-                check(False, f"{name}: the teleoperation drives the simulated MTM first")
-                print(rt.text())
-                rt.stop()
+            rt = driven(saw_rt, work, tag, domain, name.replace(" ", "_"), sim)
+            if rt is None:
                 continue
             t = time.monotonic()
             act(sim)

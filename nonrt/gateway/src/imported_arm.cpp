@@ -131,18 +131,23 @@ void ImportedArm::provide_commands(ProvidedInterface& p, const std::string& pref
   }
 }
 
-ImportedArm::Writer ImportedArm::writer(const std::string& name, const std::string& topic, const Mapping& m) {
+void ImportedArm::add_endpoint(const std::string& name, const std::string& topic, const Mapping& m,
+                               const char* kind) {
   EndpointInfo e;
   e.component = this->name();
   e.interface_name = interface_;
   e.name = name;
-  e.kind = "import_command";
+  e.kind = kind;
   e.saw_type = m.saw_type();
   e.saw_size = static_cast<std::uint32_t>(m.size());
   e.saw_version = m.saw_version();
   e.dds_type = m.dds_type();
   e.topic = topic;
   endpoints_.push_back(std::move(e));
+}
+
+ImportedArm::Writer ImportedArm::writer(const std::string& name, const std::string& topic, const Mapping& m) {
+  add_endpoint(name, topic, m, "import_command");
   // Reliable: the dVRK's subscriptions are (a best-effort writer would match none of them).
   auto* w = dds_.publisher->create_datawriter(dds_.topic(topic, m), DdsContext::writer_qos(Flow::command));
   if (w == nullptr) throw std::runtime_error("import: could not publish " + topic);
@@ -215,17 +220,7 @@ void ImportedArm::leave_safely(TimeNs deadline) {
 
 fdds::DataReader* ImportedArm::reader(const std::string& name, const std::string& topic, const Mapping& m,
                                       Flow f) {
-  EndpointInfo e;
-  e.component = this->name();
-  e.interface_name = crtk::arm::interface_name;
-  e.name = name;
-  e.kind = "import";
-  e.saw_type = m.saw_type();
-  e.saw_size = static_cast<std::uint32_t>(m.size());
-  e.saw_version = m.saw_version();
-  e.dds_type = m.dds_type();
-  e.topic = topic;
-  endpoints_.push_back(std::move(e));
+  add_endpoint(name, topic, m, "import");
   // State streams: best effort matches both best-effort and reliable publishers (ROS 2's default).
   auto* r = dds_.subscriber->create_datareader(dds_.topic(topic, m), DdsContext::reader_qos(f));
   if (r == nullptr) throw std::runtime_error("import: could not subscribe to " + topic);

@@ -56,6 +56,8 @@ class ImportedArm : public Task {
   template <class M>
   fdds::DataReader* reader(M member, const std::string& topic, Flow f);
   Writer writer(const std::string& name, const std::string& topic, const Mapping& m);
+  // The manifest's row for an imported value ("import") or command ("import_command").
+  void add_endpoint(const std::string& name, const std::string& topic, const Mapping& m, const char* kind);
   template <class T>
   bool take_newest(fdds::DataReader* r, T& out);
   bool take_cp();
