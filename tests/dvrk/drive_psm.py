@@ -90,7 +90,7 @@ def follow_and_sigterm(saw_rt, work, tag, domain):
         t_stop = time.monotonic()
         rc = rt.stop(signal.SIGTERM)
         check(rc == 0, f"saw-rt stopped in order on SIGTERM (exit {rc})")
-        check(ends_with_hold(sim, t_stop - 0.01) is not None, "SIGTERM: the last command is hold (the device's)")
+        check(ends_with_hold(sim, t_stop - 0.01) is not None, "SIGTERM: the last command is hold (the device's, or the import's as it exits)")
         moved = still(sim)
         check(moved < 1e-4, f"and the PSM stays where it was ({moved * 1000:.3f} mm in 0.3 s)")
         rows = [r for r in csv.DictReader(open(os.path.join(work, "follow.csv")))

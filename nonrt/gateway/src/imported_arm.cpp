@@ -170,7 +170,22 @@ bool ImportedArm::send(const Writer& w, const void* value) {
 void ImportedArm::command(const Writer& w, const void* value, bool motion) {
   last_command_ = now();
   cycles_since_command_ = 0;
+  // A safe command on a topic of its own (hold) goes after every motion command: one of those
+  // repaired by DDS after it would reach the arm last, and the arm would act on it.
+  if (!motion && &w == &hold_) settle_motion(monotonic_now() + 50'000'000);
   if (send(w, value)) moving_ = motion;
+}
+
+bool ImportedArm::acknowledged(const Writer& w, TimeNs deadline) {
+  if (w.writer == nullptr) return true;
+  const TimeNs left = std::max<TimeNs>(deadline - monotonic_now(), 0);
+  return w.writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+             static_cast<std::int32_t>(left / 1'000'000'000),
+             static_cast<std::uint32_t>(left % 1'000'000'000))) == ReturnCode_t::RETCODE_OK;
+}
+
+void ImportedArm::settle_motion(TimeNs deadline) {
+  for (const Writer* w : {&servo_cf_, &servo_cp_, &jaw_servo_jp_}) (void)acknowledged(*w, deadline);
 }
 
 bool ImportedArm::send_safe_command() {
@@ -179,6 +194,7 @@ bool ImportedArm::send_safe_command() {
     const Wrench zero{};
     ok = send(servo_cf_, &zero);
   } else if (config_.safe_command == "hold") {
+    settle_motion(monotonic_now() + 50'000'000);
     ok = send(hold_, nullptr);
   } else if (config_.safe_command == "servo_cp_measured" && has_cp_) {
     ok = send(servo_cp_, &measured_cp_);
@@ -206,16 +222,14 @@ void ImportedArm::watch_client() {
 }
 
 void ImportedArm::leave_safely(TimeNs deadline) {
-  if (config_.commands.empty() || !moving_) return;
-  if (!send_safe_command()) return;
-  std::fprintf(stderr, "saw-gateway: import %s: exiting while its client moved the arm: %s sent\n",
-               name().c_str(), config_.safe_command.c_str());
-  const Writer& w = config_.safe_command == "zero_wrench" ? servo_cf_
-                    : config_.safe_command == "hold"      ? hold_
-                                                          : servo_cp_;
-  const TimeNs left = std::max<TimeNs>(deadline - monotonic_now(), 0);
-  (void)w.writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
-      static_cast<std::int32_t>(left / 1'000'000'000), static_cast<std::uint32_t>(left % 1'000'000'000)));
+  if (config_.commands.empty()) return;
+  if (moving_ && send_safe_command())
+    std::fprintf(stderr, "saw-gateway: import %s: exiting while its client moved the arm: %s sent\n",
+                 name().c_str(), config_.safe_command.c_str());
+  // Whoever sent the last command (the client's own safe command, just before it stopped us, or
+  // ours): it reaches the arm before our participant goes, or a loss could not be repaired.
+  for (const Writer* w : {&servo_cf_, &servo_cp_, &jaw_servo_jp_, &hold_, &state_command_})
+    (void)acknowledged(*w, deadline);
 }
 
 fdds::DataReader* ImportedArm::reader(const std::string& name, const std::string& topic, const Mapping& m,

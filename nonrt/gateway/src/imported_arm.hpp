@@ -67,6 +67,10 @@ class ImportedArm : public Task {
   static bool matched(const Writer& w);
   bool send(const Writer& w, const void* value);
   void command(const Writer& w, const void* value, bool motion);
+  // Waits (until `deadline`) for the arm to acknowledge what `w` sent; false if it did not.
+  static bool acknowledged(const Writer& w, TimeNs deadline);
+  // Every motion command acknowledged (bounded) before a safe command on another topic.
+  void settle_motion(TimeNs deadline);
   bool send_safe_command();
   void watch_client();
 
