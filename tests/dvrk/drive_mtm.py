@@ -60,6 +60,15 @@ def last_wrench_is_zero(sim):
     return bool(got) and not nonzero(got[-1].value) and sim.stored_wrench() == (0.0, 0.0, 0.0)
 
 
+def wrench_story(sim, t):
+    """The last wrenches the arm received, timed from t, and the one it keeps: what a failure saw."""
+    got = sim.commands(WRENCH)[-6:]
+    rows = [f"  {(c.time - t) * 1000:+8.1f} ms  {c.value.wrench.force.x:+.4f} {c.value.wrench.force.y:+.4f} "
+            f"{c.value.wrench.force.z:+.4f}" for c in got]
+    return "\n".join(["the last wrenches at the arm (ms from the stop):"] + rows +
+                      [f"  the arm keeps {sim.stored_wrench()}"])
+
+
 def start(saw_rt, work, tag, domain, name):
     path = os.path.join(work, f"{name}.yaml")
     with open(path, "w") as f:
@@ -111,11 +120,16 @@ def handshake_and_follow(saw_rt, work, tag, domain):
         check(swing > 0.03, f"the MTM follows the Omni's hand (±3 cm): it swung {swing * 100:.1f} cm")
 
         t_stop = time.monotonic()
+        # What follows is a verdict on the SIGTERM path only if nothing faulted before it.
+        early = rt.faults_before(t_stop)
+        check(not early, f"nothing faulted before the SIGTERM: {early[:2]}")
         rc = rt.stop(signal.SIGTERM)
         check(rc == 0, f"saw-rt stopped in order on SIGTERM (exit {rc})")
         z = zero_after(sim, t_stop, 2.0)
-        check(z is not None and last_wrench_is_zero(sim),
-              "SIGTERM: the last wrench on the arm is zero (the device's safe command, or the import's as it exits)")
+        if not check(z is not None and last_wrench_is_zero(sim),
+                     "SIGTERM: the last wrench on the arm is zero (the device's safe command, or the import's as it exits)"):
+            print(wrench_story(sim, t_stop))
+            print(rt.text())
         report_figures(os.path.join(work, "follow.csv"), tag, seen)
 
 

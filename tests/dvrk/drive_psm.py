@@ -88,9 +88,14 @@ def follow_and_sigterm(saw_rt, work, tag, domain):
         swing = max(xs) - min(xs)
         check(0.02 < swing < 0.04, f"the PSM follows half the Omni's hand (±3 cm): it swung {swing * 100:.1f} cm")
         t_stop = time.monotonic()
+        # What follows is a verdict on the SIGTERM path only if nothing faulted before it.
+        early = rt.faults_before(t_stop)
+        check(not early, f"nothing faulted before the SIGTERM: {early[:2]}")
         rc = rt.stop(signal.SIGTERM)
         check(rc == 0, f"saw-rt stopped in order on SIGTERM (exit {rc})")
-        check(ends_with_hold(sim, t_stop - 0.01) is not None, "SIGTERM: the last command is hold (the device's, or the import's as it exits)")
+        if not check(ends_with_hold(sim, t_stop - 0.01) is not None,
+                     "SIGTERM: the last command is hold (the device's, or the import's as it exits)"):
+            print(rt.text())
         moved = still(sim)
         check(moved < 1e-4, f"and the PSM stays where it was ({moved * 1000:.3f} mm in 0.3 s)")
         rows = [r for r in csv.DictReader(open(os.path.join(work, "follow.csv")))

@@ -42,6 +42,10 @@ class SawRt:
             time.sleep(0.01)
         return None
 
+    def faults_before(self, t):
+        """saw-rt's FAULT lines that arrived before time t (time.monotonic())."""
+        return [line for at, line in list(self.lines) if at < t and "FAULT" in line]
+
     def text(self):
         return "\n".join(line for _, line in self.lines)
 
