@@ -118,6 +118,7 @@ TEST(GatewaySection, ItsSerializedFormReadsBackTheSameThroughTheSameParser) {
   s.operator_present_topic = "rt/head";
   s.domain = 42;
   s.interfaces = {"127.0.0.1", "10.0.0.1"};
+  s.peers = {"10.0.1.9", "lab-gateway:7410"};
   s.decimation = 7;
   s.display_rate = 25;
   s.insecure = true;
@@ -158,6 +159,14 @@ TEST(GatewaySection, AnImportThatSendsCommandsSaysWhichAndItsSafeCommandFollows)
       R"(key 'gateway\.import\[0\]\.safe_command': only for an import that sends commands)");
   bad("{component: MTML, commands: [servo_cf], command_timeout: 1ms}",
       R"(key 'gateway\.import\[0\]\.command_timeout': must be from 0\.002 to 1 s)");
+}
+
+TEST(GatewaySection, PeersNeedAnInterfaceThatReachesThem) {
+  expect_error(exported + "gateway: {peers: [10.0.1.9]}\n",
+               R"(^cfg\.yaml:17:\d+: key 'gateway\.peers': DDS uses loopback only)");
+  const auto spec = parse(std::string(good) + exported +
+                          "gateway: {interfaces: [10.0.2.2], peers: [10.0.1.9], security: none}\n");
+  EXPECT_EQ(settings_of(spec).peers, std::vector<std::string>{"10.0.1.9"});
 }
 
 TEST(GatewaySection, OffLoopbackNeedsAnEnclaveOrSaysSecurityNone) {

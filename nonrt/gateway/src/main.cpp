@@ -42,6 +42,7 @@ saw::gateway::GatewayConfig config_of(const saw::gateway::GatewaySettings& s) {
   }
   c.dds.domain = s.domain;
   c.dds.interfaces = s.interfaces;
+  c.dds.peers = s.peers;
   if (!s.enclave.empty()) c.dds.enclave = s.enclave;
   c.decimation = static_cast<unsigned>(s.decimation);
   c.display_rate = s.display_rate;
@@ -72,6 +73,9 @@ int main(int argc, char** argv) {
   app.add_option("--domain", s.domain, "DDS domain id")->check(CLI::Range(0, 232));
   app.add_option("--interface", s.interfaces,
                  "IPv4 address of a network interface DDS may use (repeatable; default loopback only)");
+  app.add_option("--peer", s.peers,
+                 "a peer beyond this subnet, found by unicast: ADDRESS or ADDRESS:PORT (repeatable; default "
+                 "$ROS_STATIC_PEERS)");
   app.add_option("--decimation", s.decimation, "publish state every Nth row")->check(CLI::PositiveNumber);
   app.add_option("--display-rate", s.display_rate,
                  "Hz of each state's display stream <topic>/display, what live views read (0: none)")
@@ -98,7 +102,7 @@ int main(int argc, char** argv) {
   if (!settings.empty()) {
     for (const char* o :
          {"--attach", "--import", "--mirror", "--ros-namespace", "--clutch-topic", "--operator-present-topic",
-          "--domain", "--interface", "--decimation", "--display-rate", "--name", "--enclave"})
+          "--peer", "--domain", "--interface", "--decimation", "--display-rate", "--name", "--enclave"})
       if (app.count(o) != 0) {
         std::fprintf(stderr, "saw-gateway: --settings gives every setting; %s too is ambiguous\n", o);
         return 2;

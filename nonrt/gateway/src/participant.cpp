@@ -1,9 +1,13 @@
 #include "saw/gateway/participant.hpp"
 
+#include <arpa/inet.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
+#include <netdb.h>
+#include <netinet/in.h>
 
+#include <cstdlib>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
@@ -27,6 +31,54 @@ std::uint32_t discovery_port(int domain, int index) {
 }
 
 constexpr int max_local_participants = 32;
+// A peer named without a port: its domain's first participants (a gateway, sawctl, a GUI or two).
+constexpr int max_peer_participants = 8;
+
+std::vector<std::string> split(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  std::string item;
+  for (const char ch : text + sep) {
+    if (ch != sep) {
+      if (ch != ' ' && ch != '\t') item += ch;
+      continue;
+    }
+    if (!item.empty()) out.push_back(item);
+    item.clear();
+  }
+  return out;
+}
+
+// "ADDRESS[:PORT]", ADDRESS an IPv4 address or a host name resolved once, here.
+Locator_t peer_locator(const std::string& peer, std::uint32_t& port) {
+  const auto colon = peer.rfind(':');
+  const std::string host = colon == std::string::npos ? peer : peer.substr(0, colon);
+  port = 0;
+  if (colon != std::string::npos) {
+    const std::string p = peer.substr(colon + 1);
+    char* end = nullptr;
+    const unsigned long v = std::strtoul(p.c_str(), &end, 10);
+    if (p.empty() || *end != '\0' || v == 0 || v > 65535)
+      throw std::runtime_error("DDS: peer '" + peer + "': the port is not a number from 1 to 65535");
+    port = static_cast<std::uint32_t>(v);
+  }
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  addrinfo* found = nullptr;
+  if (host.empty() || getaddrinfo(host.c_str(), nullptr, &hints, &found) != 0 || found == nullptr)
+    throw std::runtime_error("DDS: peer '" + peer + "': not an IPv4 address or a known host name");
+  char text[INET_ADDRSTRLEN] = {};
+  inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(found->ai_addr)->sin_addr, text, sizeof text);
+  freeaddrinfo(found);
+  Locator_t l;
+  IPLocator::setIPv4(l, text);
+  return l;
+}
+
+std::vector<std::string> peers_of(const ParticipantConfig& config) {
+  if (!config.peers.empty()) return config.peers;
+  const char* env = std::getenv("ROS_STATIC_PEERS");
+  return env == nullptr ? std::vector<std::string>{} : split(env, ';');
+}
 
 }  // namespace
 
@@ -49,6 +101,31 @@ fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
   // Four announcements fit in it, so one lost announcement does not drop a live peer.
   qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(1, 0);
   const bool loopback_only = config.interfaces.size() == 1 && config.interfaces.front() == "127.0.0.1";
+  if (!config.peers.empty() && loopback_only)
+    throw std::runtime_error(
+        "DDS: peers given, but DDS may use loopback only: name the interface that reaches them");
+  const std::vector<std::string> peers = peers_of(config);
+  if (!peers.empty() && !loopback_only) {
+    // Unicast discovery on each interface (which keeps Fast DDS from adding its multicast
+    // locator: a router forwards none), announced to each peer. One side's list suffices: a
+    // participant answers an announcement at the announcer's own locators.
+    auto& builtin = qos.wire_protocol().builtin;
+    for (const auto& address : config.interfaces) {
+      Locator_t self;
+      IPLocator::setIPv4(self, address);
+      self.port = 0;
+      builtin.metatrafficUnicastLocatorList.push_back(self);
+    }
+    for (const auto& peer : peers) {
+      std::uint32_t port = 0;
+      const Locator_t base = peer_locator(peer, port);
+      for (int i = 0; i < (port != 0 ? 1 : max_peer_participants); ++i) {
+        Locator_t l = base;
+        l.port = port != 0 ? port : discovery_port(config.domain, i);
+        builtin.initialPeersList.push_back(l);
+      }
+    }
+  }
   if (loopback_only) {
     // Unicast discovery on loopback: our own metatraffic locator (its port is assigned from the
     // participant index), which also keeps Fast DDS from adding its default multicast locator,

@@ -205,6 +205,10 @@ int main(int argc, char** argv) {
   app.add_option("--domain", dds.domain, "DDS domain id");
   app.add_option("--interface", dds.interfaces,
                  "IPv4 address of an interface DDS may use (default loopback)");
+  app.add_option(
+      "--peer", dds.peers,
+      "a gateway beyond this subnet, found by unicast: ADDRESS or ADDRESS:PORT (repeatable; default "
+      "$ROS_STATIC_PEERS)");
   app.add_option("--timeout", timeout, "seconds to wait for the registry and for samples");
   add_enclave_option(app, dds);
   const SecurityCommands security(app);

@@ -93,6 +93,9 @@ void read_keys(Params& g, const YAML::Node& node, const std::string& directory,
   if (g.has("domain") && g.get<double>("domain") != gw.domain) g.fail_at("domain", "expected an integer");
   gw.interfaces = g.get_or<std::vector<std::string>>("interfaces", gw.interfaces);
   if (gw.interfaces.empty()) g.fail_at("interfaces", "at least one interface address");
+  gw.peers = g.get_or<std::vector<std::string>>("peers", {});
+  if (!gw.peers.empty() && gw.interfaces == std::vector<std::string>{"127.0.0.1"})
+    g.fail_at("peers", "DDS uses loopback only: name the interface that reaches them (interfaces:)");
   gw.decimation = static_cast<int>(g.get_in_range("decimation", 1, 1000, 1));
   gw.display_rate = g.get_in_range("display_rate", 0, 1000, gw.display_rate);
   gw.name = g.get_or<std::string>("name", "");
@@ -182,6 +185,7 @@ std::string to_yaml(const GatewaySettings& s) {
   out << YAML::Key << "operator_present_topic" << YAML::Value << s.operator_present_topic;
   out << YAML::Key << "domain" << YAML::Value << s.domain;
   out << YAML::Key << "interfaces" << YAML::Value << s.interfaces;
+  if (!s.peers.empty()) out << YAML::Key << "peers" << YAML::Value << s.peers;
   out << YAML::Key << "decimation" << YAML::Value << s.decimation;
   out << YAML::Key << "display_rate" << YAML::Value << s.display_rate;
   if (!s.name.empty()) out << YAML::Key << "name" << YAML::Value << s.name;

@@ -39,7 +39,8 @@ struct GatewaySettings {
   std::string operator_present_topic = "rt/console/operator_present";
   int domain = 0;
   std::vector<std::string> interfaces{"127.0.0.1"};  // loopback unless the file names others
-  int decimation = 1;                                // publish state every Nth row
+  std::vector<std::string> peers{};  // discovery by unicast beyond this subnet (ParticipantConfig::peers)
+  int decimation = 1;                // publish state every Nth row
   double display_rate =
       50;  // Hz of the states' display streams (<topic>/display); 0: none (GatewayConfig's default)
   // DDS Security: the gateway's enclave (made by `sawctl security enroll`), absolute. Off

@@ -1,0 +1,132 @@
+"""Beyond one subnet: discovery without multicast. Three network namespaces — operator, router,
+patient — routed, with no multicast forwarding (as a router between a lab's subnets, a VPN).
+The patient runs saw-rt with its gateway on its own address; the operator runs `sawctl list`
+on its own. Multicast discovery cannot cross the router, so:
+(a) with no peer list, the operator finds nothing (the test's premise: were this found, the
+    network would not be the one claimed);
+(b) with the patient's address as the operator's peer (`sawctl --peer`), it finds the gateway;
+(c) with $ROS_STATIC_PEERS instead of the flag, too;
+(d) with the operator's address as the patient gateway's peer (`gateway: {peers: [...]}` in the
+    deployment), a sawctl without any peer list finds it too (the gateway announces itself).
+A peer list that is ignored fails (b), (c) or (d).
+
+Exit 77 (ctest: skipped, the reason printed) where namespaces cannot be created.
+usage: routed_peers.py SAW_RT SAWCTL
+"""
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+from harness import check, dds_domain, exit_code  # noqa: E402
+
+
+def sh(*args):
+    return subprocess.run(args, capture_output=True, text=True)
+
+
+def main(saw_rt, sawctl):
+    tag = str(os.getpid())
+    ns = {n: f"saw-{n}-{tag}" for n in ("op", "rt", "pat")}
+    net = f"10.{os.getpid() % 200 + 20}"
+    op_ip, rt_op_ip, rt_pat_ip, pat_ip = f"{net}.1.2", f"{net}.1.1", f"{net}.2.1", f"{net}.2.2"
+    links = (f"so{tag}"[:15], f"sro{tag}"[:15], f"srp{tag}"[:15], f"sp{tag}"[:15])
+    r = sh("ip", "netns", "add", ns["op"])
+    if r.returncode != 0:
+        print(f"SKIP: cannot create a network namespace here: {r.stderr.strip()}")
+        return 77
+    work = tempfile.mkdtemp()
+    rt = None
+    try:
+        steps = [["ip", "netns", "add", ns["rt"]], ["ip", "netns", "add", ns["pat"]],
+                 ["ip", "link", "add", links[0], "type", "veth", "peer", "name", links[1]],
+                 ["ip", "link", "add", links[2], "type", "veth", "peer", "name", links[3]],
+                 ["ip", "link", "set", links[0], "netns", ns["op"]], ["ip", "link", "set", links[1], "netns", ns["rt"]],
+                 ["ip", "link", "set", links[2], "netns", ns["rt"]], ["ip", "link", "set", links[3], "netns", ns["pat"]],
+                 ["ip", "-n", ns["op"], "addr", "add", f"{op_ip}/24", "dev", links[0]],
+                 ["ip", "-n", ns["rt"], "addr", "add", f"{rt_op_ip}/24", "dev", links[1]],
+                 ["ip", "-n", ns["rt"], "addr", "add", f"{rt_pat_ip}/24", "dev", links[2]],
+                 ["ip", "-n", ns["pat"], "addr", "add", f"{pat_ip}/24", "dev", links[3]]]
+        for n, link in ((ns["op"], links[0]), (ns["rt"], links[1]), (ns["rt"], links[2]), (ns["pat"], links[3])):
+            steps.append(["ip", "-n", n, "link", "set", link, "up"])
+        for n in ns.values():
+            steps.append(["ip", "-n", n, "link", "set", "lo", "up"])
+        steps += [["ip", "netns", "exec", ns["rt"], "sysctl", "-qw", "net.ipv4.ip_forward=1"],
+                  ["ip", "-n", ns["op"], "route", "add", "default", "via", rt_op_ip],
+                  ["ip", "-n", ns["pat"], "route", "add", "default", "via", rt_pat_ip]]
+        for cmd in steps:
+            r = sh(*cmd)
+            if r.returncode != 0:
+                print(f"SKIP: cannot build the routed network ({' '.join(cmd)}): {r.stderr.strip()}")
+                return 77
+        domain = dds_domain()
+        host = "mount -t tmpfs tmpfs /dev/shm && exec sh -c \"$0\""
+
+        def patient(name, peers):
+            """saw-rt on the patient, its gateway on the patient's address (its own /dev/shm: a
+            machine of its own)."""
+            deploy = os.path.join(work, f"{name}.yaml")
+            with open(deploy, "w") as f:
+                f.write(f"""deployment:
+  name: routed-{tag}
+components:
+  - name: arm{tag}
+    type: sim_haptic_device
+    task: {{period: 1ms, priority: 80}}
+exports:
+  - {{component: arm{tag}, provided: arm}}
+gateway:
+  domain: {domain}
+  interfaces: [{pat_ip}]
+  {"peers: [" + peers + "]" if peers else ""}
+  security: none
+""")
+            return subprocess.Popen(["ip", "netns", "exec", ns["pat"], "unshare", "--mount", "--propagation",
+                                     "private", "sh", "-c", host,
+                                     f"{saw_rt} {deploy} --duration 60 > {work}/{name}.log 2>&1"],
+                                    start_new_session=True)
+
+        def stop(p):
+            try:
+                os.killpg(p.pid, signal.SIGTERM)
+                p.wait(timeout=20)
+            except (ProcessLookupError, subprocess.TimeoutExpired):
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+
+        def listed(extra, env=None):
+            cmd = ["ip", "netns", "exec", ns["op"], "sh", "-c",
+                   " ".join([sawctl, "--domain", str(domain), "--interface", op_ip, "--timeout", "4", *extra, "list"])]
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=60, env=dict(os.environ, **(env or {})))
+            return f"arm{tag}" in r.stdout, (r.stdout + r.stderr).strip()
+
+        def found_within(extra, seconds, env=None):
+            deadline = time.monotonic() + seconds
+            found, out = listed(extra, env)
+            while not found and time.monotonic() < deadline:  # saw-rt and its gateway starting
+                found, out = listed(extra, env)
+            return found, out
+
+        rt = patient("plain", None)
+        found, out = found_within(["--peer", pat_ip], 20)
+        check(found, f"(b) sawctl --peer PATIENT finds the gateway across the router: {out[-300:]}")
+        check(not listed([])[0], "(a) without a peer list it finds nothing: multicast does not cross the router")
+        check(listed([], env={"ROS_STATIC_PEERS": f" {pat_ip} ; "})[0], "(c) ROS_STATIC_PEERS=PATIENT finds it too")
+        stop(rt)
+        rt = patient("announcing", op_ip)
+        found, out = found_within([], 20)
+        check(found, f"(d) the gateway's own peer list: a peerless sawctl on the operator finds it: {out[-300:]}")
+        print(open(os.path.join(work, "plain.log")).read()[-1200:])
+    finally:
+        if rt is not None and rt.poll() is None:
+            os.killpg(rt.pid, signal.SIGKILL)
+            rt.wait()
+        for n in ns.values():
+            sh("ip", "netns", "del", n)
+    return exit_code()
+
+
+if __name__ == "__main__":
+    sys.exit(main(*sys.argv[1:3]))
