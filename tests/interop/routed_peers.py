@@ -7,12 +7,15 @@ on its own. Multicast discovery cannot cross the router, so:
 (b) with the patient's address as the operator's peer (`sawctl --peer`), it finds the gateway;
 (c) with $ROS_STATIC_PEERS instead of the flag, too;
 (d) with the operator's address as the patient gateway's peer (`gateway: {peers: [...]}` in the
-    deployment), a sawctl without any peer list finds it too (the gateway announces itself).
-A peer list that is ignored fails (b), (c) or (d).
+    deployment), a sawctl without any peer list finds it too (the gateway announces itself);
+(e) the GUI (`sawgui --headless`, Cyclone DDS) with `--peer PATIENT` sees the component and its
+    values, and without it sees nothing; (f) with $ROS_STATIC_PEERS instead, too.
+A peer list that is ignored fails (b), (c), (d), (e) or (f).
 
 Exit 77 (ctest: skipped, the reason printed) where namespaces cannot be created.
-usage: routed_peers.py SAW_RT SAWCTL
+usage: routed_peers.py SAW_RT SAWCTL PYTHON (the venv's, with cyclonedds)
 """
+import json
 import os
 import signal
 import subprocess
@@ -27,7 +30,10 @@ def sh(*args):
     return subprocess.run(args, capture_output=True, text=True)
 
 
-def main(saw_rt, sawctl):
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+
+
+def main(saw_rt, sawctl, python):
     tag = str(os.getpid())
     ns = {n: f"saw-{n}-{tag}" for n in ("op", "rt", "pat")}
     net = f"10.{os.getpid() % 200 + 20}"
@@ -114,6 +120,28 @@ gateway:
         check(found, f"(b) sawctl --peer PATIENT finds the gateway across the router: {out[-300:]}")
         check(not listed([])[0], "(a) without a peer list it finds nothing: multicast does not cross the router")
         check(listed([], env={"ROS_STATIC_PEERS": f" {pat_ip} ; "})[0], "(c) ROS_STATIC_PEERS=PATIENT finds it too")
+
+        def gui(extra, env=None):
+            """What sawgui --headless on the operator saw of the patient's component: (component
+            shown, samples of its values, the output's tail)."""
+            env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "nonrt", "python"), **(env or {}))
+            env.pop("CYCLONEDDS_URI", None)
+            r = subprocess.run(["ip", "netns", "exec", ns["op"], python, "-m", "sawgui", "--domain", str(domain),
+                                "--interface", op_ip, "--headless", "8", *extra],
+                               capture_output=True, text=True, timeout=90, env=env)
+            try:
+                out = json.loads(r.stdout.strip().splitlines()[-1])
+            except (ValueError, IndexError):
+                return False, 0, (r.stdout + r.stderr).strip()[-300:]
+            samples = sum(n for t, n in out["samples"].items() if f"arm{tag}" in t)
+            return f"arm{tag}" in out["states"], samples, r.stdout.strip()[-300:]
+
+        shown, samples, out = gui(["--peer", pat_ip])
+        check(shown and samples > 0, f"(e) sawgui --peer PATIENT shows the component and {samples} samples of it: {out}")
+        shown, samples, out = gui([])
+        check(not shown and samples == 0, f"(e) without a peer list the GUI sees nothing ({samples} samples)")
+        shown, samples, out = gui([], env={"ROS_STATIC_PEERS": pat_ip})
+        check(shown and samples > 0, f"(f) sawgui with ROS_STATIC_PEERS=PATIENT too ({samples} samples): {out}")
         stop(rt)
         rt = patient("announcing", op_ip)
         found, out = found_within([], 20)
@@ -129,4 +157,4 @@ gateway:
 
 
 if __name__ == "__main__":
-    sys.exit(main(*sys.argv[1:3]))
+    sys.exit(main(*sys.argv[1:4]))

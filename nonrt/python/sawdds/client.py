@@ -46,6 +46,13 @@ def display_topic(endpoint) -> str:
     return "" if latched(endpoint) else str(getattr(endpoint, "display_topic", "") or "")
 
 
+def static_peers(env=None) -> list:
+    """The peers ROS 2 users already name in $ROS_STATIC_PEERS (';'-separated addresses or host
+    names, reached by unicast), [] when it is unset or empty."""
+    text = (os.environ if env is None else env).get("ROS_STATIC_PEERS", "")
+    return [p.strip() for p in text.split(";") if p.strip()]
+
+
 def interface_uri(interface: str = "lo", peers=("127.0.0.1",)) -> str:
     """A CYCLONEDDS_URI restricting DDS to one network interface, by name ("eth1") or by one of its
     addresses ("192.168.1.20", "127.0.0.1" on any OS); `peers` for unicast discovery (loopback has

@@ -25,7 +25,8 @@ def parse(argv):
                    help=f"network interface DDS uses, by name or address (default {LOOPBACK}: this machine only; "
                         "a remote GUI names the interface that reaches the gateway's host)")
     p.add_argument("--peer", action="append", default=None, metavar="ADDRESS",
-                   help="a host to discover by unicast (default 127.0.0.1 on lo; none elsewhere: multicast)")
+                   help="a host to discover by unicast (default: $ROS_STATIC_PEERS, ';'-separated; else "
+                        "127.0.0.1 on lo, none elsewhere: multicast)")
     p.add_argument("--enclave", metavar="DIR",
                    help="join a secure domain with this SROS2 enclave (KEYSTORE/enclaves/NAME, from sawctl security "
                         "enroll; or ROS_SECURITY_* as ROS 2 has it); needs a Cyclone DDS with its security plugins")
@@ -47,13 +48,14 @@ def parse(argv):
 def configure_dds(args):
     """CYCLONEDDS_URI from the options (unless the user set it), with DDS Security when an enclave is
     named, before any participant exists. Raises sawdds.security.SecurityError."""
-    from sawdds.client import interface_uri
+    from sawdds.client import interface_uri, static_peers
     from sawdds.security import resolve_enclave, secure_uri
     if "CYCLONEDDS_URI" in os.environ and args.interface == LOOPBACK and args.peer is None:
         uri = os.environ["CYCLONEDDS_URI"]
     else:
+        # --peer, else ROS 2's $ROS_STATIC_PEERS, else this machine on loopback and multicast elsewhere.
         loopback = args.interface in ("lo", "lo0", "127.0.0.1")
-        peers = args.peer if args.peer is not None else (["127.0.0.1"] if loopback else [])
+        peers = args.peer if args.peer is not None else (static_peers() or (["127.0.0.1"] if loopback else []))
         uri = interface_uri(args.interface, peers)
     enclave = resolve_enclave(args.enclave)
     if enclave is not None:
