@@ -9,8 +9,11 @@ on its own. Multicast discovery cannot cross the router, so:
 (d) with the operator's address as the patient gateway's peer (`gateway: {peers: [...]}` in the
     deployment), a sawctl without any peer list finds it too (the gateway announces itself);
 (e) the GUI (`sawgui --headless`, Cyclone DDS) with `--peer PATIENT` sees the component and its
-    values, and without it sees nothing; (f) with $ROS_STATIC_PEERS instead, too.
-A peer list that is ignored fails (b), (c), (d), (e) or (f).
+    values, and without it sees nothing; (f) with $ROS_STATIC_PEERS instead, too;
+(g) secure: the gateway with its enclave (DDS Security, a keystore `sawctl security` makes), a
+    sawctl with an operator's enclave and `--peer` finds it, one with the peer but no enclave does
+    not.
+A peer list that is ignored fails (b), (c), (d), (e), (f) or (g).
 
 Exit 77 (ctest: skipped, the reason printed) where namespaces cannot be created.
 usage: routed_peers.py SAW_RT SAWCTL PYTHON (the venv's, with cyclonedds)
@@ -70,9 +73,9 @@ def main(saw_rt, sawctl, python):
         domain = dds_domain()
         host = "mount -t tmpfs tmpfs /dev/shm && exec sh -c \"$0\""
 
-        def patient(name, peers):
+        def patient(name, peers, enclave=None):
             """saw-rt on the patient, its gateway on the patient's address (its own /dev/shm: a
-            machine of its own)."""
+            machine of its own), plain or with `enclave`."""
             deploy = os.path.join(work, f"{name}.yaml")
             with open(deploy, "w") as f:
                 f.write(f"""deployment:
@@ -87,7 +90,7 @@ gateway:
   domain: {domain}
   interfaces: [{pat_ip}]
   {"peers: [" + peers + "]" if peers else ""}
-  security: none
+  {"enclave: " + enclave if enclave else "security: none"}
 """)
             return subprocess.Popen(["ip", "netns", "exec", ns["pat"], "unshare", "--mount", "--propagation",
                                      "private", "sh", "-c", host,
@@ -142,6 +145,17 @@ gateway:
         check(not shown and samples == 0, f"(e) without a peer list the GUI sees nothing ({samples} samples)")
         shown, samples, out = gui([], env={"ROS_STATIC_PEERS": pat_ip})
         check(shown and samples > 0, f"(f) sawgui with ROS_STATIC_PEERS=PATIENT too ({samples} samples): {out}")
+        stop(rt)
+        keystore = os.path.join(work, "keystore")
+        for args in (["init", keystore], ["enroll", keystore, "lab", "--role", "gateway"],
+                     ["enroll", keystore, "console", "--role", "operator"]):
+            r = subprocess.run([sawctl, "security", *args], capture_output=True, text=True)
+            check(r.returncode == 0, f"sawctl security {args[0]} {args[-1]}: {(r.stdout + r.stderr).strip()[-200:]}")
+        rt = patient("secure", None, os.path.join(keystore, "enclaves", "lab"))
+        console = ["--enclave", os.path.join(keystore, "enclaves", "console")]
+        found, out = found_within(console + ["--peer", pat_ip], 20)
+        check(found, f"(g) secure: sawctl --enclave OPERATOR --peer PATIENT finds the secure gateway: {out[-300:]}")
+        check(not listed(["--peer", pat_ip])[0], "(g) without an enclave, the same peer list finds nothing")
         stop(rt)
         rt = patient("announcing", op_ip)
         found, out = found_within([], 20)
