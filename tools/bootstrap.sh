@@ -47,6 +47,7 @@ test_packages=(
   openssl   # the keystore tests check our files with the command
   clang libclang-rt-14-dev ccache  # the fuzz preset (libFuzzer), faster rebuilds in CI
   cyclonedds-dev cyclonedds-tools  # an independent secure DDS peer (Debian's build has the security plugins)
+  fastdds-tools  # fast-discovery-server: Fast DDS's own discovery server, for ROS_DISCOVERY_SERVER across a router
   # sawgui's tests: real windows under Xvfb; what PySide6's xcb platform plugin links beyond libxcb1
   # (found with ldd on plugins/platforms/libqxcb.so and lib/libQt6XcbQpa.so.6).
   xvfb xauth libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0

@@ -12,14 +12,18 @@ on its own. Multicast discovery cannot cross the router, so:
     values, and without it sees nothing; (f) with $ROS_STATIC_PEERS instead, too;
 (g) secure: the gateway with its enclave (DDS Security, a keystore `sawctl security` makes), a
     sawctl with an operator's enclave and `--peer` finds it, one with the peer but no enclave does
-    not.
-A peer list that is ignored fails (b), (c), (d), (e), (f) or (g).
+    not;
+(h) a discovery server (Debian's `fast-discovery-server`, Fast DDS's own) on the router: the
+    gateway and sawctl, each given only $ROS_DISCOVERY_SERVER, find each other
+    through it.
+A peer list that is ignored fails (b), (c), (d), (e), (f) or (g); a server address ignored, (h).
 
 Exit 77 (ctest: skipped, the reason printed) where namespaces cannot be created.
 usage: routed_peers.py SAW_RT SAWCTL PYTHON (the venv's, with cyclonedds)
 """
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -73,7 +77,7 @@ def main(saw_rt, sawctl, python):
         domain = dds_domain()
         host = "mount -t tmpfs tmpfs /dev/shm && exec sh -c \"$0\""
 
-        def patient(name, peers, enclave=None):
+        def patient(name, peers, enclave=None, env=None):
             """saw-rt on the patient, its gateway on the patient's address (its own /dev/shm: a
             machine of its own), plain or with `enclave`."""
             deploy = os.path.join(work, f"{name}.yaml")
@@ -95,7 +99,7 @@ gateway:
             return subprocess.Popen(["ip", "netns", "exec", ns["pat"], "unshare", "--mount", "--propagation",
                                      "private", "sh", "-c", host,
                                      f"{saw_rt} {deploy} --duration 60 > {work}/{name}.log 2>&1"],
-                                    start_new_session=True)
+                                    start_new_session=True, env=dict(os.environ, **(env or {})))
 
         def stop(p):
             try:
@@ -157,6 +161,19 @@ gateway:
         check(found, f"(g) secure: sawctl --enclave OPERATOR --peer PATIENT finds the secure gateway: {out[-300:]}")
         check(not listed(["--peer", pat_ip])[0], "(g) without an enclave, the same peer list finds nothing")
         stop(rt)
+        check(shutil.which("fast-discovery-server") is not None,
+              "fast-discovery-server is installed (tools/bootstrap.sh --tests: fastdds-tools)")
+        # On the router, a machine of its own (its own /dev/shm), listening on both its addresses.
+        server = subprocess.Popen(["ip", "netns", "exec", ns["rt"], "unshare", "--mount", "--propagation", "private",
+                                   "sh", "-c", host, "exec fast-discovery-server -i 0 -p 11811"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            rt = patient("served", None, env={"ROS_DISCOVERY_SERVER": f"{rt_pat_ip}:11811"})
+            found, out = found_within([], 20, env={"ROS_DISCOVERY_SERVER": f"{rt_op_ip}:11811"})
+            check(found, f"(h) gateway and sawctl given only ROS_DISCOVERY_SERVER find each other through it: {out[-300:]}")
+            stop(rt)
+        finally:
+            stop(server)
         rt = patient("announcing", op_ip)
         found, out = found_within([], 20)
         check(found, f"(d) the gateway's own peer list: a peerless sawctl on the operator finds it: {out[-300:]}")
