@@ -16,10 +16,19 @@ on its own. Multicast discovery cannot cross the router, so:
 (h) a discovery server (Debian's `fast-discovery-server`, Fast DDS's own) on the router: the
     gateway and sawctl, each given only $ROS_DISCOVERY_SERVER, find each other
     through it.
-A peer list that is ignored fails (b), (c), (d), (e), (f) or (g); a server address ignored, (h).
+(i) on the patient's own subnet (sawctl on the router), multicast finds the gateway, but not with
+    ROS 2's ROS_AUTOMATIC_DISCOVERY_RANGE=OFF or LOCALHOST; OFF with ROS_STATIC_PEERS does.
+A peer list that is ignored fails (b), (c), (d), (e), (f) or (g); a server address ignored, (h);
+the range ignored, (i).
+
+With --netem SPEC (the PREEMPT_RT guest's kernel has netem; the host's has not) the patient's
+link is a wireless hop shaped both ways by `tc qdisc ... netem SPEC`, and the packets it carried
+and dropped are printed; --patience K multiplies every bound on a wait (software emulation);
+--brief runs (a), (b), (e) with --peer and (g) only (the guest's: each start costs there).
 
 Exit 77 (ctest: skipped, the reason printed) where namespaces cannot be created.
-usage: routed_peers.py SAW_RT SAWCTL PYTHON (the venv's, with cyclonedds)
+usage: routed_peers.py SAW_RT SAWCTL PYTHON [--netem SPEC] [--patience K]
+       (PYTHON: the venv's, with cyclonedds)
 """
 import json
 import os
@@ -40,7 +49,7 @@ def sh(*args):
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
-def main(saw_rt, sawctl, python):
+def main(saw_rt, sawctl, python, netem=None, patience=1.0, brief=False):
     tag = str(os.getpid())
     ns = {n: f"saw-{n}-{tag}" for n in ("op", "rt", "pat")}
     net = f"10.{os.getpid() % 200 + 20}"
@@ -74,6 +83,11 @@ def main(saw_rt, sawctl, python):
             if r.returncode != 0:
                 print(f"SKIP: cannot build the routed network ({' '.join(cmd)}): {r.stderr.strip()}")
                 return 77
+        hop = ((ns["rt"], links[2]), (ns["pat"], links[3]))  # the wireless hop, both directions
+        if netem:
+            for n, link in hop:
+                r = sh("ip", "netns", "exec", n, "tc", "qdisc", "add", "dev", link, "root", "netem", *netem.split())
+                check(r.returncode == 0, f"netem {netem} on {link}: {r.stderr.strip() or 'in place'}")
         domain = dds_domain()
         host = "mount -t tmpfs tmpfs /dev/shm && exec sh -c \"$0\""
 
@@ -98,7 +112,7 @@ gateway:
 """)
             return subprocess.Popen(["ip", "netns", "exec", ns["pat"], "unshare", "--mount", "--propagation",
                                      "private", "sh", "-c", host,
-                                     f"{saw_rt} {deploy} --duration 60 > {work}/{name}.log 2>&1"],
+                                     f"{saw_rt} {deploy} --duration {600 * patience:g} > {work}/{name}.log 2>&1"],
                                     start_new_session=True, env=dict(os.environ, **(env or {})))
 
         def stop(p):
@@ -111,12 +125,13 @@ gateway:
 
         def listed(extra, env=None):
             cmd = ["ip", "netns", "exec", ns["op"], "sh", "-c",
-                   " ".join([sawctl, "--domain", str(domain), "--interface", op_ip, "--timeout", "4", *extra, "list"])]
-            r = subprocess.run(cmd, capture_output=True, text=True, timeout=60, env=dict(os.environ, **(env or {})))
+                   " ".join([sawctl, "--domain", str(domain), "--interface", op_ip, "--timeout", f"{4 * patience:g}", *extra, "list"])]
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=60 * patience,
+                               env=dict(os.environ, **(env or {})))
             return f"arm{tag}" in r.stdout, (r.stdout + r.stderr).strip()
 
         def found_within(extra, seconds, env=None):
-            deadline = time.monotonic() + seconds
+            deadline = time.monotonic() + seconds * patience
             found, out = listed(extra, env)
             while not found and time.monotonic() < deadline:  # saw-rt and its gateway starting
                 found, out = listed(extra, env)
@@ -126,7 +141,8 @@ gateway:
         found, out = found_within(["--peer", pat_ip], 20)
         check(found, f"(b) sawctl --peer PATIENT finds the gateway across the router: {out[-300:]}")
         check(not listed([])[0], "(a) without a peer list it finds nothing: multicast does not cross the router")
-        check(listed([], env={"ROS_STATIC_PEERS": f" {pat_ip} ; "})[0], "(c) ROS_STATIC_PEERS=PATIENT finds it too")
+        if not brief:
+            check(listed([], env={"ROS_STATIC_PEERS": f" {pat_ip} ; "})[0], "(c) ROS_STATIC_PEERS=PATIENT finds it too")
 
         def gui(extra, env=None):
             """What sawgui --headless on the operator saw of the patient's component: (component
@@ -134,8 +150,8 @@ gateway:
             env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "nonrt", "python"), **(env or {}))
             env.pop("CYCLONEDDS_URI", None)
             r = subprocess.run(["ip", "netns", "exec", ns["op"], python, "-m", "sawgui", "--domain", str(domain),
-                                "--interface", op_ip, "--headless", "8", *extra],
-                               capture_output=True, text=True, timeout=90, env=env)
+                                "--interface", op_ip, "--headless", f"{6 * patience:g}", *extra],
+                               capture_output=True, text=True, timeout=90 * patience, env=env)
             try:
                 out = json.loads(r.stdout.strip().splitlines()[-1])
             except (ValueError, IndexError):
@@ -145,10 +161,23 @@ gateway:
 
         shown, samples, out = gui(["--peer", pat_ip])
         check(shown and samples > 0, f"(e) sawgui --peer PATIENT shows the component and {samples} samples of it: {out}")
-        shown, samples, out = gui([])
-        check(not shown and samples == 0, f"(e) without a peer list the GUI sees nothing ({samples} samples)")
-        shown, samples, out = gui([], env={"ROS_STATIC_PEERS": pat_ip})
-        check(shown and samples > 0, f"(f) sawgui with ROS_STATIC_PEERS=PATIENT too ({samples} samples): {out}")
+        if not brief:
+            # On the patient's own subnet (from the router), multicast finds the gateway, unless ROS
+            # 2's ROS_AUTOMATIC_DISCOVERY_RANGE keeps discovery to this host or turns it off.
+            def from_router(env):
+                r = subprocess.run(["ip", "netns", "exec", ns["rt"], sawctl, "--domain", str(domain), "--interface",
+                                    rt_pat_ip, "--timeout", f"{4 * patience:g}", "list"], capture_output=True, text=True,
+                                   timeout=60 * patience, env=dict(os.environ, **env))
+                return f"arm{tag}" in r.stdout
+            check(from_router({}), "(i) on the patient's subnet, multicast finds the gateway")
+            check(not from_router({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF"}), "(i) ROS_AUTOMATIC_DISCOVERY_RANGE=OFF: not")
+            check(not from_router({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}), "(i) =LOCALHOST: not")
+            check(from_router({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF", "ROS_STATIC_PEERS": pat_ip}),
+                  "(i) OFF with ROS_STATIC_PEERS=PATIENT: found")
+            shown, samples, out = gui([])
+            check(not shown and samples == 0, f"(e) without a peer list the GUI sees nothing ({samples} samples)")
+            shown, samples, out = gui([], env={"ROS_STATIC_PEERS": pat_ip})
+            check(shown and samples > 0, f"(f) sawgui with ROS_STATIC_PEERS=PATIENT too ({samples} samples): {out}")
         stop(rt)
         keystore = os.path.join(work, "keystore")
         for args in (["init", keystore], ["enroll", keystore, "lab", "--role", "gateway"],
@@ -161,23 +190,28 @@ gateway:
         check(found, f"(g) secure: sawctl --enclave OPERATOR --peer PATIENT finds the secure gateway: {out[-300:]}")
         check(not listed(["--peer", pat_ip])[0], "(g) without an enclave, the same peer list finds nothing")
         stop(rt)
-        check(shutil.which("fast-discovery-server") is not None,
-              "fast-discovery-server is installed (tools/bootstrap.sh --tests: fastdds-tools)")
-        # On the router, a machine of its own (its own /dev/shm), listening on both its addresses.
-        server = subprocess.Popen(["ip", "netns", "exec", ns["rt"], "unshare", "--mount", "--propagation", "private",
-                                   "sh", "-c", host, "exec fast-discovery-server -i 0 -p 11811"],
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT, start_new_session=True)
-        try:
-            rt = patient("served", None, env={"ROS_DISCOVERY_SERVER": f"{rt_pat_ip}:11811"})
-            found, out = found_within([], 20, env={"ROS_DISCOVERY_SERVER": f"{rt_op_ip}:11811"})
-            check(found, f"(h) gateway and sawctl given only ROS_DISCOVERY_SERVER find each other through it: {out[-300:]}")
-            stop(rt)
-        finally:
-            stop(server)
-        rt = patient("announcing", op_ip)
-        found, out = found_within([], 20)
-        check(found, f"(d) the gateway's own peer list: a peerless sawctl on the operator finds it: {out[-300:]}")
+        if not brief:
+            check(shutil.which("fast-discovery-server") is not None,
+                  "fast-discovery-server is installed (tools/bootstrap.sh --tests: fastdds-tools)")
+            # On the router, a machine of its own (its own /dev/shm), listening on both its addresses.
+            server = subprocess.Popen(["ip", "netns", "exec", ns["rt"], "unshare", "--mount", "--propagation", "private",
+                                       "sh", "-c", host, "exec fast-discovery-server -i 0 -p 11811"],
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT, start_new_session=True)
+            try:
+                rt = patient("served", None, env={"ROS_DISCOVERY_SERVER": f"{rt_pat_ip}:11811"})
+                found, out = found_within([], 20, env={"ROS_DISCOVERY_SERVER": f"{rt_op_ip}:11811"})
+                check(found, f"(h) gateway and sawctl given only ROS_DISCOVERY_SERVER find each other through it: {out[-300:]}")
+                stop(rt)
+            finally:
+                stop(server)
+            rt = patient("announcing", op_ip)
+            found, out = found_within([], 20)
+            check(found, f"(d) the gateway's own peer list: a peerless sawctl on the operator finds it: {out[-300:]}")
         print(open(os.path.join(work, "plain.log")).read()[-1200:])
+        if netem:
+            for n, link in hop:
+                print(f"netem on {link}: " + " ".join(sh("ip", "netns", "exec", n, "tc", "-s", "qdisc", "show", "dev",
+                                                           link).stdout.split()))
     finally:
         if rt is not None and rt.poll() is None:
             os.killpg(rt.pid, signal.SIGKILL)
@@ -188,4 +222,13 @@ gateway:
 
 
 if __name__ == "__main__":
-    sys.exit(main(*sys.argv[1:4]))
+    import argparse
+    a = argparse.ArgumentParser()
+    a.add_argument("saw_rt")
+    a.add_argument("sawctl")
+    a.add_argument("python")
+    a.add_argument("--netem")
+    a.add_argument("--patience", type=float, default=1.0)
+    a.add_argument("--brief", action="store_true")
+    o = a.parse_args()
+    sys.exit(main(o.saw_rt, o.sawctl, o.python, o.netem, o.patience, o.brief))

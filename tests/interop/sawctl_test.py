@@ -31,6 +31,11 @@ def main(saw_rt, saw_gateway, sawctl):
                            timeout=60)
         return p.returncode, p.stdout + p.stderr
 
+    def ctl_env(env, *args, timeout="3"):
+        p = subprocess.run([sawctl, *args, "--domain", domain, "--timeout", timeout], capture_output=True,
+                           text=True, timeout=60, env=dict(os.environ, **env))
+        return p.returncode, p.stdout + p.stderr
+
     def ctl_background(*args):
         return subprocess.Popen([sawctl, *args, "--domain", domain, "--timeout", "30"], stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, text=True)
@@ -39,6 +44,12 @@ def main(saw_rt, saw_gateway, sawctl):
         rc, out = ctl("list")
         check(rc == 0 and f"{name}.measured_cp" in out and f"rt/{name}/servo_cf" in out,
               "sawctl list shows the component's commands and topics")
+        # ROS 2's ROS_AUTOMATIC_DISCOVERY_RANGE (OFF and LOCALHOST across a subnet: routed_peers.py).
+        rc, out = ctl_env({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}, "list", timeout="10")
+        check(rc == 0 and f"{name}.measured_cp" in out, "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST: found")
+        rc, out = ctl_env({"ROS_AUTOMATIC_DISCOVERY_RANGE": "NEARBY"}, "list")
+        check(rc != 0 and len(out.strip().splitlines()) == 1 and "ROS_AUTOMATIC_DISCOVERY_RANGE=NEARBY" in out,
+              f"an unknown range is one line naming it: {out.strip()}")
         rc, out = ctl("echo", f"rt/{name}/measured_cp", "-n", "3")
         lines = [l for l in out.splitlines() if l.startswith("p [")]
         check(rc == 0 and len(lines) == 3, f"sawctl echo prints 3 poses: {lines}")

@@ -80,6 +80,52 @@ std::vector<std::string> peers_of(const ParticipantConfig& config) {
   return env == nullptr ? std::vector<std::string>{} : split(env, ';');
 }
 
+// ROS 2's ROS_AUTOMATIC_DISCOVERY_RANGE: how far discovery reaches without a peer list.
+enum class Range { subnet, localhost, off };
+
+Range discovery_range() {
+  const char* env = std::getenv("ROS_AUTOMATIC_DISCOVERY_RANGE");
+  const std::string v = env == nullptr ? "" : env;
+  if (v.empty() || v == "SUBNET" || v == "SYSTEM_DEFAULT") return Range::subnet;
+  if (v == "LOCALHOST") return Range::localhost;
+  if (v == "OFF") return Range::off;
+  throw std::runtime_error("DDS: ROS_AUTOMATIC_DISCOVERY_RANGE=" + v +
+                           ": expected SUBNET, LOCALHOST, OFF or SYSTEM_DEFAULT");
+}
+
+// Each of `addresses` at the discovery ports of participant indices [0, n), or at its own port.
+void add_initial_peers(eprosima::fastrtps::rtps::BuiltinAttributes& builtin, int domain,
+                       const std::vector<std::string>& addresses, int n) {
+  for (const auto& peer : addresses) {
+    std::uint32_t port = 0;
+    const Locator_t base = peer_locator(peer, port);
+    for (int i = 0; i < (port != 0 ? 1 : n); ++i) {
+      Locator_t l = base;
+      l.port = port != 0 ? port : discovery_port(domain, i);
+      builtin.initialPeersList.push_back(l);
+    }
+  }
+}
+
+// Unicast discovery: our own metatraffic locator on each of `interfaces` (its port assigned from
+// the participant index), which keeps Fast DDS from adding its multicast one (a router forwards
+// none), and the initial peers we announce ourselves to. One side's list suffices: a participant
+// answers an announcement at the announcer's own locators.
+void unicast_discovery(eprosima::fastrtps::rtps::BuiltinAttributes& builtin, const ParticipantConfig& config,
+                       const std::vector<std::string>& peers, Range range) {
+  for (const auto& address : config.interfaces) {
+    Locator_t self;
+    IPLocator::setIPv4(self, address);
+    self.port = 0;
+    builtin.metatrafficUnicastLocatorList.push_back(self);
+  }
+  // This host's participants: on loopback (unless discovery is off), or on our own interfaces.
+  const bool loopback_only = config.interfaces.size() == 1 && config.interfaces.front() == "127.0.0.1";
+  if ((loopback_only && range != Range::off) || range == Range::localhost)
+    add_initial_peers(builtin, config.domain, config.interfaces, max_local_participants);
+  add_initial_peers(builtin, config.domain, peers, max_peer_participants);
+}
+
 }  // namespace
 
 fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
@@ -105,43 +151,10 @@ fdds::DomainParticipant* make_participant(const ParticipantConfig& config) {
     throw std::runtime_error(
         "DDS: peers given, but DDS may use loopback only: name the interface that reaches them");
   const std::vector<std::string> peers = peers_of(config);
-  if (!peers.empty() && !loopback_only) {
-    // Unicast discovery on each interface (which keeps Fast DDS from adding its multicast
-    // locator: a router forwards none), announced to each peer. One side's list suffices: a
-    // participant answers an announcement at the announcer's own locators.
-    auto& builtin = qos.wire_protocol().builtin;
-    for (const auto& address : config.interfaces) {
-      Locator_t self;
-      IPLocator::setIPv4(self, address);
-      self.port = 0;
-      builtin.metatrafficUnicastLocatorList.push_back(self);
-    }
-    for (const auto& peer : peers) {
-      std::uint32_t port = 0;
-      const Locator_t base = peer_locator(peer, port);
-      for (int i = 0; i < (port != 0 ? 1 : max_peer_participants); ++i) {
-        Locator_t l = base;
-        l.port = port != 0 ? port : discovery_port(config.domain, i);
-        builtin.initialPeersList.push_back(l);
-      }
-    }
-  }
-  if (loopback_only) {
-    // Unicast discovery on loopback: our own metatraffic locator (its port is assigned from the
-    // participant index), which also keeps Fast DDS from adding its default multicast locator,
-    // and every local participant index as an initial peer.
-    auto& builtin = qos.wire_protocol().builtin;
-    Locator_t self;
-    IPLocator::setIPv4(self, "127.0.0.1");
-    self.port = 0;
-    builtin.metatrafficUnicastLocatorList.push_back(self);
-    for (int i = 0; i < max_local_participants; ++i) {
-      Locator_t peer;
-      IPLocator::setIPv4(peer, "127.0.0.1");
-      peer.port = discovery_port(config.domain, i);
-      builtin.initialPeersList.push_back(peer);
-    }
-  }
+  const Range range = discovery_range();
+  // Multicast discovery (Fast DDS's default) only on a subnet, with no peer list.
+  if (loopback_only || !peers.empty() || range != Range::subnet)
+    unicast_discovery(qos.wire_protocol().builtin, config, peers, range);
   const std::string enclave = apply_security(qos, config);
   auto* p = fdds::DomainParticipantFactory::get_instance()->create_participant(config.domain, qos);
   if (p == nullptr)
