@@ -17,7 +17,8 @@ on its own. Multicast discovery cannot cross the router, so:
     gateway and sawctl, each given only $ROS_DISCOVERY_SERVER, find each other
     through it.
 (i) on the patient's own subnet (sawctl on the router), multicast finds the gateway, but not with
-    ROS 2's ROS_AUTOMATIC_DISCOVERY_RANGE=OFF or LOCALHOST; OFF with ROS_STATIC_PEERS does.
+    ROS 2's ROS_AUTOMATIC_DISCOVERY_RANGE=OFF or LOCALHOST; OFF with ROS_STATIC_PEERS does; sawgui
+    there finds it, and not with OFF.
 A peer list that is ignored fails (b), (c), (d), (e), (f) or (g); a server address ignored, (h);
 the range ignored, (i).
 
@@ -144,13 +145,13 @@ gateway:
         if not brief:
             check(listed([], env={"ROS_STATIC_PEERS": f" {pat_ip} ; "})[0], "(c) ROS_STATIC_PEERS=PATIENT finds it too")
 
-        def gui(extra, env=None):
-            """What sawgui --headless on the operator saw of the patient's component: (component
-            shown, samples of its values, the output's tail)."""
+        def gui(extra, env=None, where=("op", op_ip)):
+            """What sawgui --headless on the operator (or `where`: namespace, address) saw of the
+            patient's component: (component shown, samples of its values, the output's tail)."""
             env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "nonrt", "python"), **(env or {}))
             env.pop("CYCLONEDDS_URI", None)
-            r = subprocess.run(["ip", "netns", "exec", ns["op"], python, "-m", "sawgui", "--domain", str(domain),
-                                "--interface", op_ip, "--headless", f"{6 * patience:g}", *extra],
+            r = subprocess.run(["ip", "netns", "exec", ns[where[0]], python, "-m", "sawgui", "--domain", str(domain),
+                                "--interface", where[1], "--headless", f"{6 * patience:g}", *extra],
                                capture_output=True, text=True, timeout=90 * patience, env=env)
             try:
                 out = json.loads(r.stdout.strip().splitlines()[-1])
@@ -174,6 +175,10 @@ gateway:
             check(not from_router({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}), "(i) =LOCALHOST: not")
             check(from_router({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF", "ROS_STATIC_PEERS": pat_ip}),
                   "(i) OFF with ROS_STATIC_PEERS=PATIENT: found")
+            shown, samples, out = gui([], where=("rt", rt_pat_ip))
+            check(shown and samples > 0, f"(i) sawgui there finds it by multicast ({samples} samples): {out}")
+            shown, samples, out = gui([], env={"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF"}, where=("rt", rt_pat_ip))
+            check(not shown and samples == 0, f"(i) sawgui with ROS_AUTOMATIC_DISCOVERY_RANGE=OFF: not ({samples})")
             shown, samples, out = gui([])
             check(not shown and samples == 0, f"(e) without a peer list the GUI sees nothing ({samples} samples)")
             shown, samples, out = gui([], env={"ROS_STATIC_PEERS": pat_ip})

@@ -53,14 +53,26 @@ def static_peers(env=None) -> list:
     return [p.strip() for p in text.split(";") if p.strip()]
 
 
-def interface_uri(interface: str = "lo", peers=("127.0.0.1",)) -> str:
+def discovery_range(env=None) -> str:
+    """ROS 2's $ROS_AUTOMATIC_DISCOVERY_RANGE: "SUBNET" (unset, SUBNET or SYSTEM_DEFAULT: multicast),
+    "LOCALHOST" (this host only) or "OFF" (static peers only). Raises ValueError for another value."""
+    value = (os.environ if env is None else env).get("ROS_AUTOMATIC_DISCOVERY_RANGE", "")
+    if value in ("", "SUBNET", "SYSTEM_DEFAULT"):
+        return "SUBNET"
+    if value in ("LOCALHOST", "OFF"):
+        return value
+    raise ValueError(f"ROS_AUTOMATIC_DISCOVERY_RANGE={value}: expected SUBNET, LOCALHOST, OFF or SYSTEM_DEFAULT")
+
+
+def interface_uri(interface: str = "lo", peers=("127.0.0.1",), multicast=None) -> str:
     """A CYCLONEDDS_URI restricting DDS to one network interface, by name ("eth1") or by one of its
     addresses ("192.168.1.20", "127.0.0.1" on any OS); `peers` for unicast discovery (loopback has
-    no multicast), none to discover by multicast on that interface."""
+    no multicast), none to discover by multicast on that interface (unless `multicast` is False)."""
     peer_xml = "".join(f"<Peer address='{p}'/>" for p in peers)
-    multicast = "false" if peers else "true"
+    unicast = bool(peers) or multicast is False
+    multicast = "false" if unicast else "true"
     discovery = (f"<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>31</MaxAutoParticipantIndex>"
-                 f"<Peers>{peer_xml}</Peers>") if peers else ""
+                 f"<Peers>{peer_xml}</Peers>") if unicast else ""
     import ipaddress
     try:
         ipaddress.ip_address(interface)

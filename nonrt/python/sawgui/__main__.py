@@ -48,15 +48,22 @@ def parse(argv):
 def configure_dds(args):
     """CYCLONEDDS_URI from the options (unless the user set it), with DDS Security when an enclave is
     named, before any participant exists. Raises sawdds.security.SecurityError."""
-    from sawdds.client import interface_uri, static_peers
+    from sawdds.client import discovery_range, interface_uri, static_peers
     from sawdds.security import resolve_enclave, secure_uri
     if "CYCLONEDDS_URI" in os.environ and args.interface == LOOPBACK and args.peer is None:
         uri = os.environ["CYCLONEDDS_URI"]
     else:
-        # --peer, else ROS 2's $ROS_STATIC_PEERS, else this machine on loopback and multicast elsewhere.
+        # --peer, else ROS 2's $ROS_STATIC_PEERS, else this machine on loopback and multicast
+        # elsewhere; ROS 2's $ROS_AUTOMATIC_DISCOVERY_RANGE narrows it (OFF: the peers alone).
+        reach = discovery_range()
         loopback = args.interface in ("lo", "lo0", "127.0.0.1")
-        peers = args.peer if args.peer is not None else (static_peers() or (["127.0.0.1"] if loopback else []))
-        uri = interface_uri(args.interface, peers)
+        peers = args.peer if args.peer is not None else static_peers()
+        if not peers and loopback and reach != "OFF":
+            peers = ["127.0.0.1"]
+        here = args.interface if args.interface[:1].isdigit() else "127.0.0.1"
+        if reach == "LOCALHOST" and here not in peers:
+            peers = peers + [here]
+        uri = interface_uri(args.interface, peers, multicast=None if reach == "SUBNET" else False)
     enclave = resolve_enclave(args.enclave)
     if enclave is not None:
         uri = secure_uri(uri, enclave)
@@ -157,7 +164,7 @@ def main(argv=None) -> int:
     from sawdds.security import SecurityError
     try:
         configure_dds(args)
-    except SecurityError as e:
+    except (SecurityError, ValueError) as e:
         print(f"sawgui: {e}", file=sys.stderr)
         return 2
     if args.headless is not None:
