@@ -56,6 +56,7 @@ function(saw_package name)
   install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/sawrt/packages COMPONENT runtime)
   saw_warnings(${target})
   set_property(GLOBAL APPEND PROPERTY SAW_PACKAGE_MODULES ${target})
+  set_property(GLOBAL APPEND PROPERTY SAW_MODULE_HOSTS saw_deploy)  # what loads it builds on this
 endfunction()
 
 # saw_mapping_module(name SOURCES ... LIBS ...): a package's DDS mappings as saw-gateway and
@@ -74,4 +75,5 @@ function(saw_mapping_module name)
   install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/sawrt/mappings COMPONENT runtime)
   saw_warnings(${target})
   set_property(GLOBAL APPEND PROPERTY SAW_MAPPING_MODULES ${target})
+  set_property(GLOBAL APPEND PROPERTY SAW_MODULE_HOSTS saw_gateway)  # what loads it builds on this
 endfunction()
