@@ -194,14 +194,17 @@ std::uint64_t Exporter::ring_errors() const noexcept {
   return n;
 }
 
-void Exporter::answer_queries() {
+bool Exporter::answer_queries() {
   alignas(16) std::byte arg[query_max_bytes], result[query_max_bytes];
+  bool answered = false;
   for (std::uint32_t i = 0; i < view_.layout().slot_count; ++i) {
     ClientSlot& c = view_.client_slot(i);
     ServerSlot& s = view_.server_slot(i);
-    const auto request = c.query_request.load(std::memory_order_acquire);
+    // seq_cst: the sleep check in serve() reads every slot's request after raising its flag.
+    const auto request = c.query_request.load(std::memory_order_seq_cst);
     if (request == last_reply_[i]) continue;
     last_reply_[i] = request;
+    answered = true;
     // Copied before it is looked at: the client may change it while we work.
     const auto index = c.query_command.load(std::memory_order_relaxed);
     std::memcpy(arg, c.query_arg, sizeof arg);
@@ -217,28 +220,33 @@ void Exporter::answer_queries() {
     s.query_reply.store(request, std::memory_order_seq_cst);
     if (c.query_waiting.load(std::memory_order_seq_cst) != 0) futex_wake_all(s.query_reply);
   }
+  return answered;
 }
 
 void Exporter::serve() {
   auto& bell_word = view_.client_common().service_bell;
+  auto& sleeping = view_.header().service_sleeping;
   TimeNs last_reclaim = 0, last_query = 0;
   while (!stop_.load(std::memory_order_acquire)) {
-    const auto bell = bell_word.load(std::memory_order_acquire);
-    answer_queries();
     const TimeNs t = monotonic_now();
+    if (answer_queries()) last_query = t;
     // Slots of clients whose heartbeat stopped are freed every 50 ms, not on every query.
     if (t - last_reclaim >= 50'000'000) {
       const auto n = reclaim_stale_slots(view_, t, client_timeout_);
       slots_reclaimed_.store(load(slots_reclaimed_) + n, std::memory_order_relaxed);
       last_reclaim = t;
     }
-    if (bell != bell_word.load(std::memory_order_acquire)) last_query = t;
-    // Busy for a while after a query (callers that want sub-microsecond answers), then asleep.
+    // Busy for a while after a query (callers that want sub-microsecond answers): a client then
+    // writes its request and nothing else. Then asleep: Dekker with the client, which writes its
+    // request, then rings the bell only if it sees this flag raised; here the flag is raised,
+    // then every request read again (answer_queries, seq_cst), so one of the two sees the other.
     if (t - last_query < service_spin_) continue;
-    auto& sleeping = view_.header().service_sleeping;
+    const auto bell = bell_word.load(std::memory_order_acquire);
     sleeping.store(1, std::memory_order_seq_cst);
-    if (bell_word.load(std::memory_order_seq_cst) == bell)
+    if (!answer_queries())
       futex_wait(bell_word, bell, 50'000'000);  // woken by a query, or every 50 ms
+    else
+      last_query = t;
     sleeping.store(0, std::memory_order_relaxed);
   }
 }

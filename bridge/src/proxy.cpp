@@ -172,10 +172,14 @@ Status Proxy::query(std::uint32_t index, std::uint32_t arg_size, std::uint32_t r
   std::memcpy(c.query_arg, q, arg_size);
   c.query_command.store(index, std::memory_order_relaxed);
   const auto request = c.query_request.load(std::memory_order_relaxed) + 1;
-  c.query_request.store(request, std::memory_order_release);
-  auto& bell = l.view.client_common().service_bell;
-  bell.fetch_add(1, std::memory_order_seq_cst);
-  if (l.view.header().service_sleeping.load(std::memory_order_seq_cst) != 0) futex_wake_all(bell);
+  // Dekker with the service thread (see Exporter::serve): the request, then its flag; a service
+  // thread that spins reads the request, one asleep (or about to be) is rung.
+  c.query_request.store(request, std::memory_order_seq_cst);
+  if (l.view.header().service_sleeping.load(std::memory_order_seq_cst) != 0) {
+    auto& bell = l.view.client_common().service_bell;
+    bell.fetch_add(1, std::memory_order_seq_cst);
+    futex_wake_all(bell);
+  }
   const TimeNs deadline = monotonic_now() + options_.stale_after;
   for (;;) {
     const auto reply = s.query_reply.load(std::memory_order_acquire);

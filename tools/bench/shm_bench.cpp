@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
   if (!dma.error().empty()) std::printf("# warning: %s\n", dma.error().c_str());
   const int ncpu = static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN));
   const int cpu_a = ncpu > 1 ? 0 : -1, cpu_b = ncpu > 1 ? 1 : -1;
+  if (cpu_a >= 0) (void)saw::rt::set_affinity(cpu_a);  // the ping-pongs' parent side
   std::printf("# saw-bench-shm: %d × %d round trips between two processes on CPUs %d and %d\n", reps, n,
               cpu_a, cpu_b);
 
@@ -81,25 +82,7 @@ int main(int argc, char** argv) {
 
   for (int r = 0; r < reps; ++r) {
     auto futex = saw::bench::futex_ping_pong(n, cpu_b);
-    new (pp) PingPong{};
-    auto spin = two_processes(
-        n, cpu_a, cpu_b,
-        [&](int count) {
-          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
-            while (pp->ping.load(std::memory_order_acquire) != i) {
-            }
-            pp->pong.store(i, std::memory_order_release);
-          }
-        },
-        [&](int count, std::vector<std::int64_t>& out) {
-          for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(count); ++i) {
-            const TimeNs t0 = saw::monotonic_now();
-            pp->ping.store(i, std::memory_order_release);
-            while (pp->pong.load(std::memory_order_acquire) != i) {
-            }
-            out[i - 1] = saw::monotonic_now() - t0;
-          }
-        });
+    auto spin = saw::bench::spin_ping_pong(n, cpu_b);
     // The bridge's rings: the parent (client) pushes a command, the child (server) answers with
     // an event. Spinning first, then sleeping on the futex words beside the rings.
     for (bool sleep : {false, true}) {

@@ -82,7 +82,7 @@ class Exporter : public detail::CycleHook {
   void describe(const Component& component, const ProvidedInterface& p);
   void emit(std::uint32_t index, const void* arg, std::size_t size) noexcept;
   void run_commands(Slot& slot) noexcept;
-  void answer_queries();
+  bool answer_queries();  // true if it answered any
   void serve();
 
   TimeNs service_spin_;

@@ -13,7 +13,7 @@
 namespace saw::bridge {
 
 inline constexpr std::uint64_t segment_magic = 0x3147445242574153ULL;  // "SAWBRDG1", little endian
-inline constexpr std::uint32_t layout_version = 5;                     // any change below bumps this
+inline constexpr std::uint32_t layout_version = 6;                     // any change below bumps this
 inline constexpr std::size_t page_size = 4096;
 
 enum class SegmentState : std::uint32_t { initializing = 0, ready = 1, closed = 2 };
@@ -84,7 +84,7 @@ struct alignas(cache_line) ClientSlot {
 };
 
 struct alignas(cache_line) ClientCommon {
-  std::atomic<std::uint32_t> service_bell;  // bumped by clients with a query
+  std::atomic<std::uint32_t> service_bell;  // bumped by a client whose query finds the service thread asleep
 };
 
 inline constexpr std::size_t query_max_bytes = sizeof(ClientSlot::query_arg);

@@ -126,6 +126,8 @@ class Proxy : public Component {
 
 // Looks for "/saw.<name>": validates it, refuses a server whose heartbeat is stale, claims a
 // slot. Connect then compares every type by name, size and layout version.
+// A manager asks its resolvers in the order they were added, and the first that finds a name
+// makes its proxy: proxies with other options (a bounded spin) need a manager of their own.
 class ShmResolver : public RemoteResolver {
  public:
   explicit ShmResolver(ProxyOptions options = {}) : options_(options) {}
