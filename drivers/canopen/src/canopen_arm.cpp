@@ -168,7 +168,7 @@ CanopenArm::~CanopenArm() = default;
 
 void CanopenArm::provide_interfaces() {
   auto& st = state_table();
-  crtk::provide(arm(), joint_space::setpoint_js, st, &setpoint_js_);
+  crtk::provide(crtk_interface(), joint_space::setpoint_js, st, &setpoint_js_);
   auto& c = provide("canopen");
   c.add_command_read("status", st.add_column("status", &status_, ColumnUse::summary));
   c.add_command_qualified_read<SdoRequest, SdoReply>("sdo", [this](const SdoRequest& q, SdoReply& r) {

@@ -57,7 +57,7 @@ FalconDevice::FalconDevice(std::string name, TaskConfig task, FalconConfig confi
   publish();
 
   auto& st = state_table();
-  arm().add_command_read("servo_force", st.add_column("servo_force", &servo_force_));
+  crtk_interface().add_command_read("servo_force", st.add_column("servo_force", &servo_force_));
   auto& falcon = provide("falcon");
   falcon.add_command_read("summary", st.add_column("summary", &summary_, ColumnUse::summary));
   falcon.add_command_read("leds", st.add_column("leds", &leds_));

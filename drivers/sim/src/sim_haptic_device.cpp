@@ -82,7 +82,7 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   columns_.measured_cp = contract_columns().measured_cp;
   columns_.measured_cv = contract_columns().measured_cv;
   columns_.measured_js = contract_columns().measured_js;
-  arm().add_command_read("servo_force", columns_.servo_force);
+  crtk_interface().add_command_read("servo_force", columns_.servo_force);
   auto& sim = provide("sim");
   sim.add_command_write<ButtonCommand>("set_button",
                                        [this](const ButtonCommand& b) { set_button(b.button, b.pressed); });

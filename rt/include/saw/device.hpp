@@ -233,8 +233,9 @@ class Device : public Task {
   // In FAULT: what is known now about the same fault replaces what was said (a silent node seen
   // first as stale feedback, then as a lost heartbeat); said again as a fault event.
   void update_fault(const Outcome& why) noexcept;
-  // The provided CRTK interface, for a driver's own reads (after the base's constructor).
-  ProvidedInterface& arm() noexcept { return *arm_; }
+  // The provided CRTK interface ("arm", or the name the driver gave it: "io"), for a driver's own
+  // reads (after the base's constructor).
+  ProvidedInterface& crtk_interface() noexcept { return *arm_; }
 
  private:
   void provide_interfaces();

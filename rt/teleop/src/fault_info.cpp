@@ -13,7 +13,7 @@ FaultInfo fault_on(FaultSide side, FaultCode code, Status last_read, TimeNs age_
   return f;
 }
 
-FaultReason& FaultReason::append(std::string_view s) noexcept {
+FaultText& FaultText::append(std::string_view s) noexcept {
   for (const char c : s) {
     if (size == max) break;
     text[size++] = c;
@@ -22,7 +22,7 @@ FaultReason& FaultReason::append(std::string_view s) noexcept {
   return *this;
 }
 
-FaultReason& FaultReason::append(double v) noexcept {
+FaultText& FaultText::append(double v) noexcept {
   char b[32];
   const auto r = std::to_chars(b, b + sizeof b, v);
   return append(r.ec == std::errc{} ? std::string_view(b, static_cast<std::size_t>(r.ptr - b)) : "?");

@@ -43,15 +43,15 @@ FaultInfo fault_on(FaultSide side, FaultCode code, Status last_read = Status::ok
 
 // Why a FAULT happened, in more words than a FaultInfo holds (a setting's two values, the two
 // components): written in RT code without allocating, truncated at `max` characters.
-struct FaultReason {
+struct FaultText {
   static constexpr std::size_t max = 255;
   std::array<char, max + 1> text{};  // NUL-terminated
   std::size_t size = 0;
 
   void clear() noexcept { *this = {}; }
-  FaultReason& append(std::string_view s) noexcept;
+  FaultText& append(std::string_view s) noexcept;
   // The shortest decimal that reads back as v (std::to_chars: no locale, no allocation).
-  FaultReason& append(double v) noexcept;
+  FaultText& append(double v) noexcept;
   std::string_view view() const noexcept { return {text.data(), size}; }
 };
 

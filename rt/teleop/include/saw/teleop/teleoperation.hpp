@@ -41,7 +41,7 @@ struct TeleopSummary {
   static constexpr std::uint32_t layout_version = 2;  // 2: reason
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultInfo fault{};
-  std::array<char, FaultReason::max + 1> reason{};  // the fault's reason in words (fault_reason())
+  std::array<char, FaultText::max + 1> reason{};  // the fault's reason in words (fault_reason())
   double tracking_rms = 0, tracking_max = 0;        // m
   std::uint64_t enabled_cycles = 0;
   std::uint64_t rejected_commands = 0, refused_sends = 0, rejected_inputs = 0, offset_errors = 0;
@@ -191,7 +191,7 @@ class Teleoperation : public Task {
   TimeNs start_time_ = -1;
   TimeNs waiting_since_ = -1;  // enabled, a device not: since when
   FaultInfo fault_{};
-  FaultReason fault_reason_{};
+  FaultText fault_reason_{};
   // "law 'wave_variables' has impedance 3 N·s/m, but the master's port ('port.arm', through
   // 'link.arm')": made at start-up, copied into fault_reason_ by the RT cycle.
   std::string wave_port_text_;
