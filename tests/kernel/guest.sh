@@ -135,4 +135,21 @@ fi
 # patient's link a wireless hop shaped by netem both ways (this kernel has it; the host's has not).
 check net.routed_netem 300 python3 "$src/tests/interop/routed_peers.py" "$saw_rt" "$sawctl" \
   "$src/.venv/bin/python" --netem "delay 20ms 5ms loss 1% rate 20mbit" --patience 3 --brief
+# The paper's Fig. 4 across that router with the patient's link a netem hop (Network MH): the
+# DDS peer and both gateways beside raw Fast DDS and Ice over the same path, in one run (ratios of
+# the same run only: emulated CPUs). Every row must be measured, no call lost.
+latency_mh() {
+  local rc=0
+  [ -n "${saw_latency:-}" ] || { echo "saw-latency was not built (SAW_BUILD_TOOLS, SAW_WITH_ICE)"; return 1; }
+  "$saw_latency" --no-local --no-veth --no-secure --calls 200 --reps 1 --rows 200 \
+    --netem "delay 1ms 200us" > latency.md || rc=$?
+  cat latency.md
+  [ "$rc" -eq 0 ] || { echo "saw-latency exited $rc (a failed or incomplete path)"; return 1; }
+  for path in "qualified read, DDS peer" "raw Fast DDS" "ZeroC Ice" "qualified read, both gateways" \
+    "state row, server task -> client process via both"; do
+    grep -q "^| Network MH netem | $path" latency.md || { echo "no Network MH netem row: $path"; return 1; }
+  done
+}
+export -f latency_mh
+check net.latency_mh 300 latency_mh
 date > "$out/done"

@@ -18,13 +18,7 @@ namespace saw::bench {
 namespace fdds = eprosima::fastdds::dds;
 
 // Raw Fast DDS: the same topics' types and QoS, the same WaitSet wait, answered at once.
-void raw_dds_echo(int domain, const std::vector<std::string>& interfaces,
-                  const std::optional<std::filesystem::path>& enclave) {
-  saw::gateway::ParticipantConfig pc;
-  pc.domain = domain;
-  pc.interfaces = interfaces;
-  pc.enclave = enclave;
-  pc.name = "raw-echo";
+void raw_dds_echo(const saw::gateway::ParticipantConfig& pc) {
   auto* p = saw::gateway::make_participant(pc);
   fdds::TypeSupport rq(new saw_msgs::msg::QueryPubSubType()), rr(new saw_msgs::msg::QueryReplyPubSubType());
   rq.register_type(p);

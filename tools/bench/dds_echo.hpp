@@ -2,15 +2,11 @@
 // types, QoS and WaitSet wait, but no bridge and no server process — the floor for our DDS path.
 #pragma once
 
-#include <filesystem>
-#include <optional>
-#include <string>
-#include <vector>
+#include "saw/gateway/participant.hpp"
 
 namespace saw::bench {
 
-// With `enclave`, a DDS Security participant (docs/security.md).
-[[noreturn]] void raw_dds_echo(int domain, const std::vector<std::string>& interfaces,
-                               const std::optional<std::filesystem::path>& enclave = std::nullopt);
+// On a participant made as the gateway's are (its interfaces, peers and enclave: docs/security.md).
+[[noreturn]] void raw_dds_echo(const saw::gateway::ParticipantConfig& pc);
 
 }  // namespace saw::bench

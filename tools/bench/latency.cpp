@@ -1,6 +1,7 @@
 // saw-latency: the paper's Fig. 4 benchmark (a qualified read of a double, 10,000 calls × 5) in
 // every configuration — Local 1P, Local 2P over shared memory, Local 2P over DDS through both
-// gateways, Network 1H across a veth pair between two network namespaces — beside, in the same
+// gateways, Network 1H across a veth pair between two network namespaces, Network MH across a
+// router between two subnets (DDS peers found by their peer lists) — beside, in the same
 // run and with the same payload, ZeroC Ice 3.7 (the paper's middleware) and raw Fast DDS.
 // Also the one-way latency of a state row from the server's process to the client's, and the DDS
 // paths again with DDS Security (gateway and operator enclaves of a keystore made for the run),
@@ -164,15 +165,28 @@ std::vector<std::int64_t> bridge_client(const Plan& plan, const std::string& nam
 // A DDS peer (no bridge on its side) calling rq/<component>/add_oneRequest.
 using Enclave = std::optional<std::filesystem::path>;
 
-std::vector<std::int64_t> dds_client(const Plan& plan, int domain, const std::string& address,
-                                     const std::string& component, std::uint64_t& failed,
-                                     const Enclave& enclave) {
+struct Site {           // where one side of a configuration runs
+  std::string ns;       // network namespace ("" here)
+  std::string address;  // the address DDS and Ice use there
+  std::string peer{};   // beyond a router: the other side's address, a DDS peer (no multicast)
+};
+
+// A participant of this site: its interface, and the other side as its peer.
+saw::gateway::ParticipantConfig participant_at(const Site& at, int domain, const char* name,
+                                               const Enclave& enclave) {
   saw::gateway::ParticipantConfig pc;
   pc.domain = domain;
-  pc.name = "latency-client";
-  pc.interfaces = {address};
+  pc.name = name;
+  pc.interfaces = {at.address};
+  if (!at.peer.empty()) pc.peers = {at.peer};
   pc.enclave = enclave;
-  auto* p = saw::gateway::make_participant(pc);
+  return pc;
+}
+
+std::vector<std::int64_t> dds_client(const Plan& plan, int domain, const Site& at,
+                                     const std::string& component, std::uint64_t& failed,
+                                     const Enclave& enclave) {
+  auto* p = saw::gateway::make_participant(participant_at(at, domain, "latency-client", enclave));
   std::vector<std::int64_t> out;
   {
     saw::gateway::QueryClient q(p, component, "add_one");
@@ -190,14 +204,9 @@ std::vector<std::int64_t> dds_client(const Plan& plan, int domain, const std::st
 
 // A new peer's discovery: from making its participant until its qualified-read client has
 // matched the server's gateway (with security: authentication and key exchange included).
-std::vector<std::int64_t> discovery(int times, int domain, const std::string& address,
-                                    const std::string& component, std::uint64_t& failed,
-                                    const Enclave& enclave) {
-  saw::gateway::ParticipantConfig pc;
-  pc.domain = domain;
-  pc.name = "latency-discovery";
-  pc.interfaces = {address};
-  pc.enclave = enclave;
+std::vector<std::int64_t> discovery(int times, int domain, const Site& at, const std::string& component,
+                                    std::uint64_t& failed, const Enclave& enclave) {
+  const auto pc = participant_at(at, domain, "latency-discovery", enclave);
   std::vector<std::int64_t> out;
   for (int i = 0; i < times; ++i) {
     const auto t0 = saw::monotonic_now();
@@ -228,11 +237,6 @@ struct Row {
   saw::bench::Summary s;
   std::uint64_t failed = 0;
   bool completed = false;
-};
-
-struct Site {           // where one side of a configuration runs
-  std::string ns;       // network namespace ("" here)
-  std::string address;  // the address DDS and Ice use there
 };
 
 // Runs every path of a configuration once per repetition, interleaved (A B C, A B C, ...), so
@@ -268,6 +272,16 @@ class Suite {
     if (!enclaves_.empty())
       remote("Network 1H secure", name + "s", {veth.ns_a(), veth.addr_a()}, {veth.ns_b(), veth.addr_b()},
              true);
+  }
+
+  // The server at the patient's end, the client at the operator's, a router between: every DDS
+  // participant finds the other side by its peer list (multicast does not cross the router).
+  void routed(const saw::bench::RoutedNet& net, const std::string& config) {
+    const std::string name = "latr" + std::to_string(getpid());
+    const Site patient{net.ns_patient(), net.addr_patient(), net.addr_operator()};
+    const Site operator_{net.ns_operator(), net.addr_operator(), net.addr_patient()};
+    remote(config, name, patient, operator_, false);
+    if (!enclaves_.empty()) remote(config + " secure", name + "s", patient, operator_, true);
   }
 
   const std::vector<Row>& rows() const { return rows_; }
@@ -309,7 +323,8 @@ class Suite {
     const Enclave gateway_enclave = secure ? Enclave(enclaves_ / "gateway") : std::nullopt;
     const Enclave peer_enclave = secure ? Enclave(enclaves_ / "operator") : std::nullopt;
     const bool same_host = server.ns == client.ns;
-    const std::string dds = same_host ? "DDS loopback" : "DDS veth";
+    const bool routed = !client.peer.empty();
+    const std::string dds = same_host ? "DDS loopback" : routed ? "DDS routed" : "DDS veth";
     const saw::testing::DdsDomain claim;
     const int domain = claim.id();
     const std::string mirrored = name + "m";
@@ -320,14 +335,17 @@ class Suite {
     a.attach = {name};
     a.dds.domain = domain;
     a.dds.interfaces = {server.address};
+    if (!server.peer.empty()) a.dds.peers = {server.peer};
     b.name = "gateway-client";
     b.mirrors = {name + "=" + mirrored};
     b.dds.domain = domain;
     b.dds.interfaces = {client.address};
+    if (!client.peer.empty()) b.dds.peers = {client.peer};
     a.dds.enclave = b.dds.enclave = gateway_enclave;
     servers.spawn(server.ns, plan_.gateway_cpu, [&] { run_gateway(a); });
-    servers.spawn(server.ns, plan_.gateway_cpu,
-                  [&] { saw::bench::raw_dds_echo(domain, {server.address}, gateway_enclave); });
+    servers.spawn(server.ns, plan_.gateway_cpu, [&] {
+      saw::bench::raw_dds_echo(participant_at(server, domain, "raw-echo", gateway_enclave));
+    });
     int fds[2];
     if (pipe(fds) != 0) return;
     servers.spawn(server.ns, plan_.gateway_cpu, [&] {
@@ -347,16 +365,17 @@ class Suite {
       paths.push_back({"state row, server task -> client process (one way)", "shared memory", client,
                        [&](auto& f) { return bridge_client(one_rep, name, true, f); }});
     }
-    paths.push_back({"qualified read, DDS peer -> server's gateway -> bridge", dds, client, [&](auto& f) {
-                       return dds_client(plan_, domain, client.address, name, f, peer_enclave);
-                     }});
-    paths.push_back({"raw Fast DDS request/reply (same types, QoS, wait)", dds, client, [&](auto& f) {
-                       return dds_client(plan_, domain, client.address, "raw", f, peer_enclave);
-                     }});
+    paths.push_back({"qualified read, DDS peer -> server's gateway -> bridge", dds, client,
+                     [&](auto& f) { return dds_client(plan_, domain, client, name, f, peer_enclave); }});
+    paths.push_back({"raw Fast DDS request/reply (same types, QoS, wait)", dds, client,
+                     [&](auto& f) { return dds_client(plan_, domain, client, "raw", f, peer_enclave); }});
     paths.push_back({"discovery: a new DDS peer until its qualified-read client matched", dds, client,
-                     [&](auto& f) { return discovery(4, domain, client.address, name, f, peer_enclave); }});
+                     [&](auto& f) { return discovery(4, domain, client, name, f, peer_enclave); }});
     if (!secure)
-      paths.push_back({"ZeroC Ice 3.7 two-way call addOne(double)", same_host ? "TCP loopback" : "TCP veth",
+      paths.push_back({"ZeroC Ice 3.7 two-way call addOne(double)",
+                       same_host ? "TCP loopback"
+                       : routed  ? "TCP routed"
+                                 : "TCP veth",
                        client, [&](auto& f) {
                          std::uint64_t warm = 0;
                          (void)saw::bench::ice_calls(endpoint, plan_.warmup, 0, warm);
@@ -419,6 +438,18 @@ void goal(const std::vector<Row>& rows, const char* what, const Case& ours, cons
                                : "**missed**");
 }
 
+// Across the router: ours against the baselines of the same configuration (reported: a router
+// adds the same hop to each, and a netem link its delay).
+void routed_goals(const std::vector<Row>& rows, const std::string& mh) {
+  const Case raw{mh, "raw Fast DDS"}, ice{mh, "ZeroC Ice"};
+  goal(rows, "routed: DDS peer → gateway → bridge, against raw Fast DDS", {mh, "qualified read, DDS peer"},
+       raw, 0);
+  goal(rows, "routed: both gateways, against raw Fast DDS", {mh, "qualified read, both"}, raw, 0);
+  goal(rows, "routed: DDS peer → gateway, against Ice", {mh, "qualified read, DDS peer"}, ice, 0);
+  goal(rows, "routed, secure: DDS peer → gateway, against without security",
+       {mh + " secure", "qualified read, DDS peer"}, {mh, "qualified read, DDS peer"}, 0);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -433,6 +464,13 @@ int main(int argc, char** argv) {
   app.add_option("--gateway-cpu", plan.gateway_cpu,
                  "CPU of the gateways, the raw echo and the Ice server (-1: any; the RT server is on CPU 1)");
   app.add_flag("--no-veth", no_veth, "skip Network 1H (two network namespaces joined by a veth pair)");
+  bool no_local = false, no_routed = false;
+  app.add_flag("--no-local", no_local, "skip Local 1P and Local 2P (this host's loopback)");
+  std::string netem;
+  app.add_flag("--no-routed", no_routed, "skip Network MH (two subnets joined by a router namespace)");
+  app.add_option("--netem", netem,
+                 "Network MH: shape the patient's link both ways with this tc netem spec (a kernel with "
+                 "sch_netem), e.g. \"delay 20ms 5ms loss 1%\"");
   bool no_secure = false;
   std::string given_keystore;
   app.add_flag("--no-secure", no_secure, "skip the DDS Security configurations");
@@ -450,7 +488,7 @@ int main(int argc, char** argv) {
                                              : std::filesystem::path(given_keystore) / "enclaves";
   Suite suite(plan, enclaves);
   std::fprintf(stderr, "saw-latency: %d × %d calls per configuration\n", plan.reps, plan.calls);
-  suite.local();
+  if (!no_local) suite.local();
   std::string network_note;
   if (no_veth) {
     network_note = "Network 1H: skipped (--no-veth)";
@@ -461,6 +499,18 @@ int main(int argc, char** argv) {
     else
       network_note =
           "Network 1H: skipped — network namespaces or a veth pair cannot be made here (root needed)";
+  }
+  std::string routed_note;
+  if (no_routed) {
+    routed_note = "Network MH: skipped (--no-routed)";
+  } else {
+    saw::bench::RoutedNet net("sawlat", netem);
+    if (net.ok())
+      suite.routed(net, netem.empty() ? "Network MH" : "Network MH netem");
+    else
+      routed_note = "Network MH: skipped — namespaces, routing" +
+                    std::string(netem.empty() ? "" : " or netem") + " cannot be made here (root needed" +
+                    (netem.empty() ? "" : "; sch_netem for --netem") + ")";
   }
   const auto& rows = suite.rows();
   std::printf(
@@ -479,6 +529,7 @@ int main(int argc, char** argv) {
                 r.s.max_us, r.s.n, static_cast<unsigned long long>(r.failed),
                 r.completed ? "" : " (incomplete)");
   if (!network_note.empty()) std::printf("\n%s\n", network_note.c_str());
+  if (!routed_note.empty()) std::printf("\n%s\n", routed_note.c_str());
   std::printf("\n| goal (ratio of medians, one run) | measured | verdict |\n|---|---|---|\n");
   const Case ice_lo{"Local 2P", "ZeroC Ice"}, raw_lo{"Local 2P", "raw Fast DDS"};
   const Case ice_net{"Network 1H", "ZeroC Ice"}, raw_net{"Network 1H", "raw Fast DDS"};
@@ -511,6 +562,7 @@ int main(int argc, char** argv) {
        raw_net, 1.2);
   goal(rows, "loopback, secure: a new peer's discovery, against without security",
        {"Local 2P secure", "discovery"}, {"Local 2P", "discovery"}, 0);
+  routed_goals(rows, netem.empty() ? "Network MH" : "Network MH netem");
   if (!keystore.empty()) std::filesystem::remove_all(keystore.parent_path());
   if (!csv.empty()) {
     std::ofstream out(csv);
