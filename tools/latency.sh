@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # One command: saw-latency, the paper's Fig. 4 qualified-read benchmark in every configuration
-# (Local 1P, Local 2P over shared memory and over DDS, Network 1H across a veth pair) beside
+# (Local 1P, Local 2P over shared memory and over DDS, Network 1H across a veth pair, Network MH
+# across a router) beside
 # ZeroC Ice and raw Fast DDS; a Markdown table (build/latency/table.md), CSV and
 # docs/img/latency.png. Extra arguments go to saw-latency (e.g. --calls 2000, --no-veth).
 set -euo pipefail
