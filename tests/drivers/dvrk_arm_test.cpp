@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "fake_dvrk_import.hpp"
+#include "dvrk_test_rig.hpp"
 #include "saw/component.hpp"
 #include "saw/crtk_arm.hpp"
 #include "saw/deploy/deployment.hpp"
@@ -20,64 +20,11 @@
 namespace saw::drivers::dvrk {
 namespace {
 
+using testing::enable_mtm;
 using testing::FakeImport;
-
-struct Rig {
-  explicit Rig(DvrkArmConfig c) : arm("arm", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c) {
-    manager.add(import);
-    manager.add(arm);
-    manager.connect("arm", "dvrk", "import", "dvrk");
-    manager.start_stepped();
-  }
-  ~Rig() { manager.stop(); }
-  // n periods; the import publishing unless the dVRK went silent.
-  void step(int n = 1, bool publish = true) {
-    for (int i = 0; i < n; ++i) {
-      if (publish) import.publish(t);
-      manager.step_until(t);
-      t += 1'000'000;
-    }
-  }
-  void state_command(StateCommand c) { arm.provided("arm")->find_command("state_command")->execute(&c); }
-  void servo_cf(Vec3 f) {
-    Wrench w;
-    w.force = f;
-    arm.provided("arm")->find_command("servo_cf")->execute(&w);
-  }
-  void servo_cp(const Pose& p) { arm.provided("arm")->find_command("servo_cp")->execute(&p); }
-  OperatingStateValue state() const { return arm.operating_state().state; }
-
-  FakeImport import{"import"};
-  DvrkArm arm;
-  Manager manager;
-  TimeNs t = 0;
-};
-
-DvrkArmConfig mtm(bool home = true) {
-  DvrkArmConfig c;
-  c.kind = ArmKind::mtm;
-  c.home = home;
-  return c;
-}
-
-DvrkArmConfig psm(SafeCommand safe = SafeCommand::hold) {
-  DvrkArmConfig c;
-  c.kind = ArmKind::psm;
-  c.safe_command = safe;
-  c.home = true;
-  return c;
-}
-
-// Enables and waits until following (the import powers and homes the arm), a wrench offered
-// each cycle all along.
-void enable_mtm(Rig& r) {
-  r.state_command(StateCommand::enable);
-  for (int i = 0; i < 100 && !r.arm.following(); ++i) {
-    r.servo_cf({0.5, 0, 0});
-    r.step();
-  }
-  ASSERT_TRUE(r.arm.following()) << "state " << static_cast<int>(r.state());
-}
+using testing::mtm;
+using testing::psm;
+using testing::Rig;
 
 // A PSM's jaw goes with its pose, checked; an MTM's gripper is read through.
 TEST(DvrkArm, APsmsJawFollowsWithItsPoseWithinItsLimitsAndAnMtmsGripperIsRead) {
@@ -423,6 +370,15 @@ TEST(DvrkArmDeployment, ParameterErrorsNameFileLineAndKey) {
       {"{kind: psm, workspace: {min: [0, 0, 0], max: [1, -1, 1]}}",
        "key 'components[0].params.workspace.max': must be above min"},
       {"{kind: mtm, max_linear_speed: 1}", "key 'components[0].params.max_linear_speed': unknown parameter"},
+      {"{kind: psm, servo_jp: true}", "key 'components[0].params.servo_jp': needs the arm's joints"},
+      {"{kind: psm, joints: {names: [a, b], min: [0]}}",
+       "key 'components[0].params.joints.min': one value per joint (2)"},
+      {"{kind: psm, joints: {names: [a], min: [1], max: [0]}}",
+       "key 'components[0].params.joints.max': must be above min for a"},
+      {"{kind: psm, joints: {names: [a], max_velocity: [0]}}",
+       "key 'components[0].params.joints.max_velocity': must be positive for a"},
+      {"{kind: psm, joints: {names: [a], mni: [0]}}",
+       "key 'components[0].params.joints.mni': unknown parameter"},
   };
   for (const auto& [params, expect] : cases) {
     try {

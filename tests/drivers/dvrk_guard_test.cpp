@@ -1,7 +1,7 @@
 // The dvrk_arm device's cycle (the handshake, homing, servo_cf and servo_cp forwarded, commands
-// held while the arm is busy, refusals, the watchdog, a FAULT when the arm leaves ENABLED and the
-// enable after it, the safe command each time) allocates, locks, waits and prints nothing:
-// checked by the RT guard on every cycle.
+// held while the arm is busy, refusals, the watchdog, move_cp/move_jp/free and measured_js, a FAULT when the
+// arm leaves ENABLED and the enable after it, the safe command each time) allocates, locks, waits and prints
+// nothing: checked by the RT guard on every cycle.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -22,10 +22,12 @@ void run_arm(ArmKind kind) {
   c.kind = kind;
   c.safe_command = kind == ArmKind::psm ? SafeCommand::hold : SafeCommand::zero_wrench;
   c.home = true;
+  for (const char* n : {"x", "y", "z", "rx", "ry", "rz"}) c.joints.push_back(JointLimits{n, -1, 1, 0.5});
   saw::testing::GuardWindow window;
   drivers::dvrk::testing::FakeImport import("import");
   import.record = false;  // counted only: the fake must not allocate in the arm's cycle either
   import.pose.position = {0.01, 0, -0.1};
+  import.js.size = 6;
   DvrkArm arm("arm", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c);
   Manager manager;
   manager.add(import);
@@ -64,6 +66,10 @@ void run_arm(ArmKind kind) {
       w.force = {0.5 * std::sin(i * 0.01), 0, i == 300 ? 99.0 : 0.0};  // 99 N: refused
       servo->execute(&w);
     }
+    // Moves in the silence (the arm driven, no servo command): checked and sent in the cycle.
+    if (i == 510) arm.provided("arm")->find_command("move_cp")->execute(&import.pose);
+    if (i == 520) arm.provided("arm")->find_command("move_jp")->execute(&import.js);
+    if (i == 530 && kind == ArmKind::mtm) arm.provided("arm")->find_command("free")->execute(nullptr);
     import.publish(t);
     manager.step_until(t);
     t += 1'000'000;
@@ -79,6 +85,7 @@ void run_arm(ArmKind kind) {
   EXPECT_GT(import.count(kind == ArmKind::psm ? "servo_cp" : "servo_cf"), 500);
   EXPECT_GE(arm.summary().safe_commands, 3u) << "refusal, watchdog, fault";
   EXPECT_GT(arm.summary().held_busy, 0u);
+  EXPECT_EQ(arm.summary().moves, kind == ArmKind::mtm ? 3u : 2u);
   EXPECT_EQ(counts.cycles, static_cast<std::uint64_t>(cycles));
   EXPECT_RT_CLEAN(counts);
 }

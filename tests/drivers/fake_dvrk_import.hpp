@@ -18,11 +18,13 @@ namespace saw::drivers::dvrk::testing {
 class FakeImport : public Component {
  public:
   struct Received {
-    std::string_view what;  // "enable", "home", "disable", "servo_cf", "servo_cp", "jaw_servo_jp", "hold"
+    std::string_view what;  // "enable", "home", "disable", "servo_cf", "servo_cp", "jaw_servo_jp", "hold",
+                            // "servo_jp", "move_cp", "move_jp", "free"
     OperatingState arm;
     Wrench wrench{};
     Pose pose{};
     double jaw = 0;
+    JointState joints{};
   };
 
   explicit FakeImport(std::string name) : Component(std::move(name)) {
@@ -52,6 +54,22 @@ class FakeImport : public Component {
       got({"hold", state, {}, {}});
       wrench = {};
     });
+    p.add_command_void("free", [this] {
+      got({"free", state, {}, {}});
+      wrench = {};
+    });
+    crtk::provide(p, arm::move_cp, [this](const Pose& x) { got({"move_cp", state, {}, x}); });
+    const auto joints = [this](std::string_view what) {
+      return [this, what](const JointState& j) {
+        Received r{what, state, {}, {}};
+        r.joints = j;
+        got(r);
+      };
+    };
+    crtk::provide(p, arm::move_jp, joints("move_jp"));
+    crtk::provide(p, arm::servo_jp, joints("servo_jp"));
+    crtk::provide(p, arm::measured_js, state_table(), &js_);
+    crtk::provide(p, arm::measured_cf, state_table(), &cf_);
     p.add_command_read("errors", state_table().add_column("errors", &errors_));
     clutch_ = &crtk::provide(p, arm::clutch);
   }
@@ -65,6 +83,8 @@ class FakeImport : public Component {
     errors_ = errors;
     jaw_js_.size = 1;
     jaw_js_.position[0] = jaw;
+    js_ = js;
+    cf_ = cf;
     state_table().advance(t);
   }
   // The console's clutch pedal, as the import passes it on.
@@ -81,13 +101,16 @@ class FakeImport : public Component {
   std::uint64_t errors = 0;  // error messages the arm sent (the import counts them)
   double jaw = 0.5;          // the gripper's or the jaw's angle, rad
   Wrench wrench{};           // what the arm applies: the last servo_cf (zeroed by hold)
+  JointState js{};           // measured_js
+  Wrench cf{};               // measured_cf
   bool follows = true;       // measured_cp is the last servo_cp goal
   bool record = true;        // every command kept (allocates); off, only counted (the RT guard's runs)
   std::vector<Received> received;
 
  private:
-  static constexpr std::array<std::string_view, 7> kinds{"enable",   "home", "other",       "servo_cf",
-                                                         "servo_cp", "hold", "jaw_servo_jp"};
+  static constexpr std::array<std::string_view, 11> kinds{"enable",   "home",    "other",        "servo_cf",
+                                                          "servo_cp", "hold",    "jaw_servo_jp", "servo_jp",
+                                                          "move_cp",  "move_jp", "free"};
   std::array<int, kinds.size()> counts{};
   void got(const Received& r) {
     for (std::size_t i = 0; i < kinds.size(); ++i)
@@ -111,7 +134,8 @@ class FakeImport : public Component {
   Twist cv_{};
   OperatingState state_{};
   std::uint64_t errors_ = 0;
-  JointState jaw_js_{};
+  JointState jaw_js_{}, js_{};
+  Wrench cf_{};
   EventWrite<ButtonEvent>* clutch_ = nullptr;
 };
 

@@ -18,6 +18,8 @@ DvrkArmConfig checked(DvrkArmConfig c) {
   if (!psm && c.safe_command == SafeCommand::servo_cp_measured)
     throw std::invalid_argument("an MTM's safe command is zero_wrench or hold");
   if (!(c.stale_timeout > 0)) throw std::invalid_argument("stale_timeout must be positive");
+  if (c.joints.size() > JointState::max_joints) throw std::invalid_argument("at most 8 joints");
+  if (c.servo_jp && c.joints.empty()) throw std::invalid_argument("servo_jp needs the arm's joints");
   return c;
 }
 
@@ -38,6 +40,8 @@ DeviceConfig contract_of(const DvrkArmConfig& c) {
   d.start_enabled = c.start_enabled;
   d.enable_timeout = c.enable_timeout;
   d.home_timeout = c.home_timeout;
+  d.joints = c.joints;
+  d.servo_jp = c.servo_jp;
   return d;
 }
 
@@ -47,6 +51,12 @@ bool finite(const Pose& p) noexcept {
   for (double v : p.orientation)
     if (!std::isfinite(v)) return false;
   return Pose::valid(p);
+}
+
+bool finite(const Wrench& w) noexcept {
+  for (std::size_t k = 0; k < 3; ++k)
+    if (!std::isfinite(w.force[k]) || !std::isfinite(w.torque[k])) return false;
+  return true;
 }
 
 }  // namespace
@@ -72,8 +82,22 @@ DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
   crtk::require(
       r, arm::operator_present, [this](const ButtonEvent& b) { button(Button::operator_present, b.pressed); },
       Need::optional);
-  // The gripper (MTM) or the jaw (PSM), passed on checked.
   auto& a = *provided(std::string(arm::interface_name));
+  // What the arm measures, passed on checked; with joints, measured_js and servo_jp.
+  crtk::require(r, arm::measured_cf, read_cf_, Need::optional);
+  crtk::provide(a, arm::measured_cf, state_table(), &cf_);
+  if (!arm_config_.joints.empty()) crtk::require(r, arm::measured_js, read_js_, Need::optional);
+  if (arm_config_.servo_jp) crtk::require(r, arm::servo_jp, write_jp_);
+  // Moves the dVRK plans itself, and an MTM's free: what the import allows.
+  crtk::require(r, arm::move_cp, move_cp_, Need::optional);
+  crtk::require(r, arm::move_jp, move_jp_, Need::optional);
+  crtk::provide(a, arm::move_cp, [this](const Pose& x) { on_move_cp(x); });
+  crtk::provide(a, arm::move_jp, [this](const JointState& j) { on_move_jp(j); });
+  if (!psm) {
+    r.add_function("free", free_, Need::optional);
+    a.add_command_void("free", [this] { on_free(); });
+  }
+  // The gripper (MTM) or the jaw (PSM), passed on checked.
   if (psm) {
     crtk::require(r, arm::jaw_measured_js, read_jaw_, Need::optional);
     crtk::require(r, arm::jaw_servo_jp, write_jaw_, Need::optional);
@@ -113,6 +137,9 @@ Outcome DvrkArm::read() {
       ok = ok && std::isfinite(cv.linear[k]) && std::isfinite(cv.angular[k]);
     if (ok) measured().cv = cv;
   }
+  Wrench cf;
+  if (read_cf_.is_bound() && read_cf_(cf) == Status::ok && finite(cf)) cf_ = cf;
+  read_joints();
   JointState jaw;
   if (read_jaw_.is_bound() && read_jaw_(jaw) == Status::ok && jaw.size >= 1 && std::isfinite(jaw.position[0]))
     jaw_ = jaw;
@@ -204,11 +231,102 @@ void DvrkArm::on_jaw(const JointState& j) noexcept {
   jaw_pending_ = true;
 }
 
+void DvrkArm::read_joints() noexcept {
+  const std::size_t n = arm_config_.joints.size();
+  JointState js;
+  if (n == 0 || !read_js_.is_bound() || read_js_(js) != Status::ok) return;
+  bool ok = js.size == n;
+  for (std::size_t i = 0; ok && i < n; ++i)
+    ok = std::isfinite(js.position[i]) && std::isfinite(js.velocity[i]) && std::isfinite(js.effort[i]);
+  if (!ok) {
+    ++summary_.bad_joint_states;  // a cycle whose sample was refused: the last good one stands
+    return;
+  }
+  JointState& m = measured().js;
+  for (std::size_t i = 0; i < n; ++i) {
+    m.position[i] = js.position[i];
+    m.velocity[i] = js.velocity[i];
+    m.effort[i] = js.effort[i];
+  }
+}
+
+void DvrkArm::on_move_cp(const Pose& p) noexcept {
+  bool inside = move_cp_.is_bound() && finite(p);
+  for (std::size_t k = 0; inside && k < 3; ++k)
+    inside = p.position[k] >= arm_config_.workspace_min[k] && p.position[k] <= arm_config_.workspace_max[k];
+  if (!inside) {
+    ++summary_.moves_refused;
+    return;
+  }
+  request_ = Request{Request::Kind::move_cp, p, {}};
+}
+
+void DvrkArm::on_move_jp(const JointState& j) noexcept {
+  const std::size_t n = arm_config_.joints.size();
+  bool ok = move_jp_.is_bound() && n > 0 && j.size == n;
+  Request r{Request::Kind::move_jp, {}, {}};
+  r.joints.size = static_cast<decltype(r.joints.size)>(n);
+  for (std::size_t i = 0; ok && i < n; ++i) {
+    const JointLimits& l = arm_config_.joints[i];
+    ok = std::isfinite(j.position[i]) && j.position[i] >= l.min && j.position[i] <= l.max;
+    r.joints.position[i] = j.position[i];
+  }
+  if (!ok) {
+    ++summary_.moves_refused;
+    return;
+  }
+  request_ = r;
+}
+
+void DvrkArm::on_free() noexcept {
+  if (!free_.is_bound()) {
+    ++summary_.moves_refused;
+    return;
+  }
+  request_ = Request{Request::Kind::free, {}, {}};
+}
+
+// In a cycle without a servo command: the client's move or free, once the arm is driven. The
+// dVRK's own busy (a homing from its console) holds it back; a move of ours it replaces.
+Outcome DvrkArm::send_request() noexcept {
+  using Kind = Request::Kind;
+  if (request_.kind == Kind::none) return Outcome::done();
+  if (!following()) {
+    ++summary_.moves_refused;
+    request_ = {};
+    return Outcome::done();
+  }
+  if (summary_.arm.is_busy && !moved_) {
+    ++summary_.held_busy;
+    return Outcome::done();
+  }
+  const Kind kind = request_.kind;
+  const Status st = kind == Kind::move_cp   ? move_cp_(request_.pose)
+                    : kind == Kind::move_jp ? move_jp_(request_.joints)
+                                            : free_();
+  if (st == Status::disconnected)
+    return Outcome::failed(FaultCode::device_lost, "the arm's import is gone (its gateway stopped)", source);
+  if (st != Status::ok) {
+    ++summary_.not_sent;  // tried again in the next cycle
+    return Outcome::done();
+  }
+  request_ = {};
+  ++summary_.moves;
+  moved_ = kind != Kind::free;
+  if (kind == Kind::free) commanded_ = false;  // free is no effort: nothing of ours left to undo
+  return Outcome::done();
+}
+
 Outcome DvrkArm::write(const Setpoint& s) {
   if (s.mode == ServoMode::none) {
     jaw_pending_ = false;  // a jaw goal goes only with the arm's motion
     (void)send_safe();
-    return Outcome::done();
+    return send_request();
+  }
+  // A move or free given while servo commands run would pre-empt them, or be pre-empted: refused.
+  if (request_.kind != Request::Kind::none) {
+    ++summary_.moves_refused;
+    request_ = {};
   }
   // The dVRK takes motion while busy (a servo command cancels a move, disturbs a homing): held
   // back here instead.
@@ -216,7 +334,15 @@ Outcome DvrkArm::write(const Setpoint& s) {
     ++summary_.held_busy;
     return Outcome::done();
   }
-  const Status st = s.mode == ServoMode::cf ? write_cf_(s.wrench) : write_cp_(s.pose);
+  Status st = Status::ok;
+  if (s.mode == ServoMode::jp) {
+    JointState j;
+    j.size = static_cast<decltype(j.size)>(arm_config_.joints.size());
+    for (std::size_t i = 0; i < arm_config_.joints.size(); ++i) j.position[i] = s.joints[i];
+    st = write_jp_(j);
+  } else {
+    st = s.mode == ServoMode::cf ? write_cf_(s.wrench) : write_cp_(s.pose);
+  }
   if (st == Status::disconnected)
     return Outcome::failed(FaultCode::device_lost, "the arm's import is gone (its gateway stopped)", source);
   if (st != Status::ok) {
@@ -229,6 +355,7 @@ Outcome DvrkArm::write(const Setpoint& s) {
   not_sent_in_a_row_ = 0;
   ++summary_.commands;
   commanded_ = true;
+  moved_ = false;  // a servo command pre-empts a move at the dVRK
   if (jaw_pending_ && write_jaw_.is_bound() && write_jaw_(jaw_goal_) == Status::ok) ++summary_.jaw_commands;
   jaw_pending_ = false;
   return Outcome::done();
@@ -256,12 +383,17 @@ Status DvrkArm::send_safe() noexcept {
 }
 
 void DvrkArm::enter_safe_state(SafeReason) {
+  // A move may still be under way (the arm's busy can lag the command): the safe command stops it.
+  if (moved_) commanded_ = true;
+  moved_ = false;
+  request_ = {};
   (void)send_safe();
   enable_sent_ = home_sent_ = false;
 }
 
 bool DvrkArm::accepts(ServoMode m) const noexcept {
-  return m == (arm_config_.kind == ArmKind::psm ? ServoMode::cp : ServoMode::cf);
+  return m == (arm_config_.kind == ArmKind::psm ? ServoMode::cp : ServoMode::cf) ||
+         (m == ServoMode::jp && arm_config_.servo_jp);
 }
 
 }  // namespace saw::drivers::dvrk

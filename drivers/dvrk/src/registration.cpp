@@ -2,6 +2,9 @@
 #include "saw/drivers/dvrk/registration.hpp"
 
 #include <cstdio>
+#include <limits>
+#include <string>
+#include <vector>
 
 #include "saw/drivers/dvrk/dvrk_arm.hpp"
 
@@ -20,6 +23,33 @@ TimeNs duration_in(const Params& p, const std::string& key, TimeNs fallback, Tim
                    const char* what) {
   using ns = std::chrono::nanoseconds;
   return p.get_duration_in(key, ns(fallback), ns(lo), ns(hi), what);
+}
+
+// joints: {names: [...], min: [...], max: [...], max_velocity: [...]}: one entry per joint, as
+// the arm's measured_js names them (rad or m; max_velocity, servo_jp's step rate, optional).
+std::vector<JointLimits> parse_joints(const Params& p) {
+  std::vector<JointLimits> out;
+  if (!p.has("joints")) return out;
+  const Params j = p.child("joints");
+  const auto names = j.get<std::vector<std::string>>("names");
+  if (names.empty() || names.size() > JointState::max_joints) j.fail_at("names", "one to eight joints");
+  const auto list = [&](const char* key, double fallback) {
+    auto v = j.get_or<std::vector<double>>(key, std::vector<double>(names.size(), fallback));
+    if (v.size() != names.size())
+      j.fail_at(key, "one value per joint (" + std::to_string(names.size()) + ")");
+    return v;
+  };
+  const auto min = list("min", -std::numeric_limits<double>::infinity());
+  const auto max = list("max", std::numeric_limits<double>::infinity());
+  const auto velocity = list("max_velocity", std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i].empty() || names[i].size() > JointState::max_name)
+      j.fail_at("names", "a name of 1 to 31 characters");
+    if (!(min[i] < max[i])) j.fail_at("max", "must be above min for " + names[i]);
+    if (!(velocity[i] > 0)) j.fail_at("max_velocity", "must be positive for " + names[i]);
+    out.push_back(JointLimits{names[i], min[i], max[i], velocity[i]});
+  }
+  return out;
 }
 
 DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
@@ -53,6 +83,10 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
                                std::chrono::nanoseconds(600s).count(), "in (0, 600 s]");
   c.home = p.get_or<bool>("home", false);
   c.start_enabled = p.get_or<bool>("start_enabled", false);
+  c.joints = parse_joints(p);
+  c.servo_jp = p.get_or<bool>("servo_jp", false);
+  if (c.servo_jp && c.joints.empty())
+    p.fail_at("servo_jp", "needs the arm's joints (joints: {names: [...]})");
   if (psm) {
     c.jaw_min = p.get_in_range("jaw_min", -1, 2, c.jaw_min);
     c.jaw_max = p.get_in_range("jaw_max", -1, 2, c.jaw_max);
@@ -71,15 +105,17 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
 }
 
 std::string summary_line(const DvrkSummary& s) {
-  char b[300];
+  char b[400];
   std::snprintf(b, sizeof b,
                 "%llu motion commands, %llu safe commands, %llu held back while the arm was busy, %llu not "
-                "taken by the import, %llu poses refused, %llu jaw commands (%llu refused); the dVRK arm "
-                "last %s%s%s",
+                "taken by the import, %llu poses refused, %llu jaw commands (%llu refused), %llu moves (%llu "
+                "refused), %llu joint samples refused; the dVRK arm last %s%s%s",
                 static_cast<unsigned long long>(s.commands), static_cast<unsigned long long>(s.safe_commands),
                 static_cast<unsigned long long>(s.held_busy), static_cast<unsigned long long>(s.not_sent),
                 static_cast<unsigned long long>(s.bad_poses), static_cast<unsigned long long>(s.jaw_commands),
-                static_cast<unsigned long long>(s.jaw_refused), to_string(s.arm.state).data(),
+                static_cast<unsigned long long>(s.jaw_refused), static_cast<unsigned long long>(s.moves),
+                static_cast<unsigned long long>(s.moves_refused),
+                static_cast<unsigned long long>(s.bad_joint_states), to_string(s.arm.state).data(),
                 s.arm.is_homed ? ", homed" : "", s.arm.is_busy ? ", busy" : "");
   return b;
 }

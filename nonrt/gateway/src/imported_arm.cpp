@@ -35,6 +35,8 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
   cp_ = topic(arm::measured_cp);
   cv_ = topic(arm::measured_cv);
   js_ = topic(arm::measured_js);
+  // Where the arm publishes one (a dVRK MTM's body/measured_cf).
+  cf_ = reader(arm::measured_cf, prefix + "body/measured_cf", Flow::state);
   // An MTM's gripper, a PSM's jaw: whichever the arm publishes.
   gripper_ = reader(arm::gripper_measured_js, prefix + "gripper/measured_js", Flow::state);
   jaw_ = reader(arm::jaw_measured_js, prefix + "jaw/measured_js", Flow::state);
@@ -51,6 +53,7 @@ ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
   crtk::provide(p, arm::measured_cp, st, &measured_cp_);
   crtk::provide(p, arm::measured_cv, st, &measured_cv_);
   crtk::provide(p, arm::measured_js, st, &measured_js_);
+  crtk::provide(p, arm::measured_cf, st, &measured_cf_);
   crtk::provide(p, arm::gripper_measured_js, st, &gripper_js_);
   crtk::provide(p, arm::jaw_measured_js, st, &jaw_js_);
   crtk::provide(p, arm::operating_state, st, &operating_state_);
@@ -125,9 +128,27 @@ void ImportedArm::provide_commands(ProvidedInterface& p, const std::string& pref
     jaw_servo_jp_ = writer("jaw_servo_jp", prefix + "jaw/servo_jp", mapping_of(arm::jaw_servo_jp));
     crtk::provide(p, arm::jaw_servo_jp, [this](const JointState& j) { command(jaw_servo_jp_, &j, true); });
   }
+  if (allowed("servo_jp")) {
+    servo_jp_ = writer("servo_jp", prefix + "servo_jp", mapping_of(arm::servo_jp));
+    crtk::provide(p, arm::servo_jp, [this](const JointState& j) { command(servo_jp_, &j, true); });
+  }
+  // A move is a trajectory the dVRK plans and ends at a checked goal: not a stream whose silence
+  // means its client died (no watchdog); the exit path stops one still under way.
+  if (allowed("move_cp")) {
+    move_cp_ = writer("move_cp", prefix + "move_cp", mapping_of(arm::move_cp));
+    crtk::provide(p, arm::move_cp, [this](const Pose& x) { command(move_cp_, &x, false, true); });
+  }
+  if (allowed("move_jp")) {
+    move_jp_ = writer("move_jp", prefix + "move_jp", mapping_of(arm::move_jp));
+    crtk::provide(p, arm::move_jp, [this](const JointState& j) { command(move_jp_, &j, false, true); });
+  }
   if (allowed("hold")) {
     hold_ = writer("hold", prefix + "hold", empty_mapping());
     p.add_command_void("hold", [this] { command(hold_, nullptr, false); });
+  }
+  if (allowed("free")) {
+    free_ = writer("free", prefix + "free", empty_mapping());
+    p.add_command_void("free", [this] { command(free_, nullptr, false); });
   }
 }
 
@@ -167,13 +188,16 @@ bool ImportedArm::send(const Writer& w, const void* value) {
   return ok;
 }
 
-void ImportedArm::command(const Writer& w, const void* value, bool motion) {
+void ImportedArm::command(const Writer& w, const void* value, bool motion, bool move) {
   last_command_ = now();
   cycles_since_command_ = 0;
   // A safe command on a topic of its own (hold) goes after every motion command: one of those
   // repaired by DDS after it would reach the arm last, and the arm would act on it.
   if (!motion && &w == &hold_) settle_motion(monotonic_now() + 50'000'000);
-  if (send(w, value)) moving_ = motion;
+  if (send(w, value)) {
+    moving_ = motion;
+    move_sent_ = move;
+  }
 }
 
 bool ImportedArm::acknowledged(const Writer& w, TimeNs deadline) {
@@ -185,7 +209,8 @@ bool ImportedArm::acknowledged(const Writer& w, TimeNs deadline) {
 }
 
 void ImportedArm::settle_motion(TimeNs deadline) {
-  for (const Writer* w : {&servo_cf_, &servo_cp_, &jaw_servo_jp_}) (void)acknowledged(*w, deadline);
+  for (const Writer* w : {&servo_cf_, &servo_cp_, &servo_jp_, &jaw_servo_jp_, &move_cp_, &move_jp_})
+    (void)acknowledged(*w, deadline);
 }
 
 bool ImportedArm::send_safe_command() {
@@ -200,7 +225,7 @@ bool ImportedArm::send_safe_command() {
     ok = send(servo_cp_, &measured_cp_);
   }
   if (ok) {
-    moving_ = false;
+    moving_ = move_sent_ = false;
     safe_sent_.fetch_add(1, std::memory_order_relaxed);
   }
   return ok;
@@ -223,12 +248,15 @@ void ImportedArm::watch_client() {
 
 void ImportedArm::leave_safely(TimeNs deadline) {
   if (config_.commands.empty()) return;
-  if (moving_ && send_safe_command())
+  // A move of the client's still under way (the arm busy) is stopped too.
+  const bool move_running = move_sent_ && operating_state_.is_busy;
+  if ((moving_ || move_running) && send_safe_command())
     std::fprintf(stderr, "saw-gateway: import %s: exiting while its client moved the arm: %s sent\n",
                  name().c_str(), config_.safe_command.c_str());
   // Whoever sent the last command (the client's own safe command, just before it stopped us, or
   // ours): it reaches the arm before our participant goes, or a loss could not be repaired.
-  for (const Writer* w : {&servo_cf_, &servo_cp_, &jaw_servo_jp_, &hold_, &state_command_})
+  for (const Writer* w : {&servo_cf_, &servo_cp_, &servo_jp_, &jaw_servo_jp_, &move_cp_, &move_jp_, &hold_,
+                          &free_, &state_command_})
     (void)acknowledged(*w, deadline);
 }
 
@@ -303,6 +331,7 @@ void ImportedArm::run() {
   }
   (void)take_newest(cv_, measured_cv_);
   (void)take_newest(js_, measured_js_);
+  (void)take_newest(cf_, measured_cf_);
   (void)take_newest(gripper_, gripper_js_);
   (void)take_newest(jaw_, jaw_js_);
   OperatingState s;

@@ -13,12 +13,13 @@
 namespace saw::gateway {
 
 // Read-only (as the paper's research API was), the provided "arm" (crtk_arm.hpp): measured_cp,
-// measured_cv, measured_js, gripper_measured_js (an MTM's), jaw_measured_js (a PSM's),
+// measured_cv, measured_js, measured_cf (where published: an MTM's body/measured_cf),
+// gripper_measured_js (an MTM's), jaw_measured_js (a PSM's),
 // operating_state (reads); operating_state, clutch, operator_present (events).
 // Read-write (ImportConfig::commands), the provided "dvrk" for one client, a dvrk_arm device in
 // saw-rt: the same reads and `errors` (how many error messages the arm sent; each, and each
-// warning, printed), and state_command, servo_cf (the arm's body/servo_cf), servo_cp,
-// jaw_servo_jp (jaw/servo_jp), hold
+// warning, printed), and state_command, servo_cf (the arm's body/servo_cf), servo_cp, servo_jp,
+// jaw_servo_jp (jaw/servo_jp), move_cp, move_jp, hold, free
 // forwarded to reliable writers as the dVRK's subscriptions require. The device keeps the
 // contract; the import keeps what a process must do for a client that can no longer: the safe
 // command when the client falls silent while moving the arm, and on the gateway's exit (its
@@ -66,7 +67,8 @@ class ImportedArm : public Task {
   void provide_commands(ProvidedInterface& p, const std::string& prefix);
   static bool matched(const Writer& w);
   bool send(const Writer& w, const void* value);
-  void command(const Writer& w, const void* value, bool motion);
+  // motion: a servo stream (its silence is the client's death); move: a trajectory the arm plans.
+  void command(const Writer& w, const void* value, bool motion, bool move = false);
   // Waits (until `deadline`) for the arm to acknowledge what `w` sent; false if it did not.
   static bool acknowledged(const Writer& w, TimeNs deadline);
   // Every motion command acknowledged (bounded) before a safe command on another topic.
@@ -77,15 +79,17 @@ class ImportedArm : public Task {
   DdsContext& dds_;
   ImportConfig config_;
   std::string interface_;
-  fdds::DataReader *cp_ = nullptr, *cv_ = nullptr, *js_ = nullptr, *state_ = nullptr, *clutch_ = nullptr,
-                   *operator_ = nullptr, *gripper_ = nullptr, *jaw_ = nullptr;
-  Writer state_command_, servo_cf_, servo_cp_, jaw_servo_jp_, hold_, gravity_;
+  fdds::DataReader *cp_ = nullptr, *cv_ = nullptr, *js_ = nullptr, *cf_ = nullptr, *state_ = nullptr,
+                   *clutch_ = nullptr, *operator_ = nullptr, *gripper_ = nullptr, *jaw_ = nullptr;
+  Writer state_command_, servo_cf_, servo_cp_, servo_jp_, jaw_servo_jp_, move_cp_, move_jp_, hold_, free_,
+      gravity_;
   fdds::DataReader *error_ = nullptr, *warning_ = nullptr;
   std::uint64_t errors_ = 0;  // error messages of the arm (a state column: "errors")
   bool gravity_sent_ = false;
   Pose measured_cp_;
   bool has_cp_ = false;
   Twist measured_cv_;
+  Wrench measured_cf_;
   JointState measured_js_, gripper_js_, jaw_js_;
   OperatingState operating_state_;
   TimeNs cp_arrival_ = 0;
@@ -94,6 +98,7 @@ class ImportedArm : public Task {
   std::optional<StateCommand> pending_state_command_;
   // A motion command was the last one sent (the safe command is owed if the client goes).
   bool moving_ = false;
+  bool move_sent_ = false;  // a move was the last command sent: stopped on exit if under way
   TimeNs last_command_ = 0;
   int cycles_since_command_ = 0;
   EventWrite<OperatingState>* state_event_ = nullptr;

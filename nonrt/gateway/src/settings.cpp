@@ -40,11 +40,14 @@ void read_import_commands(const Params& im, ImportSettings& s) {
   const auto allowed = [&](const std::string& c) {
     return std::find(s.commands.begin(), s.commands.end(), c) != s.commands.end();
   };
+  static const std::vector<std::string> known{"servo_cf", "servo_cp", "servo_jp", "jaw_servo_jp",
+                                              "move_cp",  "move_jp",  "hold",     "free"};
   for (const auto& c : s.commands)
-    if (c != "servo_cf" && c != "servo_cp" && c != "jaw_servo_jp" && c != "hold")
-      im.fail_at(
-          "commands",
-          "'" + c + "' is not one of: servo_cf (an MTM), servo_cp (a PSM), jaw_servo_jp (its jaw), hold");
+    if (std::find(known.begin(), known.end(), c) == known.end())
+      im.fail_at("commands",
+                 "'" + c +
+                     "' is not one of: servo_cf (an MTM), servo_cp (a PSM), servo_jp, jaw_servo_jp (its "
+                     "jaw), move_cp, move_jp, hold, free");
   if (allowed("servo_cf") && allowed("servo_cp"))
     im.fail_at("commands", "servo_cf (an MTM's wrench) or servo_cp (a PSM's pose), not both");
   if (s.commands.empty()) {

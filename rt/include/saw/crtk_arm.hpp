@@ -110,6 +110,13 @@ inline constexpr Read<JointState> setpoint_js{"setpoint_js"};
 inline constexpr Write<JointState> servo_jp{"servo_jp"};  // positions
 inline constexpr Write<JointState> servo_jv{"servo_jv"};  // velocities
 inline constexpr Write<JointState> servo_jf{"servo_jf"};  // efforts: N·m or N
+// CRTK's move commands: a goal the arm reaches along a trajectory it plans itself (busy until
+// there), as a dVRK arm aligns before teleoperation.
+inline constexpr Write<Pose> move_cp{"move_cp"};
+inline constexpr Write<JointState> move_jp{"move_jp"};
+// The wrench the arm measures or estimates at its tip, where it publishes one (a dVRK MTM's
+// body/measured_cf).
+inline constexpr Read<Wrench> measured_cf{"measured_cf"};
 using crtk::operating_state_event;
 using crtk::state_command;
 inline constexpr Event<ButtonEvent> clutch{"clutch"};                      // a foot pedal

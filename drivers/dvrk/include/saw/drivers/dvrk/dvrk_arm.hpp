@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 #include <tuple>
+#include <vector>
 
 #include "saw/device.hpp"
 #include "saw/functions.hpp"
@@ -43,23 +44,39 @@ struct DvrkArmConfig {
   // PSM jaw_servo_jp: its angle (rad) within these, else refused (the dVRK's large needle
   // driver opens to about 80 degrees and closes a little past zero to grip).
   double jaw_min = -0.35, jaw_max = 1.4;
+  // The arm's joints as its measured_js has them (an MTM's 7, a PSM's 6 without the jaw): with
+  // them, measured_js is this device's (a sample of another size is refused) and move_jp goals
+  // are checked against min/max. Empty: no joint space.
+  std::vector<JointLimits> joints;
+  bool servo_jp = false;  // also take servo_jp (needs joints; the base checks steps by max_velocity)
 };
 
 // What went to the arm, for the run's summary and a GUI.
 struct DvrkSummary {
   static constexpr std::string_view type_name = "saw::dvrk::DvrkSummary";
-  static constexpr std::uint32_t layout_version = 2;  // 2: jaw
+  static constexpr std::uint32_t layout_version = 3;  // 2: jaw; 3: moves, joints
   std::uint64_t commands = 0;                         // motion commands sent (servo_cf, servo_cp)
   std::uint64_t safe_commands = 0;                    // safe commands sent
   std::uint64_t held_busy = 0;                        // motion commands held back while the arm was busy
   std::uint64_t not_sent = 0;                         // commands the import's queue did not take (full)
-  std::uint64_t bad_poses = 0;     // measured_cp samples refused (not finite, not a rotation)
-  std::uint64_t jaw_commands = 0;  // jaw_servo_jp sent
-  std::uint64_t jaw_refused = 0;   // jaw_servo_jp refused (not one finite angle within the limits)
-  OperatingState arm{};            // the dVRK's own operating state, as last read
-  static constexpr auto fields = std::tuple{
-      &DvrkSummary::commands,  &DvrkSummary::safe_commands, &DvrkSummary::held_busy,   &DvrkSummary::not_sent,
-      &DvrkSummary::bad_poses, &DvrkSummary::jaw_commands,  &DvrkSummary::jaw_refused, &DvrkSummary::arm};
+  std::uint64_t bad_poses = 0;         // measured_cp samples refused (not finite, not a rotation)
+  std::uint64_t jaw_commands = 0;      // jaw_servo_jp sent
+  std::uint64_t jaw_refused = 0;       // jaw_servo_jp refused (not one finite angle within the limits)
+  std::uint64_t moves = 0;             // move_cp, move_jp and free sent
+  std::uint64_t moves_refused = 0;     // refused (not finite, outside the limits, not driven, not allowed)
+  std::uint64_t bad_joint_states = 0;  // measured_js samples refused (another size, not finite)
+  OperatingState arm{};                // the dVRK's own operating state, as last read
+  static constexpr auto fields = std::tuple{&DvrkSummary::commands,
+                                            &DvrkSummary::safe_commands,
+                                            &DvrkSummary::held_busy,
+                                            &DvrkSummary::not_sent,
+                                            &DvrkSummary::bad_poses,
+                                            &DvrkSummary::jaw_commands,
+                                            &DvrkSummary::jaw_refused,
+                                            &DvrkSummary::moves,
+                                            &DvrkSummary::moves_refused,
+                                            &DvrkSummary::bad_joint_states,
+                                            &DvrkSummary::arm};
 };
 
 // Requires "dvrk" (the import: measured_cp, operating_state, state_command; servo_cf for an MTM,
@@ -67,7 +84,14 @@ struct DvrkSummary {
 // there; the console's clutch and operator_present, which become this device's events). Provides,
 // besides the device's "arm": an MTM's gripper_measured_js; a PSM's
 // jaw_measured_js and jaw_servo_jp (one finite angle within jaw_min/max, else refused and
-// counted; sent with the cycle's pose, only while the arm is driven, never while it is busy). Enabling walks
+// counted; sent with the cycle's pose, only while the arm is driven, never while it is busy); the
+// arm's measured_cf where the import has it (a finite wrench); with `joints`, measured_js (checked)
+// and servo_jp when `servo_jp`. move_cp and move_jp (the dVRK plans the trajectory: alignment
+// before following), and an MTM's `free`: checked when given (finite, a unit quaternion, in the
+// workspace; every joint within its limits), sent in the next cycle only while the arm is driven
+// and no servo command runs (refused and counted otherwise); servo commands are held back while
+// the move makes the arm busy, and every stop path after a move sends the safe command, which
+// stops a move still under way. Enabling walks
 // the dVRK's handshake: `enable` sent once and ENABLED awaited; a not-homed arm homed (`home: true`, only
 // once ENABLED) or refused; no motion command reaches the arm before it is ENABLED, homed and not busy, nor
 // while it is busy. Following, an arm that leaves ENABLED, loses its homing, stops publishing
@@ -93,6 +117,11 @@ class DvrkArm final : public Device {
   Outcome send_state(StateCommand c, bool& sent, const char* why) noexcept;
   void on_jaw(const JointState& j) noexcept;
   Status send_safe() noexcept;
+  void on_move_cp(const Pose& p) noexcept;
+  void on_move_jp(const JointState& j) noexcept;
+  void on_free() noexcept;
+  Outcome send_request() noexcept;
+  void read_joints() noexcept;
 
   DvrkArmConfig arm_config_;
   FunctionRead<Pose> read_cp_;
@@ -106,6 +135,21 @@ class DvrkArm final : public Device {
   FunctionVoid hold_;
   FunctionRead<JointState> read_jaw_;  // the gripper (MTM) or the jaw (PSM)
   FunctionWrite<JointState> write_jaw_;
+  FunctionRead<Wrench> read_cf_;
+  Wrench cf_{};  // the arm's measured_cf, the last finite one
+  FunctionRead<JointState> read_js_;
+  FunctionWrite<JointState> write_jp_, move_jp_;
+  FunctionWrite<Pose> move_cp_;
+  FunctionVoid free_;
+  // One request of a client that the arm carries out by itself: checked when given, sent by the
+  // next write() (the hardware is written there only).
+  struct Request {
+    enum class Kind : std::uint8_t { none, move_cp, move_jp, free } kind = Kind::none;
+    Pose pose{};
+    JointState joints{};
+  };
+  Request request_{};
+  bool moved_ = false;             // a move went out since the last safe command: a stop sends it
   JointState jaw_{}, jaw_goal_{};  // the last good gripper/jaw sample; the last accepted jaw goal
   bool jaw_pending_ = false;
   DvrkSummary summary_{};
