@@ -50,13 +50,9 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
     if (ctx.publisher == nullptr || ctx.subscriber == nullptr || dds_->manifest == nullptr)
       throw std::runtime_error(
           "DDS: could not create the gateway's publisher, subscriber or manifest writer");
-    for (const auto& name : config_.attach) {
-      attachments_.push_back(std::make_unique<Attachment>(ctx, name, config_.decimation, config_.display_rate,
-                                                          config_.attach_timeout,
-                                                          [this] { publish_manifest(); }));
-      const auto& e = attachments_.back()->endpoints();
-      endpoints_.insert(endpoints_.end(), e.begin(), e.end());
-    }
+    // Imports and mirrors are presented first: saw-rt starts its tasks (and so makes its exports
+    // live, which an attachment waits for) only once they are here. The other order waits in a
+    // circle, broken only while the exports' fresh heartbeat still passes (a slow start did not).
     imports_ = std::make_unique<Imports>();
     for (const auto& i : config_.imports) {
       imports_->arms.push_back(std::make_unique<ImportedArm>(ctx, i));
@@ -80,8 +76,18 @@ Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::m
       }
     }
     if (!config_.imports.empty() || !config_.mirrors.empty()) imports_->manager.start();
+    std::vector<EndpointInfo> attached;
+    for (const auto& name : config_.attach) {
+      attachments_.push_back(std::make_unique<Attachment>(ctx, name, config_.decimation, config_.display_rate,
+                                                          config_.attach_timeout,
+                                                          [this] { publish_manifest(); }));
+      const auto& e = attachments_.back()->endpoints();
+      attached.insert(attached.end(), e.begin(), e.end());
+    }
+    endpoints_.insert(endpoints_.begin(), attached.begin(), attached.end());  // the manifest's order
   } catch (...) {
     attachments_.clear();
+    if (imports_ != nullptr) imports_->manager.stop();  // started before an attachment failed
     imports_.reset();
     delete_participant(ctx.participant);
     throw;
