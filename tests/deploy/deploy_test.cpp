@@ -205,7 +205,7 @@ TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
   const std::string collaborative = "params: {gains: {master: 100, slave: 100}}";
   const Case cases[] = {
       {"params: {gains: {master: 100, slave: 100}}", "params: {law: springy}",
-       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.law': 'springy' is not one of: collaborative, passive_bilateral, position_position, wave_variables)"},
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.law': 'springy' is not one of: collaborative, passive_bilateral, position_position, surgical, wave_variables)"},
       {"params: {gains: {master: 100, slave: 100}}", "params: {law: position_position, stiffness: 1e9}",
        R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.stiffness': .*out of range)"},
       // Another law's setting is not this law's: an unknown parameter.
@@ -214,6 +214,8 @@ TEST(Deployment, TheLawIsChosenByNameAndItsSettingsChecked) {
       // A slave that follows a pose needs a law that gives one.
       {"params: {gains: {master: 100, slave: 100}}", "params: {slave_command: servo_cp}",
        R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.slave_command': law 'collaborative' gives the slave a force only)"},
+      {"params: {gains: {master: 100, slave: 100}}", "params: {law: surgical}",
+       R"(^cfg\.yaml:13:\d+: key 'components\[2\]\.params\.law': law 'surgical' gives the slave a pose only: it needs slave_command: servo_cp)"},
       {"params: {gains: {master: 100, slave: 100}}", "params: {slave_command: servo_jp}",
        R"(key 'components\[2\]\.params\.slave_command': 'servo_jp' is not one of: servo_cf, servo_cp)"},
       {"params: {gains: {master: 100, slave: 100}}", "params: {mirror: [1, 0.5, 1]}",

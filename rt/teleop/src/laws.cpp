@@ -3,6 +3,7 @@
 #include "saw/teleop/laws/collaborative.hpp"
 #include "saw/teleop/laws/passive_bilateral.hpp"
 #include "saw/teleop/laws/position_position.hpp"
+#include "saw/teleop/laws/surgical.hpp"
 #include "saw/teleop/laws/wave_variables.hpp"
 
 namespace saw::teleop {
@@ -14,6 +15,7 @@ LawRegistry& law_registry() {
     r.add<PositionPositionLaw>();
     r.add<PassiveBilateralLaw>();
     r.add<WaveVariableLaw>();
+    r.add<SurgicalLaw>();
     return r;
   }();
   return registry;

@@ -35,7 +35,9 @@ TeleopSpec parse_teleop(const ComponentContext& ctx, Params& p) {
   if (c.slave_servo_cp && !spec.law.make(LawContext{})->gives_slave_goal())
     p.fail_at("slave_command", "law '" + law +
                                    "' gives the slave a force only; servo_cp needs a law that gives a "
-                                   "position (position_position)");
+                                   "position (position_position, surgical)");
+  if (!c.slave_servo_cp && spec.law.make(LawContext{})->gives_no_force())
+    p.fail_at("law", "law '" + law + "' gives the slave a pose only: it needs slave_command: servo_cp");
   spec.task = deploy::periodic_task(ctx, p, "teleop");
   return spec;
 }

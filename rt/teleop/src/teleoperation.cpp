@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <thread>
 
@@ -146,6 +147,13 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   crtk::require(r, crtk::arm::servo_cf, s.cf,
                 s.side == FaultSide::master || follows_pose ? Need::optional : Need::required);
   if (follows_pose) crtk::require(r, crtk::arm::servo_cp, s.goal);
+  // A master's gripper drives a slave's jaw (a law that gives slave_jaw).
+  if (s.side == FaultSide::master) {
+    crtk::require(r, crtk::arm::gripper_measured_js, s.grip, Need::optional);
+  } else {
+    crtk::require(r, crtk::arm::jaw_measured_js, s.grip, Need::optional);
+    crtk::require(r, crtk::arm::jaw_servo_jp, s.jaw, Need::optional);
+  }
   crtk::require(r, delayed_arm::source_time, s.source_time, Need::optional);
   crtk::require(r, delayed_arm::delay, s.delay, Need::optional);
   crtk::require(r, crtk::operating_state, s.state, Need::optional);
@@ -309,8 +317,13 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   // A row from the future (more than a period ahead) would never go stale: refused.
   if (st == Status::ok && time > now() + config().period.count()) st = Status::invalid;
   if (st == Status::ok) {
-    const Eigen::Vector3d position = to_eigen(pose.position), velocity = to_eigen(twist.linear);
-    s.not_finite = !position.allFinite() || !velocity.allFinite();
+    const Eigen::Vector3d position = to_eigen(pose.position), velocity = to_eigen(twist.linear),
+                          angular = to_eigen(twist.angular);
+    const Eigen::Quaterniond q(pose.orientation[3], pose.orientation[0], pose.orientation[1],
+                               pose.orientation[2]);
+    // A quaternion off the unit sphere is no rotation: refused as a value that is not one.
+    s.not_finite = !position.allFinite() || !velocity.allFinite() || !angular.allFinite() ||
+                   !q.coeffs().allFinite() || !Pose::valid(pose);
     if (s.not_finite) {
       ++rejected_inputs_;
       st = Status::invalid;
@@ -318,6 +331,8 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
       s.last.position = position;
       s.orientation = pose.orientation;
       s.last.velocity = velocity;
+      s.last.orientation = q;
+      s.last.angular_velocity = angular;
       s.energy = std::max(s.energy, energy);  // only grows: a late row tells nothing new
       // A wave is new when its row is: one shown again (nothing arrived) is no wave.
       s.wave_fresh = time != s.time;
@@ -358,10 +373,18 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   return true;
 }
 
+// Optional, and no reason to fault: NaN when the device has none or its value is not one.
+void Teleoperation::read_grip(Side& s) noexcept {
+  JointState j;
+  s.last.grip = s.grip.is_bound() && s.grip(j) == Status::ok && j.size >= 1 && std::isfinite(j.position[0])
+                    ? j.position[0]
+                    : std::numeric_limits<double>::quiet_NaN();
+}
+
 void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave,
-                                const Eigen::Vector3d* slave_goal) noexcept {
+                                const LawCommand* law) noexcept {
   Eigen::Vector3d fm = f_master, fs = f_slave;
-  const bool finite = fm.allFinite() && fs.allFinite() && (slave_goal == nullptr || slave_goal->allFinite());
+  const bool finite = fm.allFinite() && fs.allFinite() && (law == nullptr || law->slave_goal.allFinite());
   if (!finite) {  // the last check before a device
     raise_fault(
         fault_on(fm.allFinite() ? FaultSide::slave : FaultSide::master, FaultCode::output_not_finite));
@@ -375,9 +398,21 @@ void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Ve
   if (config_.slave_servo_cp) {
     // A slave that follows a pose gets only goals: while the law holds, nothing (its device's
     // command watchdog holds it).
-    if (finite && slave_goal != nullptr &&
-        slave_.goal(Pose{to_vec3(*slave_goal), held_orientation_}) != Status::ok)
-      ++refused_sends_;
+    if (finite && law != nullptr) {
+      Quat q = held_orientation_;
+      if (law->orients_slave) {
+        const Eigen::Quaterniond& g = law->slave_goal_orientation;
+        q = {g.x(), g.y(), g.z(), g.w()};
+      }
+      // The device refuses a pose that is not one (not finite, off the unit sphere): counted.
+      if (slave_.goal(Pose{to_vec3(law->slave_goal), q}) != Status::ok) ++refused_sends_;
+      if (std::isfinite(law->slave_jaw) && slave_.jaw.is_bound()) {
+        JointState j;
+        j.size = 1;
+        j.position[0] = law->slave_jaw;
+        if (slave_.jaw(j) != Status::ok) ++refused_sends_;
+      }
+    }
     slave_force_ = {};
     return;
   }
@@ -487,6 +522,8 @@ void Teleoperation::cycle_body() noexcept {
   FaultInfo why{};
   if (!read_side(master_, why) || !read_side(slave_, why)) return on_input_failure(why);
   inputs_seen_ = true;
+  read_grip(master_);
+  read_grip(slave_);
   LawInputs in{master_.last, slave_.last, seconds(config()), master_.energy};
   in.master_wave = master_.wave_value;
   in.master_wave_fresh = master_.wave_fresh;
@@ -526,7 +563,7 @@ void Teleoperation::cycle_body() noexcept {
     (void)master_.remote_energy(law.slave_port_energy);
   if (law.sends_wave && master_.remote_wave.is_bound())
     (void)master_.remote_wave(to_vec3(law.master_wave_out));
-  send_forces(law.master_force, law.slave_force, &law.slave_goal);
+  send_forces(law.master_force, law.slave_force, &law);
 }
 
 }  // namespace saw::teleop

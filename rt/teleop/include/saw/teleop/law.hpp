@@ -2,8 +2,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <concepts>
 #include <cstdint>
+#include <limits>
 #include <string_view>
 #include <tuple>
 
@@ -17,6 +19,10 @@ struct SideSample {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s
   TimeNs age = 0;                                      // ns since the sample was taken (delay included)
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // a unit quaternion, checked
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();       // rad/s
+  // The master's gripper or the slave's jaw (rad), checked finite; NaN: the device has none.
+  double grip = std::numeric_limits<double>::quiet_NaN();
 };
 
 // What the task gives a law every cycle it drives the devices, or holds them.
@@ -51,6 +57,12 @@ struct LawCommand {
   // For a law that `gives_slave_goal`: where the slave should be (m), for a slave that follows a
   // pose (servo_cp, a PSM) rather than a force; slave_force is then not sent.
   Eigen::Vector3d slave_goal = Eigen::Vector3d::Zero();
+  // With orients_slave, the slave's goal orientation (a unit quaternion) with slave_goal; without
+  // it the task holds the slave's orientation from the engagement.
+  Eigen::Quaterniond slave_goal_orientation = Eigen::Quaterniond::Identity();
+  bool orients_slave = false;
+  // The slave's jaw goal (rad), sent to a slave that has a jaw; NaN: none.
+  double slave_jaw = std::numeric_limits<double>::quiet_NaN();
   // False when the law's arithmetic overflowed (a huge input): the task then faults with zero
   // force, naming `bad_side`.
   bool finite = true;
@@ -85,6 +97,7 @@ struct LawContext {
 //     double wave_impedance() const noexcept;   // its b: the master port's must be the same
 //     static constexpr bool gives_slave_goal = true;  // sets LawCommand::slave_goal: it can drive
 //                                              // a slave that follows a pose (slave_command: servo_cp)
+//     static constexpr bool gives_no_force = true;  // and only such a slave
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {

@@ -35,6 +35,7 @@ class LawModel {
   virtual bool uses_waves() const noexcept = 0;
   // The law sets LawCommand::slave_goal: a slave that follows a pose can be driven by it.
   virtual bool gives_slave_goal() const noexcept = 0;
+  virtual bool gives_no_force() const noexcept = 0;
   // For a law that uses_waves: its wave impedance b (N·s/m), which the master's port must share
   // (the task refuses to start otherwise); 0 for other laws.
   virtual double wave_impedance() const noexcept = 0;
@@ -83,6 +84,12 @@ class LawHolder final : public LawModel {
   bool gives_slave_goal() const noexcept override {
     if constexpr (requires { L::gives_slave_goal; })
       return L::gives_slave_goal;
+    else
+      return false;
+  }
+  bool gives_no_force() const noexcept override {
+    if constexpr (requires { L::gives_no_force; })
+      return L::gives_no_force;
     else
       return false;
   }

@@ -42,7 +42,7 @@ struct TeleopSummary {
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultInfo fault{};
   std::array<char, FaultText::max + 1> reason{};  // the fault's reason in words (fault_reason())
-  double tracking_rms = 0, tracking_max = 0;        // m
+  double tracking_rms = 0, tracking_max = 0;      // m
   std::uint64_t enabled_cycles = 0;
   std::uint64_t rejected_commands = 0, refused_sends = 0, rejected_inputs = 0, offset_errors = 0;
   double master_age_mean = 0;  // ns
@@ -55,6 +55,7 @@ std::string to_string(const TeleopSummary& s);
 
 // Required interfaces "master" and "slave" (CRTK: measured_cp, measured_cv, servo_cf — optional
 // on the master, which may be read-only; optional clutch event on the master; optional
+// gripper_measured_js on the master, jaw_measured_js and jaw_servo_jp on the slave; optional
 // source_time and delay, given by a DelayTask; optional operating_state). Provided interface
 // "teleop": state_command; its law's settings as set_<name> commands and as read commands
 // <name> (the values in force); master_force, slave_force, tracking_error, fault,
@@ -135,6 +136,8 @@ class Teleoperation : public Task {
     FunctionRead<Twist> cv;
     FunctionWrite<Wrench> cf;
     FunctionWrite<Pose> goal;                 // a slave that follows a pose (slave_servo_cp)
+    FunctionRead<JointState> grip;            // the master's gripper, the slave's jaw (optional)
+    FunctionWrite<JointState> jaw;            // the slave's jaw goal (optional)
     FunctionRead<TimeNs> source_time, delay;  // bound when a DelayTask sits in between
     FunctionRead<OperatingState> state;       // bound when the device reports its state
     FunctionRead<double> port_energy;         // bound when the device has a passivity port
@@ -172,9 +175,10 @@ class Teleoperation : public Task {
   void set_operating_state(OperatingStateValue s) noexcept;
   void raise_fault(FaultInfo why) noexcept;
   void on_input_failure(const FaultInfo& why) noexcept;
-  // The slave's goal (slave_servo_cp) instead of its force when `slave_goal` is given.
+  // The slave's goal (slave_servo_cp) instead of its force, and its jaw, when `law` is given.
   void send_forces(const Eigen::Vector3d& f_master, const Eigen::Vector3d& f_slave,
-                   const Eigen::Vector3d* slave_goal = nullptr) noexcept;
+                   const LawCommand* law = nullptr) noexcept;
+  void read_grip(Side& s) noexcept;
   void note_refusals() noexcept;
   void account(const LawCommand& law) noexcept;
   void cycle_body() noexcept;

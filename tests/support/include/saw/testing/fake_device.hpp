@@ -1,6 +1,7 @@
 // FakeDevice: a passive CRTK device whose state the test sets and publishes explicitly.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <utility>
 
@@ -26,6 +27,13 @@ class FakeDevice : public Component {
       goal = x;
       ++goals;
     });
+    // A gripper (as a master's) and a jaw (as a slave's): `grip`, NaN for a device without.
+    crtk::provide(p, arm::gripper_measured_js, state_table(), &grip_js_);
+    crtk::provide(p, arm::jaw_measured_js, state_table(), &grip_js_);
+    crtk::provide(p, arm::jaw_servo_jp, [this](const JointState& j) {
+      jaw_goal = j.size >= 1 ? j.position[0] : std::nan("");
+      ++jaw_goals;
+    });
     clutch_ = &crtk::provide(p, arm::clutch);
     crtk::provide(p, arm::operating_state, state_table(), &state_);
   }
@@ -36,6 +44,8 @@ class FakeDevice : public Component {
     twist_.linear = velocity;
     state_.state = operating;
     state_.is_busy = busy;
+    grip_js_.size = std::isnan(grip) ? 0 : 1;
+    grip_js_.position[0] = std::isnan(grip) ? 0 : grip;
     state_table().advance(t);
   }
   void press_clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
@@ -47,10 +57,14 @@ class FakeDevice : public Component {
   OperatingStateValue operating = OperatingStateValue::enabled;
   bool busy = false;  // operating_state's is_busy (homing)
   int commands = 0;
+  double grip = std::nan("");      // rad: the gripper's or the jaw's angle; NaN: none
+  double jaw_goal = std::nan("");  // the last jaw_servo_jp
+  int jaw_goals = 0;
 
  private:
   Pose pose_;
   Twist twist_;
+  JointState grip_js_{};
   OperatingState state_{OperatingStateValue::enabled, true, false};
   EventWrite<ButtonEvent>* clutch_;
 };

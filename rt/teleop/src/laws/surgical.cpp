@@ -1,0 +1,74 @@
+#include "saw/teleop/laws/surgical.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace saw::teleop {
+namespace {
+
+constexpr double degrees = 180.0 / std::numbers::pi;
+
+}  // namespace
+
+SurgicalLaw::SurgicalLaw(const Settings& s, const LawContext& c) : s_(s), period_(c.period) {}
+
+Eigen::Quaterniond SurgicalLaw::camera() const noexcept {
+  const double r = s_.camera_rpy[0] / degrees, p = s_.camera_rpy[1] / degrees, y = s_.camera_rpy[2] / degrees;
+  return Eigen::Quaterniond(Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(p, Eigen::Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(r, Eigen::Vector3d::UnitX()));
+}
+
+void SurgicalLaw::reset(const LawInputs& in) noexcept {
+  // Held where it is until engaged: the goal stays this pose, so no drift and no step.
+  p_s0_ = in.slave.position;
+  q_s0_ = in.slave.orientation;
+  jaw_ = in.slave.grip;  // NaN when the slave has no jaw: then none is sent
+  engaged_ = false;
+  (void)engage(in);
+}
+
+bool SurgicalLaw::engage(const LawInputs& in) noexcept {
+  const Eigen::Quaterniond seen = camera() * in.master.orientation;
+  misalignment_ = s_.orientation ? seen.angularDistance(q_s0_) * degrees : 0.0;
+  engaged_ = misalignment_ <= s_.align_tolerance;
+  aligned_ = engaged_ ? 1.0 : 0.0;
+  if (!engaged_) return false;
+  p_m0_ = in.master.position;
+  // What is left of the misalignment is kept as an offset: the goal starts at q_s0.
+  q_off_ = seen.conjugate() * q_s0_;
+  return true;
+}
+
+double SurgicalLaw::jaw_goal(const LawInputs& in) noexcept {
+  if (!std::isfinite(jaw_) || !std::isfinite(in.master.grip)) return jaw_;  // NaN: nothing sent
+  const double target = std::clamp(s_.jaw_scale * in.master.grip + s_.jaw_offset, s_.jaw_min, s_.jaw_max);
+  const double step = s_.jaw_rate * period_;
+  jaw_ += std::clamp(target - jaw_, -step, step);
+  return jaw_;
+}
+
+LawCommand SurgicalLaw::step(const LawInputs& in) noexcept {
+  LawCommand out;
+  out.orients_slave = true;
+  if (!engaged_ && !engage(in)) {
+    out.slave_goal = p_s0_;
+    out.slave_goal_orientation = q_s0_;
+  } else {
+    const Eigen::Quaterniond c = camera();
+    out.slave_goal = p_s0_ + s_.scale * (c * (in.master.position - p_m0_));
+    out.slave_goal_orientation = s_.orientation ? (c * in.master.orientation * q_off_).normalized() : q_s0_;
+    out.slave_jaw = jaw_goal(in);
+  }
+  out.slave_error = in.slave.position - out.slave_goal;
+  out.master_error = -out.slave_error / s_.scale;
+  out.slave_offset = p_s0_ - s_.scale * (camera() * p_m0_);
+  orientation_error_ = in.slave.orientation.angularDistance(out.slave_goal_orientation) * degrees;
+  out.finite = out.slave_goal.allFinite() && out.slave_goal_orientation.coeffs().allFinite() &&
+               out.slave_error.allFinite();
+  if (!out.finite) out.bad_side = in.master.position.allFinite() ? FaultSide::slave : FaultSide::master;
+  return out;
+}
+
+}  // namespace saw::teleop

@@ -1,0 +1,174 @@
+// The surgical law on the teleoperation task, between two fake devices on the stepped clock:
+// translation scaled from engagement in the camera frame, orientation absolute once aligned,
+// no step in the commanded pose at engagement, clutch or misalignment, the jaw from the gripper.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+
+#include "saw/teleop/laws/surgical.hpp"
+#include "teleop_support.hpp"
+
+namespace {
+
+using saw::teleop::SurgicalLaw;
+using saw::testing::dist;
+
+class SurgicalOperator : public saw::Component {
+ public:
+  SurgicalOperator() : Component("operator") {
+    auto& r = require("teleop");
+    r.add_function("misalignment", misalignment);
+    r.add_function("aligned", aligned);
+    r.add_function("orientation_error", orientation_error);
+  }
+  saw::FunctionRead<double> misalignment, aligned, orientation_error;
+};
+using Rig = saw::testing::TeleopRig<SurgicalOperator>;
+
+constexpr double deg = std::numbers::pi / 180;
+
+saw::Quat about_z(double degrees) { return {0, 0, std::sin(degrees * deg / 2), std::cos(degrees * deg / 2)}; }
+double angle_between(const saw::Quat& a, const saw::Quat& b) {
+  const Eigen::Quaterniond qa(a[3], a[0], a[1], a[2]), qb(b[3], b[0], b[1], b[2]);
+  return qa.angularDistance(qb) / deg;
+}
+
+saw::teleop::TeleopConfig follows_pose() {
+  saw::teleop::TeleopConfig c;
+  c.slave_servo_cp = true;
+  return c;
+}
+
+Rig rig_with(const SurgicalLaw::Settings& s) {
+  return Rig(follows_pose(), saw::teleop::law_spec<SurgicalLaw>(s));
+}
+
+TEST(SurgicalLaw, TranslationIsScaledFromEngagementInTheCameraFrameWithoutAStep) {
+  SurgicalLaw::Settings s;
+  s.scale = 0.2;
+  s.camera_rpy = {0, 0, 90};  // the camera turned a quarter about z: the master's x is the slave's y
+  Rig rig = rig_with(s);
+  rig.master.position = {0.05, 0.01, 0};
+  rig.master.orientation = about_z(-85);  // seen through the camera: 5 degrees from the slave's
+  rig.slave.position = {-0.02, 0.03, -0.1};
+  rig.step(3);
+  ASSERT_GT(rig.slave.goals, 0);
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "engaging: no step";
+  EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9) << "nor in orientation";
+  rig.master.position[0] += 0.01;
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.goal.position[0], -0.02, 1e-12);
+  EXPECT_NEAR(rig.slave.goal.position[1], 0.03 + 0.002, 1e-12) << "1 cm along the master's x: 2 mm along y";
+  EXPECT_EQ(rig.slave.commands, 0) << "a pose only, never a force";
+}
+
+TEST(SurgicalLaw, OrientationFollowsTheMasterOnceAligned) {
+  Rig rig = rig_with(SurgicalLaw::Settings{});
+  rig.master.orientation = about_z(3);
+  rig.step(3);
+  rig.master.orientation = about_z(33);
+  rig.step(2);
+  EXPECT_NEAR(angle_between(rig.slave.goal.orientation, about_z(30)), 0, 1e-9)
+      << "the master turned 30 degrees; the 3 degrees it was off stay an offset";
+  double aligned = 0;
+  ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
+  EXPECT_EQ(aligned, 1.0);
+}
+
+TEST(SurgicalLaw, ItRefusesToEngageWhileMisalignedAndEngagesWithoutAStepOnceAligned) {
+  Rig rig = rig_with(SurgicalLaw::Settings{});  // align_tolerance 10 degrees
+  rig.slave.position = {0, 0, -0.1};
+  rig.master.orientation = about_z(30);
+  rig.step(3);
+  double aligned = 1, off = 0;
+  ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
+  ASSERT_EQ(rig.op.misalignment(off), saw::Status::ok);
+  EXPECT_EQ(aligned, 0.0);
+  EXPECT_NEAR(off, 30, 1e-9) << "the operator is told how far off the master is";
+  rig.master.position = {0.05, 0, 0};  // moving the misaligned master moves nothing
+  rig.step(3);
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12);
+  EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9);
+  rig.master.orientation = about_z(8);  // within the tolerance: engaged, from here
+  rig.step(2);
+  ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
+  EXPECT_EQ(aligned, 1.0);
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "no step at engagement";
+  EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9);
+  rig.master.position[0] += 0.01;
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.goal.position[0], 0.002, 1e-12);
+}
+
+// Clutched, nothing is sent; the master turned past the tolerance meanwhile must come back before
+// the law engages again; and no step at the release.
+TEST(SurgicalLaw, AClutchDecouplesAndTheReleaseChecksTheOrientationAgain) {
+  Rig rig = rig_with(SurgicalLaw::Settings{});
+  rig.step(3);
+  rig.master.position[0] += 0.01;
+  rig.step(2);
+  rig.slave.position = rig.slave.goal.position;  // the slave got there
+  rig.master.press_clutch(true);
+  rig.step(1);
+  const int before = rig.slave.goals;
+  rig.master.position = {0.2, 0.1, 0};
+  rig.master.orientation = about_z(45);
+  rig.step(3);
+  EXPECT_EQ(rig.slave.goals, before) << "nothing while clutched";
+  rig.master.press_clutch(false);
+  rig.step(3);
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "held: the master is 45 degrees off";
+  double aligned = 1;
+  ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
+  EXPECT_EQ(aligned, 0.0);
+  rig.master.orientation = about_z(2);
+  rig.step(2);
+  rig.master.position[1] += 0.01;
+  rig.step(2);
+  EXPECT_NEAR(rig.slave.goal.position[1], rig.slave.position[1] + 0.002, 1e-12)
+      << "re-engaged from where the master was when it aligned";
+}
+
+TEST(SurgicalLaw, TheJawFollowsTheGripperWithinItsLimitsAndRate) {
+  SurgicalLaw::Settings s;
+  s.jaw_max = 0.8;
+  s.jaw_rate = 2.0;  // 2 mrad a cycle
+  Rig rig = rig_with(s);
+  rig.slave.grip = 0.2;
+  rig.master.grip = 1.0;  // beyond jaw_max
+  rig.step(3);
+  ASSERT_GT(rig.slave.jaw_goals, 0);
+  EXPECT_NEAR(rig.slave.jaw_goal, 0.2 + 0.002 * rig.slave.jaw_goals, 1e-9) << "from the jaw, at the rate";
+  rig.step(400);
+  EXPECT_NEAR(rig.slave.jaw_goal, 0.8, 1e-12) << "and no further than jaw_max";
+  Rig none = rig_with(s);  // a slave without a jaw gets no jaw goal
+  none.master.grip = 0.5;
+  none.step(5);
+  EXPECT_EQ(none.slave.jaw_goals, 0);
+}
+
+TEST(SurgicalLaw, AThreeDofMasterDrivesTranslationAndHoldsOrientation) {
+  SurgicalLaw::Settings s;
+  s.orientation = false;
+  Rig rig = rig_with(s);
+  rig.slave.orientation = about_z(20);
+  rig.master.orientation = about_z(-60);  // a Falcon's is nothing: not a misalignment
+  rig.step(3);
+  rig.master.orientation = about_z(80);
+  rig.master.position[2] += 0.01;
+  rig.step(2);
+  EXPECT_NEAR(angle_between(rig.slave.goal.orientation, about_z(20)), 0, 1e-9);
+  EXPECT_NEAR(rig.slave.goal.position[2], 0.002, 1e-12);
+}
+
+TEST(SurgicalLaw, AnInputThatIsNoRotationIsRefused) {
+  Rig rig = rig_with(SurgicalLaw::Settings{});
+  rig.step(3);
+  rig.master.orientation = {0, 0, 0, 0.5};
+  rig.step(2);
+  EXPECT_GT(rig.teleop.rejected_inputs(), 0u);
+}
+
+}  // namespace
