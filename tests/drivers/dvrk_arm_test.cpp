@@ -132,6 +132,34 @@ TEST(DvrkArm, NothingButStateCommandsReachTheArmBeforeItIsEnabledHomedAndIdle) {
   EXPECT_TRUE(r.import.received.back().arm.is_homed);
 }
 
+// A reliable writer still matched to a reader that is gone (the dVRK restarted) loses what it
+// sends: an enable or home with no effect is sent again after 1 s, the arm idle.
+TEST(DvrkArm, ALostEnableOrHomeIsSentAgain) {
+  DvrkArmConfig c = mtm();
+  c.enable_timeout = 5'000'000'000;
+  for (const int lost : {1, 2}) {  // enables lost
+    Rig r(c);
+    r.import.lose_state_commands = lost;
+    r.state_command(StateCommand::enable);
+    r.step(900);
+    EXPECT_EQ(r.import.count("enable"), 1) << "not again within the second";
+    r.step(1100 * lost);
+    EXPECT_TRUE(r.arm.following()) << lost << " lost: state " << static_cast<int>(r.state());
+    EXPECT_EQ(r.import.count("enable"), lost + 1);
+    EXPECT_EQ(r.import.count("home"), 1);
+  }
+  Rig r(c);  // enabled, not homed: the home lost
+  r.import.state = {OperatingStateValue::enabled, false, false};
+  r.import.lose_state_commands = 1;
+  r.step(2);
+  r.state_command(StateCommand::enable);
+  r.step(1200);
+  EXPECT_TRUE(r.arm.following());
+  EXPECT_EQ(r.import.count("enable"), 0);
+  EXPECT_EQ(r.import.count("home"), 2);
+  EXPECT_EQ(r.arm.summary().state_commands, 2u);
+}
+
 TEST(DvrkArm, AnArmNotHomedIsRefusedUnlessTheDeploymentLetsItHome) {
   Rig r(mtm(/*home=*/false));
   r.state_command(StateCommand::enable);

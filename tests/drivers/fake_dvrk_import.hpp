@@ -98,13 +98,14 @@ class FakeImport : public Component {
   OperatingState state{OperatingStateValue::disabled, false, false};
   Pose pose{};
   int power_cycles = 5, home_cycles = 10;
-  std::uint64_t errors = 0;  // error messages the arm sent (the import counts them)
-  double jaw = 0.5;          // the gripper's or the jaw's angle, rad
-  Wrench wrench{};           // what the arm applies: the last servo_cf (zeroed by hold)
-  JointState js{};           // measured_js
-  Wrench cf{};               // measured_cf
-  bool follows = true;       // measured_cp is the last servo_cp goal
-  bool record = true;        // every command kept (allocates); off, only counted (the RT guard's runs)
+  std::uint64_t errors = 0;     // error messages the arm sent (the import counts them)
+  double jaw = 0.5;             // the gripper's or the jaw's angle, rad
+  Wrench wrench{};              // what the arm applies: the last servo_cf (zeroed by hold)
+  JointState js{};              // measured_js
+  Wrench cf{};                  // measured_cf
+  bool follows = true;          // measured_cp is the last servo_cp goal
+  int lose_state_commands = 0;  // the next n state commands never reach the arm
+  bool record = true;           // every command kept (allocates); off, only counted (the RT guard's runs)
   std::vector<Received> received;
 
  private:
@@ -119,6 +120,10 @@ class FakeImport : public Component {
   }
   void command(StateCommand c) {
     got({c == StateCommand::enable ? "enable" : c == StateCommand::home ? "home" : "other", state, {}, {}});
+    if (lose_state_commands > 0) {
+      --lose_state_commands;  // lost on its way (a reader that was gone)
+      return;
+    }
     if (c == StateCommand::enable && state.state != OperatingStateValue::enabled) {
       state.is_busy = true;
       powering_ = power_cycles;

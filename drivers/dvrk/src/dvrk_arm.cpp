@@ -10,6 +10,7 @@ namespace {
 
 constexpr std::string_view source = "dvrk";
 constexpr int max_not_sent = 10;  // the import's queue full this many cycles in a row: FAULT
+constexpr TimeNs resend_state_after = 1'000'000'000;  // an enable or home with no effect: again
 
 DvrkArmConfig checked(DvrkArmConfig c) {
   const bool psm = c.kind == ArmKind::psm;
@@ -174,10 +175,19 @@ Outcome DvrkArm::read() {
 }
 
 Outcome DvrkArm::send_state(StateCommand c, bool& sent, const char* why) noexcept {
+  // Sent, and the arm idle and not there a while later: the command was lost (the import's
+  // reliable writer had matched a reader that was gone: the dVRK restarted). Sent again; the
+  // dVRK takes a repeated enable or home as the first.
+  const TimeNs t = now();
+  if (sent && !summary_.arm.is_busy && t - state_sent_at_ > resend_state_after) sent = false;
   if (sent) return Outcome::pending();
   const Status s = write_state_(c);
   if (s == Status::disconnected) return Outcome::failed(FaultCode::device_lost, why, source);
   sent = s == Status::ok;  // a full queue: tried again next cycle
+  if (sent) {
+    state_sent_at_ = t;
+    ++summary_.state_commands;
+  }
   return Outcome::pending();
 }
 

@@ -65,18 +65,13 @@ struct DvrkSummary {
   std::uint64_t moves = 0;             // move_cp, move_jp and free sent
   std::uint64_t moves_refused = 0;     // refused (not finite, outside the limits, not driven, not allowed)
   std::uint64_t bad_joint_states = 0;  // measured_js samples refused (another size, not finite)
+  std::uint64_t state_commands = 0;    // enable and home sent (again after 1 s without effect)
   OperatingState arm{};                // the dVRK's own operating state, as last read
-  static constexpr auto fields = std::tuple{&DvrkSummary::commands,
-                                            &DvrkSummary::safe_commands,
-                                            &DvrkSummary::held_busy,
-                                            &DvrkSummary::not_sent,
-                                            &DvrkSummary::bad_poses,
-                                            &DvrkSummary::jaw_commands,
-                                            &DvrkSummary::jaw_refused,
-                                            &DvrkSummary::moves,
-                                            &DvrkSummary::moves_refused,
-                                            &DvrkSummary::bad_joint_states,
-                                            &DvrkSummary::arm};
+  static constexpr auto fields =
+      std::tuple{&DvrkSummary::commands,         &DvrkSummary::safe_commands,  &DvrkSummary::held_busy,
+                 &DvrkSummary::not_sent,         &DvrkSummary::bad_poses,      &DvrkSummary::jaw_commands,
+                 &DvrkSummary::jaw_refused,      &DvrkSummary::moves,          &DvrkSummary::moves_refused,
+                 &DvrkSummary::bad_joint_states, &DvrkSummary::state_commands, &DvrkSummary::arm};
 };
 
 // Requires "dvrk" (the import: measured_cp, operating_state, state_command; servo_cf for an MTM,
@@ -92,11 +87,11 @@ struct DvrkSummary {
 // and no servo command runs (refused and counted otherwise); servo commands are held back while
 // the move makes the arm busy, and every stop path after a move sends the safe command, which
 // stops a move still under way. Enabling walks
-// the dVRK's handshake: `enable` sent once and ENABLED awaited; a not-homed arm homed (`home: true`, only
-// once ENABLED) or refused; no motion command reaches the arm before it is ENABLED, homed and not busy, nor
-// while it is busy. Following, an arm that leaves ENABLED, loses its homing, stops publishing
-// (stale_timeout), reports an error (the import's `errors` grows) or whose import is gone is this
-// device's FAULT, naming which.
+// the dVRK's handshake: `enable` sent (again after 1 s idle without effect: one lost) and ENABLED awaited; a
+// not-homed arm homed (`home: true`, only once ENABLED) or refused; no motion command reaches the arm before
+// it is ENABLED, homed and not busy, nor while it is busy. Following, an arm that leaves ENABLED, loses its
+// homing, stops publishing (stale_timeout), reports an error (the import's `errors` grows) or whose import is
+// gone is this device's FAULT, naming which.
 class DvrkArm final : public Device {
  public:
   DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config);
@@ -156,6 +151,7 @@ class DvrkArm final : public Device {
   bool have_state_ = false;
   TimeNs cp_time_ = -1;  // the newest measured_cp's row time (its arrival at the import)
   bool enable_sent_ = false, home_sent_ = false;
+  TimeNs state_sent_at_ = 0;
   bool commanded_ = false;  // a motion command went out since the last safe command
   int not_sent_in_a_row_ = 0;
 };
