@@ -173,7 +173,7 @@ class SimArm:
         self._gravity_compensation = False
         self._jaw_sp = self._jaw_meas = self._jaw_goal = 0.5
         self._gripper = 0.5
-        self._hand = hand               # (amplitude m, frequency Hz[, axis]) or None
+        self._hand = hand               # (amplitude m, frequency Hz[, axis[, twist rad]]) or None
         self._t_sim = None
         self._t0 = None
         # Options for the stream tests (C5, C7).
@@ -317,7 +317,7 @@ class SimArm:
             self.cannula_ready = bool(ready)
 
     def set_hand(self, hand):
-        """The scripted hand on an MTM: (amplitude m, frequency Hz[, axis]) or None."""
+        """The scripted hand on an MTM: (amplitude m, frequency Hz[, axis[, twist rad]]) or None."""
         with self._lock:
             self._hand = hand
 
@@ -700,6 +700,7 @@ class SimArm:
             force = add(force, (0.0, 0.0, -m * self.p.gravity))
         if self._hand:
             force = add(force, self._hand_force(now, p))
+            self._hand_twist(now)
         v = add(v, scale(force, dt / m))
         p = add(p, scale(v, dt))
         # The handle's mechanical stops.
@@ -715,6 +716,18 @@ class SimArm:
         self._gripper = 0.5 + 0.2 * phase
         target = add(self.home_p, scale(axis, amplitude * phase))
         return scale(sub(target, p), self.p.hand_stiffness)
+
+
+    def _hand_twist(self, now):
+        """A hand that also turns the handle (the 4th entry: amplitude in rad about z, in phase with
+        the translation): the wrist's dynamics are not simulated, its orientation is the hand's."""
+        if len(self._hand) < 4:
+            return
+        amplitude, frequency = self._hand[3], self._hand[1]
+        omega = 2.0 * math.pi * frequency
+        angle = amplitude * math.sin(omega * (now - self._t0))
+        self._meas_q = qmul(self.home_q, from_rotvec((0.0, 0.0, angle)))
+        self._w = rotate(self.home_q, (0.0, 0.0, amplitude * omega * math.cos(omega * (now - self._t0))))
 
 
 class _Muted:

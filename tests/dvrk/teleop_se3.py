@@ -1,0 +1,151 @@
+"""saw-rt teleoperates the independent simulated dVRK PSM from the independent simulated MTM in SE(3)
+(sim_arm.py, Cyclone DDS), deployed by the shipped config/dvrk-mtm-psm.yaml (renamed for this run,
+on this test's DDS domain): the `surgical` law on the MTM's read-only import and the PSM's
+`dvrk_arm` device.
+
+(a) the PSM follows the scripted hand on the MTM: ±3 cm along x and ±20° about z at 0.5 Hz,
+    scaled 0.2 in translation, absolute in orientation; its jaw follows the MTM's gripper; the
+    translation (mm) and orientation (degrees) tracking errors are printed and bounded;
+(b) the console's clutch: no goal while pressed, and at the release no step in the commanded
+    pose (the largest step of the commanded pose at engagement and release is printed);
+(c) a PSM turned 40° from the MTM: the law does not engage (`aligned` 0, `misalignment` printed)
+    and the PSM is not moved.
+
+Each check is printed; the exit code is 1 if any failed.
+
+usage: teleop_se3.py SAW_RT
+"""
+import csv
+import math
+import os
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "interop"))
+import sim_arm as S  # noqa: E402  (first: it sets CYCLONEDDS_URI before cyclonedds is loaded)
+from harness import check, dds_domain, exit_code  # noqa: E402
+from saw_run import SawRt, shipped  # noqa: E402
+
+NAMES = ("psm1", "psm_teleop", "PSM1_dds", "MTML_dds", "dvrk-mtm-psm")
+HAND = (0.03, 0.5, (1.0, 0.0, 0.0), math.radians(20))
+
+
+def start(saw_rt, work, tag, domain, name):
+    path = os.path.join(work, f"{name}.yaml")
+    with open(path, "w") as f:
+        f.write(shipped("dvrk-mtm-psm.yaml", tag, domain, NAMES))
+    return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
+
+
+def goals(sim, since=0.0):
+    return [c for c in sim.commands("servo_cp", since=since)]
+
+
+def position(c):
+    p = c.value.pose.position
+    return (p.x, p.y, p.z)
+
+
+def yaw(c):
+    q = c.value.pose.orientation
+    return math.degrees(2.0 * math.atan2(q.z, q.w))
+
+
+def largest_step(cmds):
+    return max((math.dist(position(a), position(b)) for a, b in zip(cmds, cmds[1:])), default=0.0)
+
+
+def follow_and_clutch(saw_rt, work, tag, domain):
+    print("-- (a) the PSM follows the MTM in SE(3); (b) the clutch")
+    with S.SimArm("MTML", domain, kind="mtm", rate=500.0, console=True, hand=HAND) as mtm, \
+            S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
+        rt = start(saw_rt, work, tag, domain, "follow")
+        try:
+            if not check(psm.wait_command("servo_cp", timeout=30.0) is not None,
+                         "the teleoperation drives the simulated PSM (a servo_cp arrived)"):
+                print(rt.text())
+                return
+            t0 = time.monotonic()
+            time.sleep(3.0)  # one and a half periods of the hand
+            seen = goals(psm, since=t0)
+            xs = [position(c)[0] for c in seen]
+            yaws = [yaw(c) for c in seen]
+            swing, turn = max(xs) - min(xs), max(yaws) - min(yaws)
+            check(0.009 < swing < 0.015, f"the PSM's goal swings 0.2 × the hand's ±3 cm: {swing * 1000:.1f} mm")
+            check(30 < turn < 45, f"and turns with the hand's ±20°: {turn:.1f}°")
+            check(largest_step(seen) < 0.001, f"no step in the goals: largest {largest_step(seen) * 1000:.3f} mm")
+            jaws = [c.value.position[0] for c in psm.commands("jaw/servo_jp", since=t0)]
+            check(jaws and max(jaws) - min(jaws) > 0.2,
+                  f"the jaw follows the MTM's gripper (0.5 ± 0.2 rad): {min(jaws):.2f}..{max(jaws):.2f}"
+                  if jaws else "the jaw follows the MTM's gripper: no jaw goal")
+            t_press = time.monotonic()
+            mtm.press("clutch")
+            time.sleep(0.5)
+            during = goals(psm, since=t_press + 0.1)
+            check(not during, f"clutched: no goal ({len(during)} sent)")
+            last = goals(psm)[-1]
+            t_release = time.monotonic()
+            mtm.release("clutch")
+            time.sleep(1.0)
+            after = goals(psm, since=t_release)
+            step = math.dist(position(after[0]), position(last)) if after else float("nan")
+            check(after and step < 0.001, f"released: the goals start where they stopped (step {step * 1000:.3f} mm)")
+            if after:
+                print(f"figure: largest commanded-pose step at the clutch's release: {step * 1000:.3f} mm, "
+                      f"{abs(yaw(after[0]) - yaw(last)):.2f}°")
+            early = rt.faults_before(time.monotonic())
+            check(not early, f"nothing faulted: {early[:2]}")
+        finally:
+            rt.stop()
+        rows = [r for r in csv.DictReader(open(os.path.join(work, "follow.csv")))
+                if r[f"psm_teleop{tag}.operating_state"] == "ENABLED" and r[f"psm_teleop{tag}.aligned"] == "1"]
+        if check(len(rows) > 1000, f"the record has the law engaged ({len(rows)} cycles)"):
+            e = sorted(float(r[f"psm_teleop{tag}.tracking_error"]) for r in rows)
+            o = sorted(float(r[f"psm_teleop{tag}.orientation_error"]) for r in rows)
+            rms = (sum(x * x for x in e) / len(e)) ** 0.5
+            orms = (sum(x * x for x in o) / len(o)) ** 0.5
+            print(f"figure: MTM → PSM in SE(3), scale 0.2 ({len(e)} cycles): translation RMS {rms * 1000:.2f} mm "
+                  f"(max {e[-1] * 1000:.2f}), orientation RMS {orms:.2f}° (max {o[-1]:.2f}°) — the sim's lag included")
+            check(rms < 0.003 and orms < 5.0, "tracking within 3 mm and 5° RMS")
+
+
+def misaligned(saw_rt, work, tag, domain):
+    print("-- (c) a misaligned master does not engage")
+    with S.SimArm("MTML", domain, kind="mtm", rate=500.0, console=True) as mtm, \
+            S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
+        mtm.home_q = (0.0, 0.0, math.sin(math.radians(20)), math.cos(math.radians(20)))  # 40° about z
+        mtm.set_hand((0.03, 0.5, (1.0, 0.0, 0.0), 0.0))  # moving, but turned away from the PSM
+        rt = start(saw_rt, work, tag, domain, "misaligned")
+        try:
+            if not check(psm.wait_command("servo_cp", timeout=30.0) is not None, "the PSM gets goals (held)"):
+                print(rt.text())
+                return
+            t0 = time.monotonic()
+            time.sleep(2.0)
+            seen = goals(psm, since=t0)
+            xs = [position(c)[0] for c in seen]
+            check(seen and max(xs) - min(xs) < 1e-9, "the PSM is held where it was while the MTM moves")
+        finally:
+            rt.stop()
+        rows = list(csv.DictReader(open(os.path.join(work, "misaligned.csv"))))
+        off = [float(r[f"psm_teleop{tag}.misalignment"]) for r in rows
+               if r[f"psm_teleop{tag}.operating_state"] == "ENABLED"]
+        engaged = [r for r in rows if r[f"psm_teleop{tag}.aligned"] == "1"]
+        check(off and not engaged and abs(off[-1] - 40) < 1,
+              f"not engaged, the operator told the master is {off[-1]:.1f}° off" if off else "no ENABLED row")
+
+
+def main(saw_rt):
+    tag = str(os.getpid())
+    domain = dds_domain()
+    work = tempfile.mkdtemp()
+    follow_and_clutch(saw_rt, work, tag, domain)
+    misaligned(saw_rt, work, tag, domain)
+    return exit_code()
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1]))
