@@ -84,9 +84,11 @@ class Soak:
             for device in d.devices:
                 self.client.send(f"rt/{device}/state_command", msgs.StringStamped(string="enable"), 5)
             time.sleep(1.0 if d.slow_enable else 0.3)
+            # From this enable on, a limit the arm reaches is one after a re-enable: so judged
+            # even when its FAULT is read before the ENABLED state is (it was not, once).
+            d.faults.reenabled = True
             self.client.send(f"rt/{d.teleop}/state_command", msgs.StringStamped(string="enable"), 5)
             if self.enabled(d, 3.0):
-                d.faults.reenabled = True
                 if d.home is not None:
                     # As an operator would: the arm carried back to where the first enable had it
                     # (each enable keeps the arm where it lies, and faults that recur walk it off).
