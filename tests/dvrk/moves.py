@@ -19,6 +19,7 @@ usage: moves.py SAW_RT
 """
 import math
 import os
+from contextlib import contextmanager
 import signal
 import sys
 import tempfile
@@ -101,8 +102,18 @@ def arrives(sim, goal, timeout=5.0, tolerance=2e-4):
     return False
 
 
-def distance(a, b):
-    return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
+@contextmanager
+def enabled_by(saw_rt, work, name, text, sim, what):
+    """saw-rt running `text`, once it enabled and homed `sim` (None if it did not: said); stopped
+    with SIGTERM at the end (a killed one stays killed)."""
+    rt = start(saw_rt, work, name, text)
+    try:
+        ok = check(ready(sim), f"saw-rt enabled and homed the simulated {what}")
+        if not ok:
+            print(rt.text())
+        yield rt if ok else None
+    finally:
+        rt.stop()
 
 
 def psm_moves(saw_rt, work, tag, domain):
@@ -110,10 +121,8 @@ def psm_moves(saw_rt, work, tag, domain):
     no_cut = S.Params(refuse_when_busy=False)
     with S.SimArm("PSM1", domain, kind="psm", rate=500.0, params=no_cut) as sim:
         device, text = deployment(tag, domain, "psm", "PSM1", ["servo_cp", "move_cp", "move_jp", "hold"])
-        rt = start(saw_rt, work, "psm", text)
-        try:
-            if not check(ready(sim), "saw-rt enabled and homed the simulated PSM"):
-                print(rt.text())
+        with enabled_by(saw_rt, work, "psm", text, sim, "PSM") as rt:
+            if rt is None:
                 return
             c = Client(domain)
             topic = f"rt/{device}/"
@@ -144,8 +153,6 @@ def psm_moves(saw_rt, work, tag, domain):
             check(got is not None and abs(got.value.position[0] - q[0]) < 1e-9, "move_jp reached the arm")
             check(len(sim.commands("move_jp")) == 1, "the goal over a joint limit never reached it")
             check(arrives(sim, q[:3]), f"and the arm arrived: {sim.position()} vs {q[:3]}")
-        finally:
-            rt.stop()
 
 
 def kill_during_move(saw_rt, work, tag, domain):
@@ -153,10 +160,8 @@ def kill_during_move(saw_rt, work, tag, domain):
     slow = S.Params(refuse_when_busy=False, move_speed=0.02)
     with S.SimArm("PSM1", domain, kind="psm", rate=500.0, params=slow) as sim:
         device, text = deployment(tag, domain, "psm", "PSM1", ["servo_cp", "move_cp", "move_jp", "hold"])
-        rt = start(saw_rt, work, "kill", text)
-        try:
-            if not check(ready(sim), "saw-rt enabled and homed the simulated PSM"):
-                print(rt.text())
+        with enabled_by(saw_rt, work, "kill", text, sim, "PSM") as rt:
+            if rt is None:
                 return
             c = Client(domain)
             home = sim.position()
@@ -174,21 +179,17 @@ def kill_during_move(saw_rt, work, tag, domain):
             time.sleep(0.3)
             stopped = sim.position()
             time.sleep(0.3)
-            check(distance(stopped, sim.position()) < 1e-4 and distance(stopped, goal) > 0.05,
-                  f"the arm stopped short of the goal ({distance(stopped, goal) * 100:.1f} cm away) and stays")
+            check(math.dist(stopped, sim.position()) < 1e-4 and math.dist(stopped, goal) > 0.05,
+                  f"the arm stopped short of the goal ({math.dist(stopped, goal) * 100:.1f} cm away) and stays")
             check(rt.wait_line("exiting while its client moved the arm", 5.0) is not None, "the gateway said why")
-        finally:
-            rt.stop(signal.SIGKILL)
 
 
 def mtm_free_and_wrench(saw_rt, work, tag, domain):
     print("-- (c) an MTM's free and measured_cf")
     with S.SimArm("MTML", domain, kind="mtm", rate=500.0) as sim:
         device, text = deployment(tag, domain, "mtm", "MTML", ["servo_cf", "free"])
-        rt = start(saw_rt, work, "mtm", text)
-        try:
-            if not check(ready(sim), "saw-rt enabled and homed the simulated MTM"):
-                print(rt.text())
+        with enabled_by(saw_rt, work, "mtm", text, sim, "MTM") as rt:
+            if rt is None:
                 return
             c = Client(domain)
             topic = f"rt/{device}/"
@@ -202,8 +203,6 @@ def mtm_free_and_wrench(saw_rt, work, tag, domain):
             later = [x.topic for x in sim.commands(since=t) if x.topic != "free"]
             check(not [x for x in later if x != "use_gravity_compensation"],
                   f"after free, nothing of ours was left to undo: nothing else sent ({later})")
-        finally:
-            rt.stop()
 
 
 def main(saw_rt):
