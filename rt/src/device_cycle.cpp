@@ -129,6 +129,10 @@ void Device::step_home(TimeNs t) noexcept {
 void Device::watch_commands(TimeNs t) noexcept {
   if (!watchdog_.expired(t)) return;
   command_ = {};
+  // The hardware now holds where it is (or is unpowered), not at the last command: the next
+  // command's step is judged from the measured pose and joints, so that a stream resumed after a
+  // pause (a clutch released) is not refused for its distance from a goal the arm never reached.
+  has_jp_ = has_cp_ = false;
   saw::log(LogLevel::warning, name().c_str(), "no servo command for {} ns: {}", t - watchdog_.last_command(),
            to_string(config_.safe_state).data());
   if (config_.fault_on_command_timeout && following()) {

@@ -41,6 +41,7 @@ class ScriptedDevice : public Device {
   int writes = 0, opened = 0, closed = 0;
   std::vector<SafeReason> safe_reasons;
 
+  using Device::measured;
   using Device::update_fault;
 
  protected:
@@ -253,6 +254,14 @@ TEST(DeviceCartesian, PoseCommandsAreCheckedAgainstTheWorkspaceAndTheSpeeds) {
   EXPECT_EQ(r.not_finite, 1u);
   // After the refusals the step is judged from the last accepted pose, not the refused ones.
   EXPECT_EQ(cp(0.0003, -0.0005).mode, ServoMode::cp);
+  // Commands stopped: the arm holds where it is, not at the last command. The stream resumes from
+  // the measured pose (0.05 mm, 20 mrad from the last command), judged over the command timeout.
+  for (int k = 0; k < 5; ++k) step();
+  ASSERT_EQ(d.device_status().watchdog_trips, 1u);
+  d.measured().cp.position = {0.00025, 0, 0};
+  d.measured().cp.orientation = {0, 0, std::sin(0.01), std::cos(0.01)};
+  EXPECT_EQ(cp(0.00026, 0.0205).mode, ServoMode::cp) << "from where the arm holds, after the pause";
+  EXPECT_EQ(cp(0.00027, 0.021).mode, ServoMode::cp) << "then from that accepted pose";
   DeviceConfig plain = ScriptedDevice::config();
   ScriptedDevice p("plain", plain);
   EXPECT_EQ(p.provided("arm")->find_command("servo_cp"), nullptr) << "not declared, not provided";

@@ -95,7 +95,7 @@ struct DeviceConfig {
   std::vector<JointLimits> joints;  // measured_js's joints, 1..8
   bool servo_jp = false, servo_jv = false, servo_jf = false;
   // servo_cp (needs cartesian): a pose inside the workspace box, moving from the last accepted
-  // pose (or, first, the measured one) no faster than these speeds (m/s, rad/s).
+  // pose (or the measured one: first, and after commands stopped) no faster than these (m/s, rad/s).
   bool servo_cp = false;
   double max_linear_speed = std::numeric_limits<double>::infinity();
   double max_angular_speed = std::numeric_limits<double>::infinity();
