@@ -18,6 +18,7 @@ usage: teleop_se3.py SAW_RT
 import csv
 import math
 import os
+import re
 import sys
 import tempfile
 import time
@@ -64,8 +65,16 @@ def follow_and_clutch(saw_rt, work, tag, domain):
             S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
         rt = start(saw_rt, work, tag, domain, "follow")
         try:
-            if not check(psm.wait_command("servo_cp", timeout=30.0) is not None,
-                         "the teleoperation drives the simulated PSM (a servo_cp arrived)"):
+            first = psm.wait_command("servo_cp", timeout=30.0)
+            if not check(first is not None, "the teleoperation drives the simulated PSM (a servo_cp arrived)"):
+                print(rt.text())
+                return
+            # Held until the hand's turn passes within align_tolerance of the PSM's: engaged once
+            # the goals move.
+            p0 = position(first)
+            moving = psm.wait_command("servo_cp", pred=lambda v: math.dist(
+                (v.pose.position.x, v.pose.position.y, v.pose.position.z), p0) > 1e-4, timeout=10.0)
+            if not check(moving is not None, "the law engages and the goals move"):
                 print(rt.text())
                 return
             t0 = time.monotonic()
@@ -100,8 +109,18 @@ def follow_and_clutch(saw_rt, work, tag, domain):
             check(not early, f"nothing faulted: {early[:2]}")
         finally:
             rt.stop()
+        # The law's goals, bursts of the MTM's stream and the clutch's release included, are
+        # within the PSM device's own step checks. After the PSM's commands stopped (the clutch; a
+        # stall), the law engages afresh where it holds; a goal sent in the same cycle as the
+        # device's trip may still be refused: at most two a trip.
+        out = rt.text()
+        refused = re.search(r"psm1\d+: (\d+) servo commands refused", out)
+        trips = re.search(r"psm1\d+: commands stopped (\d+) times", out)
+        n, t = int(refused.group(1)) if refused else 0, int(trips.group(1)) if trips else 0
+        check(n <= 2 * t, f"the PSM refused {n} of the law's goals, its commands stopped {t} times")
         rows = [r for r in csv.DictReader(open(os.path.join(work, "follow.csv")))
-                if r[f"psm_teleop{tag}.operating_state"] == "ENABLED" and r[f"psm_teleop{tag}.aligned"] == "1"]
+                if r[f"psm_teleop{tag}.operating_state"] == "ENABLED" and r[f"psm_teleop{tag}.aligned"] == "1"
+                and r[f"psm_teleop{tag}.clutched"] == "0"]
         if check(len(rows) > 1000, f"the record has the law engaged ({len(rows)} cycles)"):
             e = sorted(float(r[f"psm_teleop{tag}.tracking_error"]) for r in rows)
             o = sorted(float(r[f"psm_teleop{tag}.orientation_error"]) for r in rows)
@@ -109,9 +128,10 @@ def follow_and_clutch(saw_rt, work, tag, domain):
             orms = (sum(x * x for x in o) / len(o)) ** 0.5
             print(f"figure: MTM → PSM in SE(3), scale 0.2 ({len(e)} cycles): translation RMS {rms * 1000:.2f} mm "
                   f"(max {e[-1] * 1000:.2f}), orientation RMS {orms:.2f}° (max {o[-1]:.2f}°) — the sim's lag included")
-            # The sim's lag dominates, and grows when the machine is loaded (3.7–5.4° seen): the bound
-            # is what a law that does not follow fails (orientation held: 14° RMS, the hand's own).
-            check(rms < 0.005 and orms < 10.0, "tracking within 5 mm and 10° RMS")
+            # The sim's lag dominates (0.4–0.7 mm, 1.2–1.9° seen with a CPU hog beside it): the
+            # bound is what a law that does not follow fails (orientation held: 14° RMS, the
+            # hand's own), and goals refused by the PSM failed (3 mm, 9°).
+            check(rms < 0.002 and orms < 5.0, "tracking within 2 mm and 5° RMS")
 
 
 def misaligned(saw_rt, work, tag, domain):

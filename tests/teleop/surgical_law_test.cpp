@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -58,7 +59,7 @@ TEST(SurgicalLaw, TranslationIsScaledFromEngagementInTheCameraFrameWithoutAStep)
   EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "engaging: no step";
   EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9) << "nor in orientation";
   rig.master.position[0] += 0.01;
-  rig.step(2);
+  rig.step(20);  // 2 mm at up to max_linear_speed (0.18 mm a cycle)
   EXPECT_NEAR(rig.slave.goal.position[0], -0.02, 1e-12);
   EXPECT_NEAR(rig.slave.goal.position[1], 0.03 + 0.002, 1e-12) << "1 cm along the master's x: 2 mm along y";
   EXPECT_EQ(rig.slave.commands, 0) << "a pose only, never a force";
@@ -69,7 +70,7 @@ TEST(SurgicalLaw, OrientationFollowsTheMasterOnceAligned) {
   rig.master.orientation = about_z(3);
   rig.step(3);
   rig.master.orientation = about_z(33);
-  rig.step(2);
+  rig.step(250);  // 30 degrees at up to max_angular_speed (0.15 degrees a cycle)
   EXPECT_NEAR(angle_between(rig.slave.goal.orientation, about_z(30)), 0, 1e-9)
       << "the master turned 30 degrees; the 3 degrees it was off stay an offset";
   double aligned = 0;
@@ -98,7 +99,7 @@ TEST(SurgicalLaw, ItRefusesToEngageWhileMisalignedAndEngagesWithoutAStepOnceAlig
   EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "no step at engagement";
   EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9);
   rig.master.position[0] += 0.01;
-  rig.step(2);
+  rig.step(20);
   EXPECT_NEAR(rig.slave.goal.position[0], 0.002, 1e-12);
 }
 
@@ -108,7 +109,7 @@ TEST(SurgicalLaw, AClutchDecouplesAndTheReleaseChecksTheOrientationAgain) {
   Rig rig = rig_with(SurgicalLaw::Settings{});
   rig.step(3);
   rig.master.position[0] += 0.01;
-  rig.step(2);
+  rig.step(20);
   rig.slave.position = rig.slave.goal.position;  // the slave got there
   rig.master.press_clutch(true);
   rig.step(1);
@@ -126,9 +127,53 @@ TEST(SurgicalLaw, AClutchDecouplesAndTheReleaseChecksTheOrientationAgain) {
   rig.master.orientation = about_z(2);
   rig.step(2);
   rig.master.position[1] += 0.01;
-  rig.step(2);
+  rig.step(20);
   EXPECT_NEAR(rig.slave.goal.position[1], rig.slave.position[1] + 0.002, 1e-12)
       << "re-engaged from where the master was when it aligned";
+}
+
+// A master stream in bursts (a sample held for 10 ms, then a jump): the goal moves toward it no
+// faster than the law's speeds, which the slave's own step checks (a little faster) all take.
+TEST(SurgicalLaw, TheGoalMovesNoFasterThanItsSpeedsWhenTheMasterJumps) {
+  SurgicalLaw::Settings s;
+  s.max_linear_speed = 0.1;   // 0.1 mm a cycle
+  s.max_angular_speed = 1.0;  // 1 mrad a cycle
+  Rig rig = rig_with(s);
+  rig.step(3);
+  const saw::Pose start = rig.slave.goal;
+  rig.master.position[0] += 0.01;       // 2 mm of goal at once
+  rig.master.orientation = about_z(5);  // and 87 mrad
+  saw::Pose last = start;
+  double largest = 0, largest_turn = 0;
+  for (int k = 0; k < 120; ++k) {
+    rig.step(1);
+    largest = std::max(largest, dist(rig.slave.goal.position, last.position));
+    largest_turn = std::max(largest_turn, angle_between(rig.slave.goal.orientation, last.orientation) * deg);
+    last = rig.slave.goal;
+  }
+  EXPECT_LE(largest, 0.0001 + 1e-12) << "no step beyond max_linear_speed in a period";
+  EXPECT_LE(largest_turn, 0.001 + 1e-9) << "nor beyond max_angular_speed";
+  EXPECT_NEAR(rig.slave.goal.position[0], start.position[0] + 0.002, 1e-12) << "and it gets there";
+  EXPECT_NEAR(angle_between(rig.slave.goal.orientation, about_z(5)), 0, 1e-6);
+}
+
+// The slave's commands stopped (a stall: its watchdog tripped) while it lagged its goal: it holds
+// where it is, so the goals resume from there, not from the last goal it never reached.
+TEST(SurgicalLaw, AfterTheSlavesCommandsStoppedTheGoalsResumeFromWhereItHolds) {
+  Rig rig = rig_with(SurgicalLaw::Settings{});
+  rig.step(3);
+  rig.master.position[0] += 0.01;
+  rig.step(20);
+  ASSERT_NEAR(rig.slave.goal.position[0], 0.002, 1e-12);
+  rig.slave.position[0] = 0.001;  // 1 mm behind
+  rig.slave.orientation = about_z(2);
+  rig.slave.watchdog_trips = 1;
+  rig.step(2);
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "engaged afresh where it holds";
+  EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9);
+  rig.master.position[0] += 0.005;
+  rig.step(20);
+  EXPECT_NEAR(rig.slave.goal.position[0], 0.002, 1e-12) << "and follows the master from there";
 }
 
 TEST(SurgicalLaw, TheJawFollowsTheGripperWithinItsLimitsAndRate) {
@@ -158,7 +203,7 @@ TEST(SurgicalLaw, AThreeDofMasterDrivesTranslationAndHoldsOrientation) {
   rig.step(3);
   rig.master.orientation = about_z(80);
   rig.master.position[2] += 0.01;
-  rig.step(2);
+  rig.step(20);
   EXPECT_NEAR(angle_between(rig.slave.goal.orientation, about_z(20)), 0, 1e-9);
   EXPECT_NEAR(rig.slave.goal.position[2], 0.002, 1e-12);
 }

@@ -146,7 +146,10 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   const bool follows_pose = s.side == FaultSide::slave && config_.slave_servo_cp;
   crtk::require(r, crtk::arm::servo_cf, s.cf,
                 s.side == FaultSide::master || follows_pose ? Need::optional : Need::required);
-  if (follows_pose) crtk::require(r, crtk::arm::servo_cp, s.goal);
+  if (follows_pose) {
+    crtk::require(r, crtk::arm::servo_cp, s.goal);
+    r.add_function("watchdog_trips", s.trips, Need::optional);
+  }
   // A master's gripper drives a slave's jaw (a law that gives slave_jaw).
   if (s.side == FaultSide::master) {
     crtk::require(r, crtk::arm::gripper_measured_js, s.grip, Need::optional);
@@ -373,6 +376,18 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   return true;
 }
 
+// A slave whose commands stopped (a stalled cycle here, a late row) holds where it is, not at
+// the last goal, and judges the next goal's step from there: the law is engaged afresh from that
+// pose, so that the stream resumes without a step the slave would refuse.
+bool Teleoperation::slave_held() noexcept {
+  std::uint64_t trips = 0;
+  if (!slave_.trips.is_bound() || slave_.trips(trips) != Status::ok) return false;
+  const bool held = slave_.trips_known && trips != slave_.trips_seen;
+  slave_.trips_seen = trips;
+  slave_.trips_known = true;
+  return held;
+}
+
 // Optional, and no reason to fault: NaN when the device has none or its value is not one.
 void Teleoperation::read_grip(Side& s) noexcept {
   JointState j;
@@ -529,6 +544,7 @@ void Teleoperation::cycle_body() noexcept {
   in.master_wave_fresh = master_.wave_fresh;
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const bool busy = waiting_for_devices();
+  if (slave_held()) engage_pending_ = true;
   // The master port did not say its b this cycle (its input is held meanwhile): no wave is made
   // for a port whose b is not known to be the law's, nor a force from its last one.
   const bool b_unknown = master_.impedance_status != Status::ok;

@@ -25,6 +25,8 @@ void SurgicalLaw::reset(const LawInputs& in) noexcept {
   p_s0_ = in.slave.position;
   q_s0_ = in.slave.orientation;
   jaw_ = in.slave.grip;  // NaN when the slave has no jaw: then none is sent
+  p_goal_ = p_s0_;
+  q_goal_ = q_s0_;
   engaged_ = false;
   (void)engage(in);
 }
@@ -49,18 +51,27 @@ double SurgicalLaw::jaw_goal(const LawInputs& in) noexcept {
   return jaw_;
 }
 
+void SurgicalLaw::approach(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) noexcept {
+  const Eigen::Vector3d d = p - p_goal_;
+  const double reach = s_.max_linear_speed * period_, dist = d.norm();
+  p_goal_ = dist <= reach ? p : Eigen::Vector3d(p_goal_ + d * (reach / dist));
+  const double turn = s_.max_angular_speed * period_, angle = q_goal_.angularDistance(q);
+  q_goal_ = angle <= turn ? q : q_goal_.slerp(turn / angle, q).normalized();
+}
+
 LawCommand SurgicalLaw::step(const LawInputs& in) noexcept {
   LawCommand out;
   out.orients_slave = true;
   if (!engaged_ && !engage(in)) {
-    out.slave_goal = p_s0_;
-    out.slave_goal_orientation = q_s0_;
+    approach(p_s0_, q_s0_);
   } else {
     const Eigen::Quaterniond c = camera();
-    out.slave_goal = p_s0_ + s_.scale * (c * (in.master.position - p_m0_));
-    out.slave_goal_orientation = s_.orientation ? (c * in.master.orientation * q_off_).normalized() : q_s0_;
+    approach(p_s0_ + s_.scale * (c * (in.master.position - p_m0_)),
+             s_.orientation ? (c * in.master.orientation * q_off_).normalized() : q_s0_);
     out.slave_jaw = jaw_goal(in);
   }
+  out.slave_goal = p_goal_;
+  out.slave_goal_orientation = q_goal_;
   out.slave_error = in.slave.position - out.slave_goal;
   out.master_error = -out.slave_error / s_.scale;
   out.slave_offset = p_s0_ - s_.scale * (camera() * p_m0_);

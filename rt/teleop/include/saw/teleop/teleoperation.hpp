@@ -149,6 +149,9 @@ class Teleoperation : public Task {
     double port_b = 0;                     // its last answer
     Status impedance_status = Status::ok;  // of this cycle's read of it (ok: not read, or answered)
     FunctionRead<ComponentDescription> description;  // a delay task's: the component behind it
+    FunctionRead<std::uint64_t> trips;               // a pose-following slave's watchdog_trips
+    std::uint64_t trips_seen = 0;
+    bool trips_known = false;
     Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();
     bool wave_fresh = false;  // a new wave arrived with this cycle's row
     SideSample last{};
@@ -165,6 +168,8 @@ class Teleoperation : public Task {
   // Also prepares wave_port_text_ for the same check made every cycle (read_side).
   void check_wave_port();
   bool read_side(Side& s, FaultInfo& why) noexcept;
+  // True once after the slave's commands stopped (its watchdog tripped): it holds where it is.
+  bool slave_held() noexcept;
   // Fills fault_reason_ for a fault a FaultInfo cannot say all of (clears it otherwise).
   void explain(const FaultInfo& why) noexcept;
   // True while enabled but a device cannot be driven (busy, paused, disabled): busy, and FAULT

@@ -36,6 +36,7 @@ class FakeDevice : public Component {
     });
     clutch_ = &crtk::provide(p, arm::clutch);
     crtk::provide(p, arm::operating_state, state_table(), &state_);
+    p.add_command_read("watchdog_trips", state_table().add_column("watchdog_trips", &trips_));
   }
   // Publishes the current position and velocity as a row stamped t (what a device cycle does).
   void publish(TimeNs t) {
@@ -46,6 +47,7 @@ class FakeDevice : public Component {
     state_.is_busy = busy;
     grip_js_.size = std::isnan(grip) ? 0 : 1;
     grip_js_.position[0] = std::isnan(grip) ? 0 : grip;
+    trips_ = watchdog_trips;
     state_table().advance(t);
   }
   void press_clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
@@ -60,12 +62,14 @@ class FakeDevice : public Component {
   double grip = std::nan("");      // rad: the gripper's or the jaw's angle; NaN: none
   double jaw_goal = std::nan("");  // the last jaw_servo_jp
   int jaw_goals = 0;
+  std::uint64_t watchdog_trips = 0;  // a device's: how often its commands stopped
 
  private:
   Pose pose_;
   Twist twist_;
   JointState grip_js_{};
   OperatingState state_{OperatingStateValue::enabled, true, false};
+  std::uint64_t trips_ = 0;
   EventWrite<ButtonEvent>* clutch_;
 };
 

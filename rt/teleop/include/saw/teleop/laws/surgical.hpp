@@ -26,7 +26,10 @@ namespace saw::teleop {
 // decouples translation; on release the law engages again, orientation checked again. The jaw
 // goal is jaw_scale · gripper + jaw_offset within [jaw_min, jaw_max], reached from the slave's
 // jaw at no more than jaw_rate (no step at engagement). With `orientation: false` (a 3-DOF master:
-// the Falcon) the slave's orientation is held as it was at engagement.
+// the Falcon) the slave's orientation is held as it was at engagement. The goal sent moves toward
+// that pose no faster than max_linear_speed and max_angular_speed: a master stream that arrives in
+// bursts (a network, a busy publisher) gives a goal the slave's own step checks take — set them a
+// little under the slave device's — instead of steps it refuses.
 class SurgicalLaw {
  public:
   struct Settings {
@@ -37,6 +40,8 @@ class SurgicalLaw {
     double jaw_scale = 1.0, jaw_offset = 0.0;
     double jaw_min = -0.35, jaw_max = 1.4;  // rad
     double jaw_rate = 2.0;                  // rad/s
+    double max_linear_speed = 0.18;         // m/s: the goal's fastest move (under dvrk_arm's 0.2)
+    double max_angular_speed = 2.7;         // rad/s: its fastest turn (under dvrk_arm's 3)
   };
   static constexpr std::string_view name = "surgical";
   static constexpr bool gives_slave_goal = true;
@@ -63,6 +68,10 @@ class SurgicalLaw {
                                 "the jaw goal's upper limit"},
       Setting<Settings, double>{"jaw_rate", "rad/s", 0.01, 20, &Settings::jaw_rate,
                                 "the jaw goal's fastest change"},
+      Setting<Settings, double>{"max_linear_speed", "m/s", 1e-3, 2, &Settings::max_linear_speed,
+                                "the goal's fastest move (under the slave's max_linear_speed)"},
+      Setting<Settings, double>{"max_angular_speed", "rad/s", 1e-3, 20, &Settings::max_angular_speed,
+                                "the goal's fastest turn (under the slave's max_angular_speed)"},
   };
 
   SurgicalLaw(const Settings& s, const LawContext& c);
@@ -90,6 +99,8 @@ class SurgicalLaw {
   // Takes the engagement's poses if the master is aligned; true if it is.
   bool engage(const LawInputs& in) noexcept;
   double jaw_goal(const LawInputs& in) noexcept;
+  // The goal sent: toward (p, q) by no more than the speed limits allow in one period.
+  void approach(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) noexcept;
 
   Settings s_;
   double period_ = 0.001;
@@ -97,6 +108,8 @@ class SurgicalLaw {
   Eigen::Vector3d p_m0_ = Eigen::Vector3d::Zero(), p_s0_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_s0_ = Eigen::Quaterniond::Identity(), q_off_ = Eigen::Quaterniond::Identity();
   double jaw_ = std::numeric_limits<double>::quiet_NaN();  // the last jaw goal sent
+  Eigen::Vector3d p_goal_ = Eigen::Vector3d::Zero();       // the last goal sent
+  Eigen::Quaterniond q_goal_ = Eigen::Quaterniond::Identity();
 };
 
 }  // namespace saw::teleop
