@@ -162,6 +162,38 @@ TEST(SimHapticDevice, ForceMovesTheTipAlongItAndDampingStopsIt) {
   }
 }
 
+// The motors' work is the physics': with (almost) no damping, what they did is the arm's kinetic
+// energy, ½·Σ I·q̇² from its joint velocities; and a motor that applies nothing does no work.
+TEST(SimHapticDevice, TheMotorsWorkIsTheKineticEnergyTheyGaveTheArm) {
+  for (auto model : {ArmModel::omni, ArmModel::falcon}) {
+    SimDeviceConfig c;
+    c.model = model;
+    c.damping = Eigen::Vector3d::Constant(1e-9);  // (zero would mean the model's default)
+    c.substeps = 10;
+    Rig rig(c);
+    rig.steps(5);
+    EXPECT_EQ(rig.device.servo_work(), 0.0) << "no force, no work";
+    ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{0.3, -0.2, 0.4}, {}}), saw::Status::ok);
+    rig.steps(15);
+    ASSERT_EQ(rig.client.servo_cf(saw::Wrench{}), saw::Status::ok);
+    rig.steps(1);
+    const double work = rig.device.servo_work();
+    saw::JointState js;
+    ASSERT_EQ(rig.client.measured_js(js), saw::Status::ok);
+    const Eigen::Vector3d inertia = rig.device.device_config().inertia;
+    double kinetic = 0;
+    for (int k = 0; k < 3; ++k)
+      kinetic += 0.5 * inertia[k] * js.velocity[static_cast<std::size_t>(k)] *
+                 js.velocity[static_cast<std::size_t>(k)];
+    ASSERT_GT(kinetic, 1e-5);
+    EXPECT_NEAR(work, kinetic, 0.01 * kinetic) << "model " << static_cast<int>(model);
+    rig.steps(10);
+    EXPECT_EQ(rig.device.servo_work(), work) << "coasting: the motors do nothing";
+    EXPECT_EQ(rig.device.hand_work(), 0.0);
+    EXPECT_EQ(rig.device.wall_work(), 0.0);
+  }
+}
+
 // sensor_msgs/JointState pairs positions with joints by name: measured_js names every joint.
 TEST(SimHapticDevice, MeasuredJsNamesTheModelsJoints) {
   for (auto [model, names] : {std::pair{ArmModel::omni, std::array{"yaw", "shoulder_pitch", "elbow_pitch"}},

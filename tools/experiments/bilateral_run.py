@@ -19,11 +19,36 @@ ENERGY_GROWTH = 0.05  # J given out by the channel over the run's second half: a
 # may be a cycle apart, which makes a passive channel seem to give out ~0.01 J/s; a growing one
 # gives out joules.
 SPLIT_ENERGY_GROWTH = 0.5
+# N RMS of a force about its mean in a dwell: an oscillating channel. Five times what the hand's
+# tremor gives through the coupling (~0.2 N), a third of the force limit: the uncontrolled
+# coupling at 50 ms and the paper's law at 20 ms ring at 2.7–2.8 N, the passive laws stay under
+# 0.35 N.
+OSCILLATION = 1.0
 
 
 # Minimum-jerk reaches between targets with dwell, physiological tremor on top, through a grip.
+# Each leg (origin → the three targets → origin) a reach of 0.8 s, then a dwell of 0.7 s.
 HAND = ("{type: reach, targets: [[0, 0, -0.02], [0.02, 0, -0.02], [0.02, 0, 0]], reach_time: 0.8, dwell: 0.7, "
         "stiffness: 200, damping: 1, tremor: {amplitude: 0.0003, frequency: 10}}")
+
+
+LEG = 1.5  # s: a reach and its dwell
+DWELL = (1.0, 1.5)  # s into each leg: the dwell, 0.2 s after the reach ended
+
+
+def dwell_oscillation(t, *forces):
+    """The largest RMS of a force about its own mean over one dwell, of the given sides (N). The
+    hand holds still there but for its tremor (0.3 mm at 10 Hz: ~0.2 N through a 600 N/m coupling);
+    a delayed coupling that rings or oscillates shows it here whatever its energy says."""
+    worst = 0.0
+    for k in range(int(t[-1] // LEG) + 1):
+        m = (t >= max(k * LEG + DWELL[0], SETTLE)) & (t < k * LEG + DWELL[1])
+        if m.sum() < 100:
+            continue
+        for f in forces:
+            x = f[m] - f[m].mean(axis=0)
+            worst = max(worst, float(np.sqrt(np.mean(np.sum(x ** 2, axis=1)))))
+    return worst
 
 
 def wall_yaml(stiffness: float) -> str:
@@ -65,7 +90,10 @@ class Result:
     force_rms: float  # N, felt at the master vs the wall's at the slave, in contact
     felt_stiffness: float  # N/m, slope of felt force vs the hand-side penetration
     slave_stiffness: float  # N/m, the same at the slave
-    channel_energy: float  # J, the most the network gave out beyond what it took in
+    channel_energy: float  # J, the most the network gave out beyond what it took in (its samples)
+    physics_energy: float  # J, the same from the devices' physics: the motors' work on both arms
+    physics_outflow: float  # J, the most the motors gave out over any one interval (physics)
+    oscillation: float  # N, the largest RMS of either side's force about its mean in a dwell
     max_force: float  # N
     saturated_for: float  # s, the longest run of a force at its limit
     stable: bool
@@ -96,7 +124,8 @@ connections:
   - {{client: teleop, required: master, server: {master_server}, provided: arm}}
   - {{client: teleop, required: slave, server: slave, provided: arm}}
 record:
-  columns: [master.measured_cp, master.measured_cv, slave.measured_cp, slave.measured_cv, teleop.slave_force, slave.wall_force, port.port_applied]
+  columns: [master.measured_cp, master.measured_cv, slave.measured_cp, slave.measured_cv, teleop.slave_force, slave.wall_force, port.port_applied,
+            master.servo_work, slave.servo_work]
 """
 
 
@@ -239,7 +268,21 @@ def figures(d, wall: float = WALL_STIFFNESS) -> Result:
         why.append(f"forces at their limit for {saturated * 1e3:.0f} ms")
     if grows:
         why.append("the channel's energy grows")
+    oscillation = dwell_oscillation(t, fm, fs)
+    if oscillation > OSCILLATION:
+        why.append(f"oscillating in the dwells ({oscillation:.2f} N RMS)")
     if not np.isfinite(xm).all():
         why.append("positions not finite")
-    return Result(tracking, force_rms, felt_k, slave_k, channel, float(np.max(fmag)), saturated, not why,
-                  "; ".join(why) or "stable")
+    physics, outflow = physics_energies(d)
+    return Result(tracking, force_rms, felt_k, slave_k, channel, physics, outflow, oscillation,
+                  float(np.max(fmag)), saturated, not why, "; ".join(why) or "stable")
+
+
+def physics_energies(d):
+    """(most, most over one interval) of the energy the channel's motors gave the arms, J: from
+    each simulated device's physics (its applied force along its tip's path, at its substeps), not
+    from the force and velocity samples a passivity controller bounds. A passive channel gives out
+    nothing beyond what it took in (the first is at most ~0), and over one interval no more than
+    its coupling stored (½·F²/k: 7.5 mJ at 3 N and 600 N/m)."""
+    w = d["masterservo_work"] + d["slaveservo_work"]
+    return float(np.max(w)), float(np.max(w - np.minimum.accumulate(w)))

@@ -77,6 +77,9 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   columns_.hand_force = st.add_column("hand_force", &hand_force_);
   columns_.servo_force = st.add_column("servo_force", &servo_force_);
   columns_.wall_force = st.add_column("wall_force", &wall_force_);
+  columns_.servo_work = st.add_column("servo_work", &servo_work_);
+  columns_.hand_work = st.add_column("hand_work", &hand_work_);
+  columns_.wall_work = st.add_column("wall_work", &wall_work_);
   columns_.command_timeout = watchdog().holding_column();
   columns_.watchdog_trips = watchdog().trips_column();
   columns_.measured_cp = contract_columns().measured_cp;
@@ -88,6 +91,9 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
                                        [this](const ButtonCommand& b) { set_button(b.button, b.pressed); });
   sim.add_command_read("hand_force", columns_.hand_force);
   sim.add_command_read("wall_force", columns_.wall_force);
+  sim.add_command_read("servo_work", columns_.servo_work);
+  sim.add_command_read("hand_work", columns_.hand_work);
+  sim.add_command_read("wall_work", columns_.wall_work);
   sim.add_command_read("rejected_commands", st.add_column("rejected_commands", &rejected_column_));
 }
 
@@ -126,8 +132,8 @@ Outcome SimHapticDevice::write(const Setpoint& s) {
 void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& servo,
                                 const Eigen::Vector3d& hand_target) noexcept {
   Eigen::Vector3d hand = Eigen::Vector3d::Zero(), contact = Eigen::Vector3d::Zero();
+  Eigen::Vector3d x = kinematics_.fk(q_);
   for (int i = 0; i < config_.substeps; ++i) {
-    const Eigen::Vector3d x = kinematics_.fk(q_);
     const Eigen::Matrix3d j = kinematics_.jacobian(q_);
     const Eigen::Vector3d xd = j * qd_;
     hand = config_.hand.kind == HandScript::Kind::none
@@ -142,6 +148,12 @@ void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& servo,
       if (q_[k] < config_.joint_min[k]) q_[k] = config_.joint_min[k], qd_[k] = std::max(0.0, qd_[k]);
       if (q_[k] > config_.joint_max[k]) q_[k] = config_.joint_max[k], qd_[k] = std::min(0.0, qd_[k]);
     }
+    // Each force as it acted over this substep, along the path the tip took.
+    const Eigen::Vector3d next = kinematics_.fk(q_), dx = next - x;
+    servo_work_ += servo.dot(dx);
+    hand_work_ += hand.dot(dx);
+    wall_work_ += contact.dot(dx);
+    x = next;
   }
   hand_force_ = to_vec3(hand);
   servo_force_ = to_vec3(servo);

@@ -57,7 +57,11 @@ static_assert(sizeof(ButtonCommand) == 2 && offsetof(ButtonCommand, pressed) == 
 // measured_js (with the model's joint names), operating_state, fault, command_timeout,
 // watchdog_trips (reads); servo_cf, state_command (writes); operating_state, fault, clutch,
 // operator_present (events); also servo_force (the force applied this cycle).
-// Provided "sim": set_button (write), hand_force, wall_force, rejected_commands (reads).
+// Provided "sim": set_button (write), hand_force, wall_force, rejected_commands, and the work
+// done on the arm by its motors, the hand and the wall (reads).
+// The work (J, cumulative since start) is the physics' own: each force as applied, dotted with
+// the tip's displacement in every substep — not the controller's force and velocity samples, so
+// an energy figure built on it checks a passivity controller rather than reading its bound back.
 // The base checks every servo_cf (finite, |force| <= max_force) and runs the watchdog; this
 // driver is the simulated hardware: the hand, the dynamics and the stops.
 class SimHapticDevice : public Device {
@@ -71,6 +75,10 @@ class SimHapticDevice : public Device {
   Eigen::Vector3d applied_force() const noexcept { return applied_; }
   // What the virtual wall pushes on the tip now (N).
   Eigen::Vector3d wall_force() const noexcept { return to_eigen(wall_force_); }
+  // Work done on the arm since start (J) by its motors, the hand and the wall.
+  double servo_work() const noexcept { return servo_work_; }
+  double hand_work() const noexcept { return hand_work_; }
+  double wall_work() const noexcept { return wall_work_; }
   // Times the hardware was put in its safe state (disable, fault, stop, failed start).
   int safe_entries() const noexcept { return safe_entries_; }
 
@@ -79,6 +87,7 @@ class SimHapticDevice : public Device {
     StateColumn<Twist> measured_cv;
     StateColumn<JointState> measured_js;
     StateColumn<Vec3> hand_force, servo_force, wall_force;
+    StateColumn<double> servo_work, hand_work, wall_work;
     StateColumn<bool> command_timeout;
     StateColumn<std::uint64_t> watchdog_trips;
   };
@@ -107,6 +116,7 @@ class SimHapticDevice : public Device {
 
   // State-table sources.
   Vec3 hand_force_{}, servo_force_{}, wall_force_{};
+  double servo_work_ = 0, hand_work_ = 0, wall_work_ = 0;
   std::uint64_t rejected_column_ = 0;
   Columns columns_;
 };
