@@ -79,18 +79,23 @@ class Cable final : public FalconTransport {
     sim_ = std::make_unique<SimTransport>();
     sim_->open();
     opens.fetch_add(1, std::memory_order_relaxed);
+    silent_ = silent_opens.load(std::memory_order_acquire) > 0;
+    if (silent_) silent_opens.fetch_sub(1, std::memory_order_acq_rel);
   }
   ExchangeResult exchange(const Packet& out, Packet& in) noexcept override {
     if (!plugged.load(std::memory_order_acquire) || !sim_) return {ExchangeStatus::disconnected, 0, -4};
+    if (silent_) return {ExchangeStatus::no_answer, 0, 0};
     return sim_->exchange(out, in);
   }
   void close() noexcept override { sim_.reset(); }
   std::string describe() const override { return "a Falcon on a cable"; }
   std::atomic<bool> plugged{true};
   std::atomic<int> opens{0};
+  std::atomic<int> silent_opens{0};  // the next opens find a device that answers nothing
 
  private:
   std::unique_ptr<SimTransport> sim_;
+  bool silent_ = false;
 };
 
 // Steps the rig a cycle a millisecond (the I/O thread runs beside it) until `done`, at most `limit`.
@@ -140,6 +145,28 @@ TEST(FalconThreadedTransport, AFalconPluggedInAgainIsOpenedAgainAndHomedBeforeAn
       << rig.device->summary().no_answer;
   rig.cycle();
   EXPECT_EQ(rig.device->summary().reopened, 1u);
+  rig.device->cleanup();
+}
+
+// Plugged in again but answering nothing (enumerated, its firmware not running): after a second of
+// silence the I/O thread opens it again, as after an unplug, and the next enable homes it.
+TEST(FalconThreadedTransport, AFalconBackButSilentIsOpenedAgain) {
+  auto cable = std::make_unique<Cable>();
+  Cable& c = *cable;
+  FalconConfig config;
+  config.max_missed = 50;
+  test::FalconRig rig(config, std::make_unique<ThreadedTransport>(std::move(cable), 0, 100'000, 20'000'000));
+  ASSERT_TRUE(step_until(rig, [&] { return rig.homed() && rig.state() == OperatingStateValue::enabled; }));
+  c.silent_opens.store(1, std::memory_order_release);
+  c.plugged.store(false, std::memory_order_release);
+  ASSERT_TRUE(step_until(rig, [&] { return rig.state() == OperatingStateValue::fault; }));
+  c.plugged.store(true, std::memory_order_release);
+  ASSERT_TRUE(step_until(rig, [&] { return rig.device->transport().reopened() == 2; }))
+      << "opened " << c.opens.load() << " times: the silent Falcon was not opened again";
+  EXPECT_EQ(c.opens.load(), 3);
+  rig.write("state_command", StateCommand::enable);
+  ASSERT_TRUE(step_until(rig, [&] { return rig.homed() && rig.state() == OperatingStateValue::enabled; }))
+      << "state " << static_cast<int>(rig.state()) << ", homed " << rig.homed();
   rig.device->cleanup();
 }
 

@@ -14,6 +14,16 @@ void to_words(const Packet& p, std::uint64_t (&w)[2]) noexcept { std::memcpy(w, 
 void from_words(const std::uint64_t (&w)[2], Packet& p) noexcept { std::memcpy(p.data(), w, sizeof w); }
 static_assert(sizeof(Packet) == 2 * sizeof(std::uint64_t));
 
+// A Falcon answers every exchange within a millisecond: a second of silence is a device that is
+// not there, however it still enumerates.
+constexpr TimeNs silence_ns = 1'000'000'000;
+
+TimeNs monotonic_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<TimeNs>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
 }  // namespace
 
 void ThreadedTransport::Slot::store(const Packet& p, ExchangeStatus s, std::int32_t e) noexcept {
@@ -78,6 +88,7 @@ void ThreadedTransport::open() {
 void ThreadedTransport::loop() noexcept {
   std::uint64_t done = 0;  // the command sequence last exchanged
   const timespec nap{0, static_cast<long>(poll_ns_)};
+  TimeNs answered = monotonic_ns();  // of the last exchange the device answered (or failed)
   while (running_.load(std::memory_order_acquire)) {
     Packet out{}, in{};
     ExchangeStatus unused{};
@@ -89,7 +100,14 @@ void ThreadedTransport::loop() noexcept {
     }
     done = at;
     const ExchangeResult r = inner_->exchange(out, in);
-    if (r.status == ExchangeStatus::no_answer) continue;  // the cycle sees no new report
+    if (r.status == ExchangeStatus::no_answer) {  // the cycle sees no new report
+      if (reconnect_ns_ > 0 && monotonic_ns() - answered > silence_ns && reopen()) {
+        reopened_.fetch_add(1, std::memory_order_relaxed);
+        answered = monotonic_ns();
+      }
+      continue;
+    }
+    answered = monotonic_ns();
     if (r.status == ExchangeStatus::ok && r.bytes < packet_size)
       std::memset(in.data() + r.bytes, 0, packet_size - r.bytes);  // short: the codec refuses it
     // Not connected before the cycle can see the disconnect: its next enable is refused.

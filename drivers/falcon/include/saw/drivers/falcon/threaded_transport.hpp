@@ -19,7 +19,8 @@ namespace saw::drivers::falcon {
 // as fast as it answers and at most every `poll` — a report is one cycle older than inline.
 // With `reconnect` set, a device that went away (unplugged) is looked for again by the I/O
 // thread every `reconnect` and opened again (enumeration, firmware: the thread may wait and
-// allocate there, the cycle never does); the cycle sees no report until then.
+// allocate there, the cycle never does); the cycle sees no report until then. So is a device that
+// answers no exchange for a second (a replug that left it enumerated but silent).
 class ThreadedTransport final : public FalconTransport {
  public:
   // priority: SCHED_FIFO priority of the I/O thread (0: the default policy); `poll`: how long
