@@ -7,6 +7,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "saw/clock.hpp"
+
 namespace saw::drivers::falcon {
 namespace {
 
@@ -17,12 +19,6 @@ static_assert(sizeof(Packet) == 2 * sizeof(std::uint64_t));
 // A Falcon answers every exchange within a millisecond: a second of silence is a device that is
 // not there, however it still enumerates.
 constexpr TimeNs silence_ns = 1'000'000'000;
-
-TimeNs monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<TimeNs>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 }  // namespace
 
@@ -88,7 +84,7 @@ void ThreadedTransport::open() {
 void ThreadedTransport::loop() noexcept {
   std::uint64_t done = 0;  // the command sequence last exchanged
   const timespec nap{0, static_cast<long>(poll_ns_)};
-  TimeNs answered = monotonic_ns();  // of the last exchange the device answered (or failed)
+  TimeNs answered = monotonic_now();  // of the last exchange the device answered (or failed)
   while (running_.load(std::memory_order_acquire)) {
     Packet out{}, in{};
     ExchangeStatus unused{};
@@ -101,13 +97,13 @@ void ThreadedTransport::loop() noexcept {
     done = at;
     const ExchangeResult r = inner_->exchange(out, in);
     if (r.status == ExchangeStatus::no_answer) {  // the cycle sees no new report
-      if (reconnect_ns_ > 0 && monotonic_ns() - answered > silence_ns && reopen()) {
+      if (reconnect_ns_ > 0 && monotonic_now() - answered > silence_ns && reopen()) {
         reopened_.fetch_add(1, std::memory_order_relaxed);
-        answered = monotonic_ns();
+        answered = monotonic_now();
       }
       continue;
     }
-    answered = monotonic_ns();
+    answered = monotonic_now();
     if (r.status == ExchangeStatus::ok && r.bytes < packet_size)
       std::memset(in.data() + r.bytes, 0, packet_size - r.bytes);  // short: the codec refuses it
     // Not connected before the cycle can see the disconnect: its next enable is refused.
