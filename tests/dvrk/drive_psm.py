@@ -5,6 +5,11 @@ deployed by the shipped config/dvrk-psm.yaml (renamed for this run, on this test
 (a) the handshake: `enable`, then `home`, and no motion command before the arm is ENABLED, homed
     and not busy (the simulated arm warns of every early one);
 (b) the PSM follows half the Omni's hand motion; the tracking error is printed; its jaw is read;
+    the latency from a master sample to the servo_cp computed from it arriving at the arm, matched
+    by value: the record's clock is the Omni's measured_cp rows (each row's time is the sample's),
+    every row gives the goal the law computes from it (scale x - offset, the offset recorded too),
+    and each servo_cp the arm received is the row whose goal it carries; bounded by one cycle plus
+    the DDS hop (the command's header stamp, the gateway's send, to its arrival);
 (c) every stop path ends with `hold` (the PSM's safe command) and the arm still: saw-rt's SIGTERM
     (the device), `kill -9` of saw-rt (the gateway's exit path), saw-rt frozen (the import's
     watchdog).
@@ -34,8 +39,11 @@ MOTION = ("servo_cp", "move_cp", "servo_jp", "move_jp", "body/servo_cf")
 
 def start(saw_rt, work, tag, domain, name):
     path = os.path.join(work, f"{name}.yaml")
+    # The record's clock is the master's samples (the first column); the law's offset beside them.
+    text = shipped("dvrk-psm.yaml", tag, domain, NAMES)
+    text = text.replace("columns: [", f"columns: [sim_master{tag}.measured_cp, psm_teleop{tag}.current_offset, ")
     with open(path, "w") as f:
-        f.write(shipped("dvrk-psm.yaml", tag, domain, NAMES))
+        f.write(text)
     return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
 
 
@@ -111,6 +119,9 @@ def follow_and_sigterm(saw_rt, work, tag, domain):
             # The last second's: the jaw's topic may match a little after measured_cp's.
             jaws = {r[f"psm1{tag}.jaw_measured_js.q0"] for r in rows[-1000:]}
             check(jaws == {"0.5"}, f"the PSM's jaw (0.5 rad in the sim) reads through the device: {sorted(jaws)[:3]}")
+            all_rows = list(csv.DictReader(open(os.path.join(work, "follow.csv"))))
+            received = [c for c in seen if c.topic == "servo_cp"]
+            report_latency(latency(all_rows, received, tag), received)
         else:
             check(False, "the record has the teleoperation ENABLED")
 
@@ -146,6 +157,53 @@ def stop_paths(saw_rt, work, tag, domain):
                 check(rc == 0, f"{name}: saw-rt, woken, stopped in order (exit {rc})")
             else:
                 rt.stop(signal.SIGKILL)
+
+
+def latency(rows, received, tag, scale=0.5):
+    """(master sample -> arrival at the arm, gateway send -> arrival) per matched servo_cp, in s.
+    A servo_cp matches the newest master row before its arrival whose goal (scale x - offset) it
+    carries to 1e-7 m, where the goal moves more than 5 um per ms (near the hand's turns two rows
+    give the same goal). time.monotonic() is CLOCK_MONOTONIC, as saw-rt's clock: real."""
+    goals = []
+    for r in rows:
+        try:
+            goals.append((float(r["time"]), scale * float(r[f"sim_master{tag}.measured_cp.x"])
+                          - float(r[f"psm_teleop{tag}.current_offset.x"])))
+        except (KeyError, ValueError):
+            continue
+    wall = time.time() - time.monotonic()  # this host's wall clock against its monotonic one
+    out = []
+    j = 0
+    for c in received:
+        while j + 1 < len(goals) and goals[j + 1][0] <= c.time:
+            j += 1
+        x = c.value.pose.position.x
+        for k in range(j, max(j - 50, 0), -1):
+            if abs(goals[k][1] - x) < 1e-7 and abs(goals[k][1] - goals[k - 1][1]) > 5e-6:
+                stamp = c.value.header.stamp.sec + c.value.header.stamp.nanosec * 1e-9
+                out.append((c.time - goals[k][0], c.time + wall - stamp))
+                break
+    return out
+
+
+def report_latency(pairs, received):
+    check(len(pairs) > len(received) // 2,
+          f"latency: {len(pairs)} of {len(received)} servo_cp matched to the master sample they came from")
+    if not pairs:
+        return
+    total = sorted(p[0] for p in pairs)
+    dds = sorted(p[1] for p in pairs)
+
+    def q(v, f):
+        return v[min(int(f * len(v)), len(v) - 1)] * 1e3
+
+    print(f"figure: master sample -> servo_cp at the arm ({len(total)} commands): median {q(total, 0.5):.2f} ms, "
+          f"p99 {q(total, 0.99):.2f} ms, max {total[-1] * 1e3:.2f} ms; of which the DDS hop (the gateway's "
+          f"send -> arrival): median {q(dds, 0.5):.2f} ms, p99 {q(dds, 0.99):.2f} ms")
+    saw = sorted(a - b for a, b in pairs)
+    print(f"figure: master sample -> the gateway's send (saw-rt, its device, the import): median "
+          f"{q(saw, 0.5):.2f} ms, p99 {q(saw, 0.99):.2f} ms, max {saw[-1] * 1e3:.2f} ms")
+    check(q(saw, 0.5) <= 1.0, f"master sample -> on the wire within one 1 ms cycle (median {q(saw, 0.5):.2f} ms)")
 
 
 def main(saw_rt):

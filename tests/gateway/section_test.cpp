@@ -112,6 +112,7 @@ TEST(GatewaySection, ItsSerializedFormReadsBackTheSameThroughTheSameParser) {
   psm.commands = {"servo_cp", "hold"};
   psm.safe_command = "servo_cp_measured";
   psm.command_timeout = 20'000'000;
+  psm.offset = 800'000;
   s.imports = {mtm, psm};
   s.ros_namespace = "dvrk";
   s.clutch_topic = "";
@@ -159,6 +160,12 @@ TEST(GatewaySection, AnImportThatSendsCommandsSaysWhichAndItsSafeCommandFollows)
       R"(key 'gateway\.import\[0\]\.safe_command': only for an import that sends commands)");
   bad("{component: MTML, commands: [servo_cf], command_timeout: 1ms}",
       R"(key 'gateway\.import\[0\]\.command_timeout': must be from 0\.002 to 1 s)");
+  // Its cycle's phase: after its client's, so what the client sent goes out in the same cycle.
+  EXPECT_EQ(read("{component: PSM1, commands: [servo_cp], offset: 800us}").offset, 800'000);
+  bad("{component: PSM1, commands: [servo_cp], offset: 1ms}",
+      R"(key 'gateway\.import\[0\]\.offset': at least 0 and less than the import's 1 ms period)");
+  bad("{component: MTML, offset: 800us}",
+      R"(key 'gateway\.import\[0\]\.offset': only for an import that sends)");
 }
 
 TEST(GatewaySection, PeersNeedAnInterfaceThatReachesThem) {

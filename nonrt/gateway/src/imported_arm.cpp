@@ -23,7 +23,12 @@ fdds::DataReader* ImportedArm::reader(M member, const std::string& topic, Flow f
 }
 
 ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
-    : Task(config.component, TaskConfig::periodic(std::chrono::milliseconds(1), 0)),
+    : Task(config.component,
+           [&] {
+             auto c = TaskConfig::periodic(std::chrono::milliseconds(1), 0);
+             c.offset = std::chrono::nanoseconds(config.offset);
+             return c;
+           }()),
       dds_(dds),
       config_(config),
       interface_(config.commands.empty() ? std::string(crtk::arm::interface_name) : "dvrk") {
@@ -170,7 +175,11 @@ void ImportedArm::add_endpoint(const std::string& name, const std::string& topic
 ImportedArm::Writer ImportedArm::writer(const std::string& name, const std::string& topic, const Mapping& m) {
   add_endpoint(name, topic, m, "import_command");
   // Reliable: the dVRK's subscriptions are (a best-effort writer would match none of them).
-  auto* w = dds_.publisher->create_datawriter(dds_.topic(topic, m), DdsContext::writer_qos(Flow::command));
+  auto qos = DdsContext::writer_qos(Flow::command);
+  // Acknowledgments asked for every 5 ms (not 50): a hold waits for the motion commands before it
+  // to be acknowledged, and a stop path's safe command should not wait a heartbeat for that.
+  qos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 5'000'000);
+  auto* w = dds_.publisher->create_datawriter(dds_.topic(topic, m), qos);
   if (w == nullptr) throw std::runtime_error("import: could not publish " + topic);
   return {w, &m};
 }
@@ -183,7 +192,8 @@ bool ImportedArm::matched(const Writer& w) {
 }
 
 bool ImportedArm::send(const Writer& w, const void* value) {
-  const bool ok = w.mapping->write(*w.writer, value, wall_from_monotonic(now()), config_.arm);
+  // Stamped when written (not at the cycle's start): the arm side sees how long DDS took.
+  const bool ok = w.mapping->write(*w.writer, value, wall_from_monotonic(monotonic_now()), config_.arm);
   if (ok) sent_.fetch_add(1, std::memory_order_relaxed);
   return ok;
 }

@@ -38,6 +38,7 @@ saw::gateway::GatewayConfig config_of(const saw::gateway::GatewaySettings& s) {
     i.commands = im.commands;
     i.safe_command = im.safe_command;
     i.command_timeout = im.command_timeout;
+    i.offset = im.offset;
     c.imports.push_back(i);
   }
   c.dds.domain = s.domain;

@@ -51,7 +51,7 @@ void read_import_commands(const Params& im, ImportSettings& s) {
   if (allowed("servo_cf") && allowed("servo_cp"))
     im.fail_at("commands", "servo_cf (an MTM's wrench) or servo_cp (a PSM's pose), not both");
   if (s.commands.empty()) {
-    for (const char* k : {"safe_command", "command_timeout"})
+    for (const char* k : {"safe_command", "command_timeout", "offset"})
       if (im.has(k)) im.fail_at(k, "only for an import that sends commands (commands: [...])");
     return;
   }
@@ -67,6 +67,8 @@ void read_import_commands(const Params& im, ImportSettings& s) {
   if (!allowed(needs)) im.fail_at("safe_command", s.safe_command + " needs " + needs + " in commands");
   s.command_timeout =
       im.get_duration_in("command_timeout", std::chrono::nanoseconds(s.command_timeout), 2ms, 1s);
+  s.offset =
+      im.get_duration_in("offset", 0ns, 0ns, 999us, "at least 0 and less than the import's 1 ms period");
 }
 
 // Every key of the section; `exported` (a deployment's) is the default of attach.
@@ -178,7 +180,8 @@ std::string to_yaml(const GatewaySettings& s) {
       if (!im.commands.empty())
         out << YAML::Key << "commands" << YAML::Value << im.commands << YAML::Key << "safe_command"
             << YAML::Value << im.safe_command << YAML::Key << "command_timeout" << YAML::Value
-            << (std::to_string(im.command_timeout) + "ns");
+            << (std::to_string(im.command_timeout) + "ns") << YAML::Key << "offset" << YAML::Value
+            << (std::to_string(im.offset) + "ns");
       out << YAML::EndMap;
     }
     out << YAML::EndSeq;

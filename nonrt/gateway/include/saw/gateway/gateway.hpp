@@ -26,6 +26,7 @@ struct ImportConfig {
   std::vector<std::string> commands;
   std::string safe_command;
   TimeNs command_timeout = 50'000'000;
+  TimeNs offset = 0;  // its cycle's phase, ns into the host's 1 ms grid
 };
 
 // A live plot redrawn at 20–25 Hz loses nothing it can show at 50 samples/s.

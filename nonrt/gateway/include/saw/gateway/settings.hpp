@@ -22,6 +22,10 @@ struct ImportSettings {
   // gateway exits: zero_wrench (servo_cf), hold, servo_cp_measured (servo_cp at the measured pose).
   std::string safe_command;
   std::int64_t command_timeout = 50'000'000;  // ns of silence from the client that count as gone
+  // ns into its 1 ms cycle, on the host's common phase grid (as a task's offset): the client's
+  // commands go out at the end of the import's cycle, so one placed after the client's sends
+  // them in the cycle they were made in.
+  std::int64_t offset = 0;
   bool operator==(const ImportSettings&) const = default;
 };
 
