@@ -343,6 +343,39 @@ TEST(DvrkArm, APsmFollowsPosesAndHoldsOnDisableAndStop) {
   EXPECT_EQ(r.import.count("other"), 0) << "our disable never powers the dVRK arm off";
 }
 
+// The dVRK drops a PSM's Cartesian commands, with a warning and no state, while its tool is not
+// past the cannula: goals that take no effect are a FAULT, once they are far for long enough.
+TEST(DvrkArm, APsmThatDoesNotFollowItsGoalsFaultsTheDevice) {
+  for (const bool follows : {true, false}) {
+    SCOPED_TRACE(follows ? "an arm that follows" : "an arm that does not");
+    DvrkArmConfig c = psm();
+    c.following_error = 0.01;
+    c.following_time = 100'000'000;
+    Rig r(c);
+    r.import.pose.position = {0.0, 0, -0.1};
+    r.state_command(StateCommand::enable);
+    r.step(40);
+    ASSERT_TRUE(r.arm.following());
+    r.import.follows = follows;
+    Pose p = r.import.pose;
+    int far_cycles = 0;
+    for (int i = 0; i < 400 && r.state() == OperatingStateValue::enabled; ++i) {
+      p.position[0] += 0.00015;  // 0.15 m/s, under the speed limit
+      if (std::abs(p.position[0] - r.import.pose.position[0]) > 0.01) ++far_cycles;
+      r.servo_cp(p);
+      r.step();
+    }
+    if (follows) {
+      EXPECT_EQ(r.state(), OperatingStateValue::enabled) << "an arm that follows never faults";
+      continue;
+    }
+    ASSERT_EQ(r.state(), OperatingStateValue::fault);
+    EXPECT_EQ(r.arm.fault().code, FaultCode::device_error);
+    EXPECT_NEAR(far_cycles, 100, 3) << "faulted after following_time beyond following_error";
+    EXPECT_EQ(r.import.received.back().what, "hold") << "and held";
+  }
+}
+
 TEST(DvrkArm, APsmWithoutHoldGetsItsMeasuredPose) {
   Rig r(psm(SafeCommand::servo_cp_measured));
   r.import.pose.position = {0.02, 0.01, -0.12};
@@ -399,6 +432,9 @@ TEST(DvrkArmDeployment, ParameterErrorsNameFileLineAndKey) {
        "key 'components[0].params.workspace.max': must be above min"},
       {"{kind: mtm, max_linear_speed: 1}", "key 'components[0].params.max_linear_speed': unknown parameter"},
       {"{kind: psm, servo_jp: true}", "key 'components[0].params.servo_jp': needs the arm's joints"},
+      {"{kind: psm, following_error: -0.01}", "key 'components[0].params.following_error'"},
+      {"{kind: psm, following_time: 20s}", "key 'components[0].params.following_time': at least one period"},
+      {"{kind: mtm, following_error: 0.01}", "key 'components[0].params.following_error': unknown parameter"},
       {"{kind: psm, joints: {names: [a, b], min: [0]}}",
        "key 'components[0].params.joints.min': one value per joint (2)"},
       {"{kind: psm, joints: {names: [a], min: [1], max: [0]}}",

@@ -12,7 +12,9 @@ deployed by the shipped config/dvrk-psm.yaml (renamed for this run, on this test
     the DDS hop (the command's header stamp, the gateway's send, to its arrival);
 (c) every stop path ends with `hold` (the PSM's safe command) and the arm still: saw-rt's SIGTERM
     (the device), `kill -9` of saw-rt (the gateway's exit path), saw-rt frozen (the import's
-    watchdog).
+    watchdog);
+(d) a tool not past the cannula (the dVRK drops Cartesian commands with a warning, nothing else):
+    the device FAULTs, the arm not following its goals, and holds it.
 
 Each check is printed; the exit code is 1 if any failed. Waits are polls with a bound.
 
@@ -159,6 +161,26 @@ def stop_paths(saw_rt, work, tag, domain):
                 rt.stop(signal.SIGKILL)
 
 
+def cannula(saw_rt, work, tag, domain):
+    print("-- (d) a tool not past the cannula: the dVRK drops servo_cp with a warning only")
+    with S.SimArm(ARM, domain, kind="psm", rate=500.0) as sim:
+        sim.set_cannula_ready(False)
+        rt = start(saw_rt, work, tag, domain, "cannula")
+        fault = rt.wait_line("does not follow its servo_cp goals", 20.0)
+        check(fault is not None, "the device FAULTs: the arm does not follow its goals")
+        if fault is not None:
+            print("   " + fault[1])
+        if fault is None:
+            print(rt.text())
+            rt.stop()
+            return
+        check(any("cannula" in w for w in sim.warnings()), "(the simulated arm warned of the cannula)")
+        goals = [c for c in sim.commands() if c.topic == "servo_cp"]
+        hold = ends_with_hold(sim, goals[-1].time if goals else 0.0)
+        check(hold is not None, "and the last command is hold, no motion after it")
+        rt.stop()
+
+
 def latency(rows, received, tag, scale=0.5):
     """(master sample -> arrival at the arm, gateway send -> arrival) per matched servo_cp, in s.
     A servo_cp matches the newest master row before its arrival whose goal (scale x - offset) it
@@ -212,6 +234,7 @@ def main(saw_rt):
     work = tempfile.mkdtemp()
     follow_and_sigterm(saw_rt, work, tag, domain)
     stop_paths(saw_rt, work, tag, domain)
+    cannula(saw_rt, work, tag, domain)
     return exit_code()
 
 

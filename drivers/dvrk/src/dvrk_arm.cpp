@@ -327,7 +327,33 @@ Outcome DvrkArm::send_request() noexcept {
   return Outcome::done();
 }
 
+// A PSM's servo goals that take no effect: the dVRK drops Cartesian commands, with a warning and
+// no state, while the tool is not past the cannula (and a stuck or blocked arm looks the same).
+// Judged on the goal sent last cycle against this cycle's measured pose.
+Outcome DvrkArm::check_following() noexcept {
+  if (!goal_live_ || arm_config_.following_error <= 0) {
+    far_since_ = -1;
+    return Outcome::done();
+  }
+  Vec3 d{};
+  for (std::size_t k = 0; k < 3; ++k) d[k] = measured().cp.position[k] - goal_sent_[k];
+  const double distance = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  if (distance <= arm_config_.following_error) {
+    far_since_ = -1;
+    return Outcome::done();
+  }
+  if (far_since_ < 0) far_since_ = now();
+  if (now() - far_since_ < arm_config_.following_time) return Outcome::done();
+  far_since_ = -1;
+  return Outcome::failed(FaultCode::device_error,
+                         "the arm does not follow its servo_cp goals (further than following_error for "
+                         "following_time): a tool not past the cannula? the dVRK's warning is in the log",
+                         "measured_cp");
+}
+
 Outcome DvrkArm::write(const Setpoint& s) {
+  if (const Outcome f = check_following(); f.is_failed()) return f;
+  goal_live_ = false;
   if (s.mode == ServoMode::none) {
     jaw_pending_ = false;  // a jaw goal goes only with the arm's motion
     (void)send_safe();
@@ -363,6 +389,10 @@ Outcome DvrkArm::write(const Setpoint& s) {
     return Outcome::done();
   }
   not_sent_in_a_row_ = 0;
+  if (s.mode == ServoMode::cp) {
+    goal_sent_ = s.pose.position;
+    goal_live_ = true;
+  }
   ++summary_.commands;
   commanded_ = true;
   moved_ = false;  // a servo command pre-empts a move at the dVRK

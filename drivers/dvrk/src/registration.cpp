@@ -93,6 +93,10 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
     if (!(c.jaw_min < c.jaw_max)) p.fail_at("jaw_max", "must be above jaw_min");
     c.max_linear_speed = p.get_in_range("max_linear_speed", 1e-3, 2, c.max_linear_speed);
     c.max_angular_speed = p.get_in_range("max_angular_speed", 1e-3, 20, c.max_angular_speed);
+    c.following_error = p.get_in_range("following_error", 0, 0.5, c.following_error);
+    c.following_time =
+        duration_in(p, "following_time", c.following_time, period, std::chrono::nanoseconds(10s).count(),
+                    "at least one period and at most 10 s");
     if (p.has("workspace")) {
       const Params w = p.child("workspace");
       c.workspace_min = w.get<Vec3>("min");

@@ -44,6 +44,11 @@ struct DvrkArmConfig {
   // PSM jaw_servo_jp: its angle (rad) within these, else refused (the dVRK's large needle
   // driver opens to about 80 degrees and closes a little past zero to grip).
   double jaw_min = -0.35, jaw_max = 1.4;
+  // PSM servo_cp: the arm further than this (m) from the goal it was sent, for this long, does
+  // not follow (a tool not past the cannula: the dVRK drops Cartesian commands with a warning
+  // only) and is this device's FAULT. 0: not checked.
+  double following_error = 0.01;
+  TimeNs following_time = 200'000'000;
   // The arm's joints as its measured_js has them (an MTM's 7, a PSM's 6 without the jaw): with
   // them, measured_js is this device's (a sample of another size is refused) and move_jp goals
   // are checked against min/max. Empty: no joint space.
@@ -90,8 +95,9 @@ struct DvrkSummary {
 // the dVRK's handshake: `enable` sent (again after 1 s idle without effect: one lost) and ENABLED awaited; a
 // not-homed arm homed (`home: true`, only once ENABLED) or refused; no motion command reaches the arm before
 // it is ENABLED, homed and not busy, nor while it is busy. Following, an arm that leaves ENABLED, loses its
-// homing, stops publishing (stale_timeout), reports an error (the import's `errors` grows) or whose import is
-// gone is this device's FAULT, naming which.
+// homing, stops publishing (stale_timeout), reports an error (the import's `errors` grows), does not follow a
+// PSM's servo_cp goals (following_error for following_time) or whose import is gone is this device's FAULT,
+// naming which.
 class DvrkArm final : public Device {
  public:
   DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config);
@@ -116,6 +122,7 @@ class DvrkArm final : public Device {
   void on_move_jp(const JointState& j) noexcept;
   void on_free() noexcept;
   Outcome send_request() noexcept;
+  Outcome check_following() noexcept;
   void read_joints() noexcept;
 
   DvrkArmConfig arm_config_;
@@ -153,6 +160,9 @@ class DvrkArm final : public Device {
   bool enable_sent_ = false, home_sent_ = false;
   TimeNs state_sent_at_ = 0;
   bool commanded_ = false;  // a motion command went out since the last safe command
+  Vec3 goal_sent_{};        // the last servo_cp goal that went out
+  bool goal_live_ = false;  // it went out in the last cycle
+  TimeNs far_since_ = -1;   // since when the arm has been further than following_error from it
   int not_sent_in_a_row_ = 0;
 };
 
