@@ -9,6 +9,7 @@
 #include <regex>
 
 #include "packages.hpp"
+#include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/teleop/law_registry.hpp"
 #include "saw/teleop/teleoperation.hpp"
 
@@ -126,6 +127,49 @@ TEST(Plugins, TheExampleLabLawRunsOnTheTeleoperationTask) {
         e.what(), std::regex(R"(^cfg\.yaml:14:\d+: key 'components\[2\]\.params\.feedback')")))
         << e.what();
   }
+}
+
+// A lab's law that needs an input no built-in law reads (examples/lab_force_law): declared in its
+// one file, required, read and handed over by the task; the operator feels the slave's sensor.
+TEST(Plugins, TheExampleForceSensorLawGetsTheSlavesWrenchByDeclaringIt) {
+  const std::string text = std::string("deployment: {name: p, clock: stepped}\n") + "plugins: [" +
+                           SAW_EXAMPLE_FORCE_LAW_PLUGIN +
+                           "]\n"
+                           "components:\n"
+                           "  - name: master\n"
+                           "    type: sim_haptic_device\n"
+                           "    task: {period: 1ms}\n"
+                           "    params: {hand: {type: sinusoid, amplitude: [0, 0, 0.02], frequency: 0.5}}\n"
+                           "  - name: slave\n"
+                           "    type: sim_haptic_device\n"
+                           "    task: {period: 1ms}\n"
+                           "    params: {wall: {point: [0, 0, -0.01], normal: [0, 0, 1], stiffness: 300}}\n"
+                           "  - name: teleop\n"
+                           "    type: teleop\n"
+                           "    task: {period: 1ms}\n"
+                           "    params: {law: force_sensor_feedback, stiffness: 300, feedback: 1.0}\n"
+                           "connections:\n"
+                           "  - {client: teleop, required: master, server: master, provided: arm}\n"
+                           "  - {client: teleop, required: slave, server: slave, provided: arm}\n";
+  saw::deploy::ComponentRegistry r;
+  saw::testing::register_packages(r);
+  auto d = build(text, "cfg.yaml", r);
+  auto* t = d.find<saw::teleop::Teleoperation>("teleop");
+  auto* master = d.find<saw::drivers::SimHapticDevice>("master");
+  auto* slave = d.find<saw::drivers::SimHapticDevice>("slave");
+  ASSERT_TRUE(t != nullptr && master != nullptr && slave != nullptr);
+  d.start();
+  d.run_for(1.5);  // the hand at its lowest: the slave pressed into the wall
+  EXPECT_EQ(t->operating_state(), saw::OperatingStateValue::enabled) << t->fault_reason();
+  const double wall = slave->wall_force().z();
+  double sensed = -1;
+  const auto* sensed_read = t->provided("teleop")->find_command("sensed_force");
+  ASSERT_NE(sensed_read, nullptr) << "its read-out";
+  ASSERT_EQ(sensed_read->read(nullptr, &sensed), saw::Status::ok);
+  EXPECT_GT(wall, 0.5) << "the slave pushes into its wall";
+  EXPECT_NEAR(sensed, wall, 0.05) << "the law read the slave's measured_cf (a cycle earlier)";
+  EXPECT_NEAR(master->applied_force().z(), wall, 0.05) << "the operator feels it (feedback 1)";
+  d.stop();
 }
 
 TEST(Plugins, AWrongAbiVersionIsAFileErrorNamingBothVersions) {

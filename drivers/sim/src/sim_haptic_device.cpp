@@ -86,6 +86,8 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   columns_.measured_cv = contract_columns().measured_cv;
   columns_.measured_js = contract_columns().measured_js;
   crtk_interface().add_command_read("servo_force", columns_.servo_force);
+  // A force sensor at the tip: what the environment (the wall) pushes on it with.
+  crtk::provide(crtk_interface(), crtk::arm::measured_cf, st, &contact_);
   auto& sim = provide("sim");
   sim.add_command_write<ButtonCommand>("set_button",
                                        [this](const ButtonCommand& b) { set_button(b.button, b.pressed); });
@@ -158,6 +160,7 @@ void SimHapticDevice::integrate(double dt, const Eigen::Vector3d& servo,
   hand_force_ = to_vec3(hand);
   servo_force_ = to_vec3(servo);
   wall_force_ = to_vec3(contact);
+  contact_.force = wall_force_;
 }
 
 Eigen::Vector3d SimHapticDevice::wall(const Eigen::Vector3d& x, const Eigen::Vector3d& xd) const noexcept {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include "saw/crtk_arm.hpp"
 #include "saw/eigen.hpp"
@@ -25,7 +26,8 @@ constexpr TimeNs max_delay = 10'000'000'000;
 Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig config, const LawSpec& law)
     : Task(std::move(name), task),
       config_(config),
-      law_(law.make(LawContext{seconds(task) > 0 ? seconds(task) : 0.001})) {
+      law_(law.make(LawContext{seconds(task) > 0 ? seconds(task) : 0.001})),
+      inputs_(law_->make_inputs()) {
   auto& st = state_table();
   columns_.operating_state = st.add_column("operating_state", &state_);
   columns_.master_force = st.add_column("master_force", &master_force_);
@@ -62,6 +64,7 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
   slave_.side = FaultSide::slave;
   require_side(master_, "master");
   require_side(slave_, "slave");
+  inputs_.require(*required("master"), *required("slave"));
   crtk::require(
       *required("master"), crtk::arm::clutch, [this](const ButtonEvent& b) { clutched_ = b.pressed; },
       Need::optional);
@@ -206,6 +209,15 @@ void Teleoperation::raise_fault(FaultInfo why) noexcept {
 
 void Teleoperation::explain(const FaultInfo& why) noexcept {
   fault_reason_.clear();
+  if (stale_input_ != nullptr) {
+    const detail::InputSlot* in = std::exchange(stale_input_, nullptr);
+    if (why.code == FaultCode::input_stale || why.code == FaultCode::input_missing) {
+      fault_reason_.append("the law's input ")
+          .append(in->command())
+          .append(" (declared) has had no valid value");
+      return;
+    }
+  }
   if (why.code == FaultCode::deadline_missed) {
     // The FaultInfo says the periods and how late; a window's size only the words can.
     const auto& b = deadline_breach_;
@@ -462,6 +474,19 @@ void Teleoperation::account(const LawCommand& law) noexcept {
   if (2 * master_age_ >= config().period.count()) ++master_age_late_;
 }
 
+// The law's declared inputs: a required one without a valid value for stale_timeout is stale,
+// as a device's sample would be (named in the FAULT's words).
+bool Teleoperation::read_declared(FaultInfo& why) noexcept {
+  const auto stale = static_cast<TimeNs>(config_.stale_timeout * 1e9);
+  const detail::InputSlot* late = inputs_.read(now(), stale);
+  if (late == nullptr) return true;
+  stale_input_ = late;
+  const FaultSide side = late->side() == LawSide::master ? FaultSide::master : FaultSide::slave;
+  why = fault_on(side, late->last_good < 0 ? FaultCode::input_missing : FaultCode::input_stale,
+                 Status::no_data, inputs_.age(*late, now()));
+  return false;
+}
+
 void Teleoperation::on_input_failure(const FaultInfo& why) noexcept {
   // A stopped or silent device: zero force on both sides, and stay faulted until re-enabled.
   // At start-up, inputs may simply not be published yet: wait up to startup_timeout for them.
@@ -535,13 +560,15 @@ bool Teleoperation::waiting_for_devices() noexcept {
 void Teleoperation::cycle_body() noexcept {
   if (start_time_ < 0) start_time_ = now();
   FaultInfo why{};
-  if (!read_side(master_, why) || !read_side(slave_, why)) return on_input_failure(why);
+  if (!read_side(master_, why) || !read_side(slave_, why) || !read_declared(why))
+    return on_input_failure(why);
   inputs_seen_ = true;
   read_grip(master_);
   read_grip(slave_);
   LawInputs in{master_.last, slave_.last, seconds(config()), master_.energy};
   in.master_wave = master_.wave_value;
   in.master_wave_fresh = master_.wave_fresh;
+  in.declared = inputs_.view();
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const bool busy = waiting_for_devices();
   if (slave_held()) engage_pending_ = true;

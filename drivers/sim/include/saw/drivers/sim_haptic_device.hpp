@@ -116,6 +116,7 @@ class SimHapticDevice : public Device {
 
   // State-table sources.
   Vec3 hand_force_{}, servo_force_{}, wall_force_{};
+  Wrench contact_{};  // measured_cf: the wall's force on the tip, as a force sensor there reads it
   double servo_work_ = 0, hand_work_ = 0, wall_work_ = 0;
   std::uint64_t rejected_column_ = 0;
   Columns columns_;

@@ -11,6 +11,7 @@
 
 #include "saw/clock.hpp"
 #include "saw/teleop/fault_info.hpp"
+#include "saw/teleop/law_input.hpp"
 
 namespace saw::teleop {
 
@@ -37,6 +38,9 @@ struct LawInputs {
   // this cycle (a cycle with none is a zero wave: a lost packet carries no energy).
   Eigen::Vector3d master_wave = Eigen::Vector3d::Zero();
   bool master_wave_fresh = false;
+  // What the law declared it needs besides these (declared_inputs), in declaration order:
+  // in.declared.get<Wrench>(0) — each checked valid, the last good one while a read fails.
+  DeclaredInputs declared{};
 };
 
 // What a law answers: the forces to send, and what it shows of itself. The task checks the
@@ -98,6 +102,9 @@ struct LawContext {
 //     static constexpr bool gives_slave_goal = true;  // sets LawCommand::slave_goal: it can drive
 //                                              // a slave that follows a pose (slave_command: servo_cp)
 //     static constexpr bool gives_no_force = true;  // and only such a slave
+//     static constexpr auto declared_inputs = std::tuple{Input<Wrench>{LawSide::slave, "measured_cf"}};
+//                                              // read commands of either device it needs, by name
+//                                              // and type (law_input.hpp): no task edit for a new one
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {

@@ -39,6 +39,9 @@ class LawModel {
   // For a law that uses_waves: its wave impedance b (N·s/m), which the master's port must share
   // (the task refuses to start otherwise); 0 for other laws.
   virtual double wave_impedance() const noexcept = 0;
+  // Setup: one slot per declared input (law_input.hpp), in declaration order, for the task to
+  // require on the named side and read every cycle.
+  virtual std::vector<std::unique_ptr<detail::InputSlot>> make_inputs() const = 0;
   // Setup: each declared setting as a latched state column and read command `name`, and (when
   // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`. Each declared
   // read-out as a state column and read command.
@@ -108,6 +111,12 @@ class LawHolder final : public LawModel {
     }
     return 0;
   }
+  std::vector<std::unique_ptr<detail::InputSlot>> make_inputs() const override {
+    std::vector<std::unique_ptr<detail::InputSlot>> slots;
+    if constexpr (requires { L::declared_inputs; })
+      std::apply([&](const auto&... in) { (slots.push_back(make_slot(in)), ...); }, L::declared_inputs);
+    return slots;
+  }
   void provide_settings(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected) override {
     std::apply([&](const auto&... s) { (provide(p, table, rejected, s), ...); }, L::declared_settings);
     if constexpr (requires { L::declared_readouts; })
@@ -126,6 +135,10 @@ class LawHolder final : public LawModel {
   L& law() noexcept { return law_; }
 
  private:
+  template <class T>
+  static std::unique_ptr<InputSlot> make_slot(const Input<T>& in) {
+    return std::make_unique<TypedInputSlot<T>>(in);
+  }
   template <class T>
   static void describe(ComponentDescription& d, const Setting<typename L::Settings, T>& s) noexcept {
     if (d.setting_count >= ComponentDescription::max_settings) return;

@@ -168,6 +168,7 @@ class Teleoperation : public Task {
   // Also prepares wave_port_text_ for the same check made every cycle (read_side).
   void check_wave_port();
   bool read_side(Side& s, FaultInfo& why) noexcept;
+  bool read_declared(FaultInfo& why) noexcept;
   // True once after the slave's commands stopped (its watchdog tripped): it holds where it is.
   bool slave_held() noexcept;
   // Fills fault_reason_ for a fault a FaultInfo cannot say all of (clears it otherwise).
@@ -191,6 +192,8 @@ class Teleoperation : public Task {
 
   TeleopConfig config_;
   std::unique_ptr<LawModel> law_;
+  InputSet inputs_;                                 // what the law declared it reads besides the sides
+  const detail::InputSlot* stale_input_ = nullptr;  // the declared input the last FAULT was for
   bool clutched_ = false, ratcheting_ = false;
   bool deadline_breached_ = false;
   DeadlineBreach deadline_breach_{};

@@ -37,6 +37,7 @@ class FakeDevice : public Component {
     clutch_ = &crtk::provide(p, arm::clutch);
     crtk::provide(p, arm::operating_state, state_table(), &state_);
     p.add_command_read("watchdog_trips", state_table().add_column("watchdog_trips", &trips_));
+    crtk::provide(p, arm::measured_cf, state_table(), &wrench_);
   }
   // Publishes the current position and velocity as a row stamped t (what a device cycle does).
   void publish(TimeNs t) {
@@ -48,6 +49,7 @@ class FakeDevice : public Component {
     grip_js_.size = std::isnan(grip) ? 0 : 1;
     grip_js_.position[0] = std::isnan(grip) ? 0 : grip;
     trips_ = watchdog_trips;
+    wrench_ = wrench;
     state_table().advance(t);
   }
   void press_clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
@@ -63,6 +65,7 @@ class FakeDevice : public Component {
   double jaw_goal = std::nan("");  // the last jaw_servo_jp
   int jaw_goals = 0;
   std::uint64_t watchdog_trips = 0;  // a device's: how often its commands stopped
+  Wrench wrench{};                   // measured_cf (a force sensor's)
 
  private:
   Pose pose_;
@@ -70,6 +73,7 @@ class FakeDevice : public Component {
   JointState grip_js_{};
   OperatingState state_{OperatingStateValue::enabled, true, false};
   std::uint64_t trips_ = 0;
+  Wrench wrench_{};
   EventWrite<ButtonEvent>* clutch_;
 };
 
