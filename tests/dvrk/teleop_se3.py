@@ -9,7 +9,9 @@ on this test's DDS domain): the `surgical` law on the MTM's read-only import and
 (b) the console's clutch: no goal while pressed, and at the release no step in the commanded
     pose (the largest step of the commanded pose at engagement and release is printed);
 (c) a PSM turned 40° from the MTM: the law does not engage (`aligned` 0, `misalignment` printed)
-    and the PSM is not moved.
+    and the PSM is not moved;
+(d) the console's operator_present (the shipped file says needs_operator): no goal moves before
+    the operator is present, none while away, and no step at each return.
 
 Each check is printed; the exit code is 1 if any failed.
 
@@ -41,6 +43,16 @@ def start(saw_rt, work, tag, domain, name):
     return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
 
 
+def when_ready(psm, timeout=30.0):
+    """Waits (bounded) until the PSM is enabled, homed and idle: the gateway's readers of the
+    console have matched by then (a press before that is not seen: the pedals are not latched)."""
+    deadline = time.monotonic() + timeout
+    while psm.operating_state() != ("ENABLED", True, False) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return check(psm.operating_state() == ("ENABLED", True, False),
+                 f"the PSM is enabled and homed: {psm.operating_state()}")
+
+
 def goals(sim, since=0.0):
     return [c for c in sim.commands("servo_cp", since=since)]
 
@@ -65,6 +77,8 @@ def follow_and_clutch(saw_rt, work, tag, domain):
             S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
         rt = start(saw_rt, work, tag, domain, "follow")
         try:
+            when_ready(psm)
+            mtm.press("operator_present")
             first = psm.wait_command("servo_cp", timeout=30.0)
             if not check(first is not None, "the teleoperation drives the simulated PSM (a servo_cp arrived)"):
                 print(rt.text())
@@ -120,7 +134,7 @@ def follow_and_clutch(saw_rt, work, tag, domain):
         check(n <= 2 * t, f"the PSM refused {n} of the law's goals, its commands stopped {t} times")
         rows = [r for r in csv.DictReader(open(os.path.join(work, "follow.csv")))
                 if r[f"psm_teleop{tag}.operating_state"] == "ENABLED" and r[f"psm_teleop{tag}.aligned"] == "1"
-                and r[f"psm_teleop{tag}.clutched"] == "0"]
+                and r[f"psm_teleop{tag}.clutched"] == "0" and r[f"psm_teleop{tag}.operator_present"] == "1"]
         if check(len(rows) > 1000, f"the record has the law engaged ({len(rows)} cycles)"):
             e = sorted(float(r[f"psm_teleop{tag}.tracking_error"]) for r in rows)
             o = sorted(float(r[f"psm_teleop{tag}.orientation_error"]) for r in rows)
@@ -142,6 +156,8 @@ def misaligned(saw_rt, work, tag, domain):
         mtm.set_hand((0.03, 0.5, (1.0, 0.0, 0.0), 0.0))  # moving, but turned away from the PSM
         rt = start(saw_rt, work, tag, domain, "misaligned")
         try:
+            when_ready(psm)
+            mtm.press("operator_present")
             if not check(psm.wait_command("servo_cp", timeout=30.0) is not None, "the PSM gets goals (held)"):
                 print(rt.text())
                 return
@@ -160,12 +176,51 @@ def misaligned(saw_rt, work, tag, domain):
               f"not engaged, the operator told the master is {off[-1]:.1f}° off" if off else "no ENABLED row")
 
 
+def operator_present(saw_rt, work, tag, domain):
+    print("-- (d) the operator's presence")
+    with S.SimArm("MTML", domain, kind="mtm", rate=500.0, console=True, hand=HAND) as mtm, \
+            S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
+        rt = start(saw_rt, work, tag, domain, "operator")
+        try:
+            # Once the PSM is enabled, homed and idle, the law could drive it: give it a while.
+            when_ready(psm)
+            time.sleep(1.0)
+            early = goals(psm)
+            xs = [position(c)[0] for c in early]
+            check(not xs or max(xs) - min(xs) < 1e-9, f"no operator: no goal moves ({len(early)} held goals)")
+            steps = []
+            for k in range(2):
+                t_in = time.monotonic()
+                last = goals(psm)[-1] if goals(psm) else None
+                mtm.press("operator_present")
+                time.sleep(1.5)
+                after = goals(psm, since=t_in)
+                moved = [position(c)[0] for c in after]
+                check(len(moved) > 100 and max(moved) - min(moved) > 0.002,
+                      f"present ({k + 1}): the PSM follows ({len(after)} goals)")
+                if last is not None and after:
+                    steps.append(math.dist(position(after[0]), position(last)))
+                t_out = time.monotonic()
+                mtm.release("operator_present")
+                time.sleep(0.5)
+                away = goals(psm, since=t_out + 0.1)
+                check(not away, f"away ({k + 1}): no goal ({len(away)} sent)")
+            if steps:
+                print(f"figure: largest commanded-pose step at the operator's return: {max(steps) * 1000:.3f} mm")
+                check(max(steps) < 0.001, f"no step at the operator's return ({max(steps) * 1000:.3f} mm)")
+            early = rt.faults_before(time.monotonic())
+            check(not early, f"nothing faulted: {early[:2]}")
+        finally:
+            rt.stop()
+
+
 def main(saw_rt):
     tag = str(os.getpid())
     domain = dds_domain()
     work = tempfile.mkdtemp()
     follow_and_clutch(saw_rt, work, tag, domain)
     misaligned(saw_rt, work, tag, domain)
+    operator_present(saw_rt, work, tag, domain)
     return exit_code()
 
 

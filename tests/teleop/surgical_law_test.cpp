@@ -132,6 +132,35 @@ TEST(SurgicalLaw, AClutchDecouplesAndTheReleaseChecksTheOrientationAgain) {
       << "re-engaged from where the master was when it aligned";
 }
 
+// With needs_operator (the dVRK's head sensor): nothing is driven until the operator is present,
+// nothing while away, and each return engages afresh — no step in the commanded pose.
+TEST(SurgicalLaw, TheOperatorsPresenceGatesTeleoperationWithoutAStep) {
+  saw::teleop::TeleopConfig c = follows_pose();
+  c.needs_operator = true;
+  Rig rig(c, saw::teleop::law_spec<SurgicalLaw>(SurgicalLaw::Settings{}));
+  rig.step(3);
+  rig.master.position[0] += 0.01;
+  rig.step(10);
+  EXPECT_EQ(rig.slave.goals, 0) << "no operator yet: nothing driven";
+  rig.master.press_operator_present(true);
+  rig.step(3);
+  EXPECT_GT(rig.slave.goals, 0);
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "engaged where the slave is";
+  rig.master.position[0] += 0.01;
+  rig.step(20);
+  EXPECT_NEAR(rig.slave.goal.position[0], rig.slave.position[0] + 0.002, 1e-12) << "then follows, scaled";
+  rig.slave.position = rig.slave.goal.position;
+  rig.master.press_operator_present(false);
+  rig.step(1);
+  const int before = rig.slave.goals;
+  rig.master.position[0] += 0.05;  // the hand moves away meanwhile
+  rig.step(5);
+  EXPECT_EQ(rig.slave.goals, before) << "the operator away: nothing";
+  rig.master.press_operator_present(true);
+  rig.step(3);
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "back: no step";
+}
+
 // A master stream in bursts (a sample held for 10 ms, then a jump): the goal moves toward it no
 // faster than the law's speeds, which the slave's own step checks (a little faster) all take.
 TEST(SurgicalLaw, TheGoalMovesNoFasterThanItsSpeedsWhenTheMasterJumps) {

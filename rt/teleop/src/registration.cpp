@@ -32,6 +32,7 @@ TeleopSpec parse_teleop(const ComponentContext& ctx, Params& p) {
   c.device_timeout = deploy::seconds_in_range(p, "device_timeout", 5s, 0.001, 600);
   c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.slave_servo_cp = p.get_enum<bool>("slave_command", {{"servo_cf", false}, {"servo_cp", true}}, false);
+  c.needs_operator = p.get_or<bool>("needs_operator", false);
   if (c.slave_servo_cp && !spec.law.make(LawContext{})->gives_slave_goal())
     p.fail_at("slave_command", "law '" + law +
                                    "' gives the slave a force only; servo_cp needs a law that gives a "

@@ -39,6 +39,7 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
   columns_.tracking_error = st.add_column("tracking_error", &tracking_error_);
   columns_.ratcheting = st.add_column("ratcheting", &ratcheting_);
   columns_.clutched = st.add_column("clutched", &clutched_);
+  columns_.operator_present = st.add_column("operator_present", &operator_present_);
   columns_.fault = st.add_column("fault", &fault_);
   columns_.rejected_inputs = st.add_column("rejected_inputs", &rejected_inputs_);
   columns_.offset_errors = st.add_column("offset_errors", &offset_errors_);
@@ -68,6 +69,10 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
   crtk::require(
       *required("master"), crtk::arm::clutch, [this](const ButtonEvent& b) { clutched_ = b.pressed; },
       Need::optional);
+  crtk::require(
+      *required("master"), crtk::arm::operator_present,
+      [this](const ButtonEvent& b) { operator_present_ = b.pressed; },
+      config_.needs_operator ? Need::required : Need::optional);
   state_.state = config_.start_enabled ? OperatingStateValue::enabled : OperatingStateValue::disabled;
 
   ComponentDescription::set(description_.kind, "teleoperation");
@@ -575,7 +580,8 @@ void Teleoperation::cycle_body() noexcept {
   // The master port did not say its b this cycle (its input is held meanwhile): no wave is made
   // for a port whose b is not known to be the law's, nor a force from its last one.
   const bool b_unknown = master_.impedance_status != Status::ok;
-  if (state_.state != OperatingStateValue::enabled || clutched_ || busy || b_unknown) {
+  const bool absent = config_.needs_operator && !operator_present_;
+  if (state_.state != OperatingStateValue::enabled || clutched_ || absent || busy || b_unknown) {
     // Forces off; the law holds, so that enabling or releasing the clutch cannot jump.
     law_->hold(in);
     // A device's first position after it was busy may jump (a homed Falcon's counts become

@@ -32,6 +32,10 @@ struct TeleopConfig {
   // slave's orientation when the law engaged; nothing is sent to it while the law holds (its
   // device's command watchdog then holds it). Needs a law that gives_slave_goal.
   bool slave_servo_cp = false;
+  // Drive only while the master's operator_present is pressed (a console's head sensor or pedal):
+  // absent, the task holds as for the clutch, and engages afresh (no step) on the return. The
+  // master must then provide the operator_present event.
+  bool needs_operator = false;
 };
 
 // What a run of the task comes to (its "summary" column, ColumnUse::summary): state and why,
@@ -54,7 +58,8 @@ struct TeleopSummary {
 std::string to_string(const TeleopSummary& s);
 
 // Required interfaces "master" and "slave" (CRTK: measured_cp, measured_cv, servo_cf — optional
-// on the master, which may be read-only; optional clutch event on the master; optional
+// on the master, which may be read-only; optional clutch event on the master (and its
+// operator_present event, required with needs_operator); optional
 // gripper_measured_js on the master, jaw_measured_js and jaw_servo_jp on the slave; optional
 // source_time and delay, given by a DelayTask; optional operating_state). Provided interface
 // "teleop": state_command; its law's settings as set_<name> commands and as read commands
@@ -116,7 +121,7 @@ class Teleoperation : public Task {
     StateColumn<OperatingState> operating_state;
     StateColumn<Vec3> master_force, slave_force, master_error, slave_error, slave_offset;
     StateColumn<double> tracking_error;
-    StateColumn<bool> ratcheting, clutched;
+    StateColumn<bool> ratcheting, clutched, operator_present;
     StateColumn<FaultInfo> fault;
     StateColumn<std::uint64_t> rejected_inputs, offset_errors;
     StateColumn<TeleopSummary> summary;
@@ -195,6 +200,7 @@ class Teleoperation : public Task {
   InputSet inputs_;                                 // what the law declared it reads besides the sides
   const detail::InputSlot* stale_input_ = nullptr;  // the declared input the last FAULT was for
   bool clutched_ = false, ratcheting_ = false;
+  bool operator_present_ = false;  // the master's operator_present event, last pressed or released
   bool deadline_breached_ = false;
   DeadlineBreach deadline_breach_{};
   Quat held_orientation_{0, 0, 0, 1};  // the slave's at engagement (slave_servo_cp)

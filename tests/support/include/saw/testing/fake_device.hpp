@@ -35,6 +35,7 @@ class FakeDevice : public Component {
       ++jaw_goals;
     });
     clutch_ = &crtk::provide(p, arm::clutch);
+    operator_ = &crtk::provide(p, arm::operator_present);
     crtk::provide(p, arm::operating_state, state_table(), &state_);
     p.add_command_read("watchdog_trips", state_table().add_column("watchdog_trips", &trips_));
     crtk::provide(p, arm::measured_cf, state_table(), &wrench_);
@@ -53,6 +54,7 @@ class FakeDevice : public Component {
     state_table().advance(t);
   }
   void press_clutch(bool pressed) { (void)(*clutch_)(ButtonEvent{pressed}); }
+  void press_operator_present(bool pressed) { (void)(*operator_)(ButtonEvent{pressed}); }
 
   Vec3 position{}, velocity{}, force{};
   Quat orientation{0, 0, 0, 1};
@@ -75,6 +77,7 @@ class FakeDevice : public Component {
   std::uint64_t trips_ = 0;
   Wrench wrench_{};
   EventWrite<ButtonEvent>* clutch_;
+  EventWrite<ButtonEvent>* operator_;
 };
 
 }  // namespace saw::testing
