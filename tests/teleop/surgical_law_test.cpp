@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "saw/teleop/laws/surgical.hpp"
+#include "saw/testing/stepper.hpp"
 #include "teleop_support.hpp"
 
 namespace {
@@ -63,6 +64,52 @@ TEST(SurgicalLaw, TranslationIsScaledFromEngagementInTheCameraFrameWithoutAStep)
   EXPECT_NEAR(rig.slave.goal.position[0], -0.02, 1e-12);
   EXPECT_NEAR(rig.slave.goal.position[1], 0.03 + 0.002, 1e-12) << "1 cm along the master's x: 2 mm along y";
   EXPECT_EQ(rig.slave.commands, 0) << "a pose only, never a force";
+}
+
+// The camera frame from an endoscope arm: a third device on the task's "camera" interface (the
+// law's declared input), its orientation taken at each engagement — a camera moved while
+// engaged makes no step; the next engagement (a clutch's release) uses where it is then.
+TEST(SurgicalLaw, TheCameraFrameIsTheEndoscopesOrientationTakenAtEachEngagement) {
+  saw::testing::FakeDevice master{"master"}, slave{"slave"}, endoscope{"endoscope"};
+  SurgicalLaw::Settings s;
+  s.scale = 0.2;
+  s.camera_rpy = {0, 0, -90};  // not used: the endoscope is connected
+  saw::teleop::Teleoperation teleop("teleop", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0),
+                                    follows_pose(), saw::teleop::law_spec<SurgicalLaw>(s));
+  saw::Manager manager;
+  for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &endoscope, &teleop})
+    manager.add(*c);
+  manager.connect("teleop", "master", "master", "arm");
+  manager.connect("teleop", "slave", "slave", "arm");
+  manager.connect("teleop", "camera", "endoscope", "arm");
+  manager.start_stepped();
+  saw::testing::Stepper stepper{manager};
+  const auto step = [&](int n) {
+    for (int i = 0; i < n; ++i) stepper({&master, &slave, &endoscope});
+  };
+  endoscope.orientation = about_z(90);  // the master's x is the slave's y
+  master.orientation = about_z(-90);
+  step(3);
+  master.position[0] += 0.01;
+  step(20);
+  EXPECT_NEAR(slave.goal.position[0], 0.0, 1e-12);
+  EXPECT_NEAR(slave.goal.position[1], 0.002, 1e-12) << "through the endoscope's frame, not camera_rpy's";
+  endoscope.orientation = about_z(0);  // the camera moved while engaged
+  const saw::Vec3 before = slave.goal.position;
+  step(2);
+  EXPECT_LT(dist(slave.goal.position, before), 1e-12) << "no step: C was taken at engagement";
+  slave.position = slave.goal.position;
+  slave.orientation = slave.goal.orientation;
+  master.press_clutch(true);
+  step(2);
+  master.orientation = about_z(0);  // aligned again through the new camera frame
+  master.press_clutch(false);
+  step(3);
+  master.position[0] += 0.01;
+  step(20);
+  EXPECT_NEAR(slave.goal.position[0], before[0] + 0.002, 1e-12) << "the new frame from the next engagement";
+  EXPECT_NEAR(slave.goal.position[1], before[1], 1e-12);
+  manager.stop();
 }
 
 TEST(SurgicalLaw, OrientationFollowsTheMasterOnceAligned) {

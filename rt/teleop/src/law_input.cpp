@@ -1,11 +1,17 @@
 #include "saw/teleop/law_input.hpp"
 
+#include <stdexcept>
+
 namespace saw::teleop {
 
-void InputSet::require(RequiredInterface& master, RequiredInterface& slave) {
-  for (auto& s : slots_)
-    (s->side() == LawSide::master ? master : slave)
+void InputSet::require(const std::function<RequiredInterface&(const std::string&)>& interface_of) {
+  for (auto& s : slots_) {
+    if (s->side() == LawSide::other && s->interface_name().empty())
+      throw std::invalid_argument("the law's input " + s->command() +
+                                  " names no interface (Input::interface)");
+    interface_of(s->interface_name())
         .add_function(s->command(), s->function(), s->required() ? Need::required : Need::optional);
+  }
 }
 
 const detail::InputSlot* InputSet::read(TimeNs now, TimeNs stale) noexcept {

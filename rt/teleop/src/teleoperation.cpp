@@ -65,7 +65,10 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
   slave_.side = FaultSide::slave;
   require_side(master_, "master");
   require_side(slave_, "slave");
-  inputs_.require(*required("master"), *required("slave"));
+  inputs_.require([this](const std::string& iface) -> RequiredInterface& {
+    RequiredInterface* r = required(iface);
+    return r != nullptr ? *r : require(iface);
+  });
   crtk::require(
       *required("master"), crtk::arm::clutch, [this](const ButtonEvent& b) { clutched_ = b.pressed; },
       Need::optional);
@@ -486,7 +489,9 @@ bool Teleoperation::read_declared(FaultInfo& why) noexcept {
   const detail::InputSlot* late = inputs_.read(now(), stale);
   if (late == nullptr) return true;
   stale_input_ = late;
-  const FaultSide side = late->side() == LawSide::master ? FaultSide::master : FaultSide::slave;
+  const FaultSide side = late->side() == LawSide::master  ? FaultSide::master
+                         : late->side() == LawSide::slave ? FaultSide::slave
+                                                          : FaultSide::none;
   why = fault_on(side, late->last_good < 0 ? FaultCode::input_missing : FaultCode::input_stale,
                  Status::no_data, inputs_.age(*late, now()));
   return false;

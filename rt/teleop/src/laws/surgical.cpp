@@ -13,7 +13,11 @@ constexpr double degrees = 180.0 / std::numbers::pi;
 
 SurgicalLaw::SurgicalLaw(const Settings& s, const LawContext& c) : s_(s), period_(c.period) {}
 
-Eigen::Quaterniond SurgicalLaw::camera() const noexcept {
+Eigen::Quaterniond SurgicalLaw::camera(const LawInputs& in) const noexcept {
+  if (const Pose* endoscope = in.declared.get<Pose>(0))
+    return Eigen::Quaterniond(endoscope->orientation[3], endoscope->orientation[0], endoscope->orientation[1],
+                              endoscope->orientation[2])
+        .normalized();
   const double r = s_.camera_rpy[0] / degrees, p = s_.camera_rpy[1] / degrees, y = s_.camera_rpy[2] / degrees;
   return Eigen::Quaterniond(Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) *
                             Eigen::AngleAxisd(p, Eigen::Vector3d::UnitY()) *
@@ -32,12 +36,14 @@ void SurgicalLaw::reset(const LawInputs& in) noexcept {
 }
 
 bool SurgicalLaw::engage(const LawInputs& in) noexcept {
-  const Eigen::Quaterniond seen = camera() * in.master.orientation;
+  const Eigen::Quaterniond c = camera(in);
+  const Eigen::Quaterniond seen = c * in.master.orientation;
   misalignment_ = s_.orientation ? seen.angularDistance(q_s0_) * degrees : 0.0;
   engaged_ = misalignment_ <= s_.align_tolerance;
   aligned_ = engaged_ ? 1.0 : 0.0;
   if (!engaged_) return false;
   p_m0_ = in.master.position;
+  c_ = c;
   // What is left of the misalignment is kept as an offset: the goal starts at q_s0.
   q_off_ = seen.conjugate() * q_s0_;
   return true;
@@ -65,16 +71,15 @@ LawCommand SurgicalLaw::step(const LawInputs& in) noexcept {
   if (!engaged_ && !engage(in)) {
     approach(p_s0_, q_s0_);
   } else {
-    const Eigen::Quaterniond c = camera();
-    approach(p_s0_ + s_.scale * (c * (in.master.position - p_m0_)),
-             s_.orientation ? (c * in.master.orientation * q_off_).normalized() : q_s0_);
+    approach(p_s0_ + s_.scale * (c_ * (in.master.position - p_m0_)),
+             s_.orientation ? (c_ * in.master.orientation * q_off_).normalized() : q_s0_);
     out.slave_jaw = jaw_goal(in);
   }
   out.slave_goal = p_goal_;
   out.slave_goal_orientation = q_goal_;
   out.slave_error = in.slave.position - out.slave_goal;
   out.master_error = -out.slave_error / s_.scale;
-  out.slave_offset = p_s0_ - s_.scale * (camera() * p_m0_);
+  out.slave_offset = p_s0_ - s_.scale * (c_ * p_m0_);
   orientation_error_ = in.slave.orientation.angularDistance(out.slave_goal_orientation) * degrees;
   out.finite = out.slave_goal.allFinite() && out.slave_goal_orientation.coeffs().allFinite() &&
                out.slave_error.allFinite();

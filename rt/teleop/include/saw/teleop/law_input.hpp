@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -16,7 +17,9 @@
 
 namespace saw::teleop {
 
-enum class LawSide : std::uint8_t { master, slave };
+// Whose read command: the master's or the slave's device, or a third one (an endoscope arm) the
+// task requires by the interface name the input gives, connected or not as the deployment says.
+enum class LawSide : std::uint8_t { master, slave, other };
 
 // Declared by a law (static constexpr auto declared_inputs = std::tuple{Input<Wrench>{...}, ...}):
 // the task requires `command` (a read command of type T) on that side's interface, reads it every
@@ -29,6 +32,7 @@ struct Input {
   std::string_view command;
   bool required = true;
   std::string_view help = "";
+  std::string_view interface = "";  // LawSide::other: the task's required interface (e.g. "camera")
 };
 
 namespace detail {
@@ -36,14 +40,18 @@ namespace detail {
 // One declared input as the task holds it: its function, and the last valid value it read.
 class InputSlot {
  public:
-  InputSlot(LawSide side, std::string_view command, bool required)
-      : side_(side), command_(command), required_(required) {}
+  InputSlot(LawSide side, std::string_view command, bool required, std::string_view interface)
+      : side_(side), command_(command), interface_(interface), required_(required) {}
   virtual ~InputSlot() = default;
   InputSlot(const InputSlot&) = delete;
   InputSlot& operator=(const InputSlot&) = delete;
 
   LawSide side() const noexcept { return side_; }
   const std::string& command() const noexcept { return command_; }
+  // The task's required interface it is read through: "master", "slave", or the input's own.
+  std::string interface_name() const {
+    return side_ == LawSide::master ? "master" : side_ == LawSide::slave ? "slave" : interface_;
+  }
   bool required() const noexcept { return required_; }
   virtual FunctionBase& function() noexcept = 0;
   virtual TypeInfo type() const noexcept = 0;
@@ -57,14 +65,14 @@ class InputSlot {
 
  private:
   LawSide side_;
-  std::string command_;
+  std::string command_, interface_;
   bool required_;
 };
 
 template <Plain T>
 class TypedInputSlot final : public InputSlot {
  public:
-  explicit TypedInputSlot(const Input<T>& in) : InputSlot(in.side, in.command, in.required) {}
+  explicit TypedInputSlot(const Input<T>& in) : InputSlot(in.side, in.command, in.required, in.interface) {}
   FunctionBase& function() noexcept override { return fn_; }
   TypeInfo type() const noexcept override { return type_info_of<T>(); }
   bool read() noexcept override {
@@ -91,8 +99,9 @@ class InputSet {
  public:
   InputSet() = default;
   explicit InputSet(std::vector<std::unique_ptr<detail::InputSlot>> slots) : slots_(std::move(slots)) {}
-  // Setup: each input's function on its side's interface (required or optional, as declared).
-  void require(RequiredInterface& master, RequiredInterface& slave);
+  // Setup: each input's function on its interface (required or optional, as declared), which
+  // `interface_of` finds or makes by name ("master", "slave", or an input's own).
+  void require(const std::function<RequiredInterface&(const std::string&)>& interface_of);
   // One cycle (RT): reads each. The first required input without a valid value for longer than
   // `stale` ns (since its last one, or since the first read), or nullptr.
   const detail::InputSlot* read(TimeNs now, TimeNs stale) noexcept;

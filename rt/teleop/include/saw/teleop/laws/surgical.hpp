@@ -15,8 +15,10 @@ namespace saw::teleop {
 
 // The reference is the dVRK's PSM teleoperation (its documentation and mtsTeleOperationPSM's
 // behaviour; written here from those, not copied). With C the camera's rotation (the frame the
-// operator sees the instrument in), at each engagement (enable, clutch release, a device idle
-// again) the law takes the master's position p_m0 and the slave's p_s0, q_s0, and then:
+// operator sees the instrument in: an endoscope's measured_cp on the task's "camera" interface,
+// else camera_rpy; taken at each engagement, so a camera moved meanwhile makes no step), at each engagement
+// (enable, clutch release, a device idle again) the law takes the master's position p_m0 and the slave's
+// p_s0, q_s0, and then:
 //   translation  p_goal = p_s0 + scale · C · (p_m − p_m0)       (incremental: no step)
 //   orientation  q_goal = C · q_m · q_off, q_off = (C · q_m0)⁻¹ · q_s0  (absolute but for q_off,
 //                 which is no more than align_tolerance: no step either)
@@ -74,6 +76,12 @@ class SurgicalLaw {
                                 "the goal's fastest turn (under the slave's max_angular_speed)"},
   };
 
+  // The endoscope: its measured_cp (orientation in the frame of the slave's poses) is the camera
+  // frame when the deployment connects a device to the task's "camera" interface; else camera_rpy.
+  static constexpr auto declared_inputs = std::tuple{
+      Input<Pose>{LawSide::other, "measured_cp", false,
+                  "the endoscope's pose, in the frame of the slave's: the camera frame", "camera"}};
+
   SurgicalLaw(const Settings& s, const LawContext& c);
   Settings& settings() noexcept { return s_; }
 
@@ -95,7 +103,8 @@ class SurgicalLaw {
   };
 
  private:
-  Eigen::Quaterniond camera() const noexcept;
+  // C: the endoscope's orientation when one is connected and has a pose, else camera_rpy.
+  Eigen::Quaterniond camera(const LawInputs& in) const noexcept;
   // Takes the engagement's poses if the master is aligned; true if it is.
   bool engage(const LawInputs& in) noexcept;
   double jaw_goal(const LawInputs& in) noexcept;
@@ -105,6 +114,7 @@ class SurgicalLaw {
   Settings s_;
   double period_ = 0.001;
   bool engaged_ = false;
+  Eigen::Quaterniond c_ = Eigen::Quaterniond::Identity();  // C, taken at each engagement
   Eigen::Vector3d p_m0_ = Eigen::Vector3d::Zero(), p_s0_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_s0_ = Eigen::Quaterniond::Identity(), q_off_ = Eigen::Quaterniond::Identity();
   double jaw_ = std::numeric_limits<double>::quiet_NaN();  // the last jaw goal sent
