@@ -30,7 +30,7 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "interop"))
 import sim_arm as S  # noqa: E402  (first: it sets CYCLONEDDS_URI before cyclonedds is loaded)
 from harness import check, dds_domain, exit_code, wait_for  # noqa: E402
-from saw_run import SawRt  # noqa: E402
+from saw_run import SawRt, arm_ready  # noqa: E402
 from sawdds import Client, msgs  # noqa: E402
 
 JOINTS = "{names: [x, y, z, rx, ry, rz], min: [-0.2, -0.2, -0.3, -3.2, -3.2, -3.2], " \
@@ -74,15 +74,6 @@ def start(saw_rt, work, name, text):
     return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
 
 
-def ready(sim, timeout=30.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if sim.operating_state() == ("ENABLED", True, False):
-            return True
-        time.sleep(0.02)
-    return False
-
-
 def pose(p):
     return msgs.PoseStamped(pose=msgs.Pose(position=msgs.Point(x=p[0], y=p[1], z=p[2]),
                                            orientation=msgs.Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)))
@@ -108,7 +99,7 @@ def enabled_by(saw_rt, work, name, text, sim, what):
     with SIGTERM at the end (a killed one stays killed)."""
     rt = start(saw_rt, work, name, text)
     try:
-        ok = check(ready(sim), f"saw-rt enabled and homed the simulated {what}")
+        ok = check(arm_ready(sim), f"saw-rt enabled and homed the simulated {what}")
         if not ok:
             print(rt.text())
         yield rt if ok else None

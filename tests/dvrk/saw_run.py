@@ -59,3 +59,14 @@ class SawRt:
             self.p.wait()
         self.reader.join(timeout=5)
         return self.p.returncode
+
+
+def arm_ready(sim, timeout=30.0):
+    """True once the simulated arm is ENABLED, homed and idle (what saw-rt's device waits for),
+    False after `timeout` s: a bounded poll."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if sim.operating_state() == ("ENABLED", True, False):
+            return True
+        time.sleep(0.02)
+    return False

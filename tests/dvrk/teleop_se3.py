@@ -30,7 +30,7 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "interop"))
 import sim_arm as S  # noqa: E402  (first: it sets CYCLONEDDS_URI before cyclonedds is loaded)
 from harness import check, dds_domain, exit_code  # noqa: E402
-from saw_run import SawRt, shipped  # noqa: E402
+from saw_run import SawRt, arm_ready, shipped  # noqa: E402
 
 NAMES = ("psm1", "psm_teleop", "PSM1_dds", "MTML_dds", "dvrk-mtm-psm")
 HAND = (0.03, 0.5, (1.0, 0.0, 0.0), math.radians(20))
@@ -43,14 +43,10 @@ def start(saw_rt, work, tag, domain, name):
     return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
 
 
-def when_ready(psm, timeout=30.0):
-    """Waits (bounded) until the PSM is enabled, homed and idle: the gateway's readers of the
-    console have matched by then (a press before that is not seen: the pedals are not latched)."""
-    deadline = time.monotonic() + timeout
-    while psm.operating_state() != ("ENABLED", True, False) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    return check(psm.operating_state() == ("ENABLED", True, False),
-                 f"the PSM is enabled and homed: {psm.operating_state()}")
+def when_ready(psm):
+    """The PSM enabled, homed and idle: the gateway's readers of the console have matched by then
+    (a press before that is not seen: the pedals are not latched)."""
+    return check(arm_ready(psm), f"the PSM is enabled and homed: {psm.operating_state()}")
 
 
 def goals(sim, since=0.0):
