@@ -44,7 +44,7 @@ inline CanopenArmConfig arm_config(cia402::Mode mode, std::size_t joints = 3) {
   if (joints == 3) c.chain = omni_chain();
   c.heartbeat_period = 10 * ms;
   c.heartbeat_timeout = 30 * ms;
-  c.command_timeout = 5 * ms;
+  c.contract.command_timeout = 5 * ms;
   return c;
 }
 

@@ -182,7 +182,7 @@ TEST(CanopenArm, TheWatchdogHoldsAndReportsWhenCommandsStop) {
   EXPECT_FALSE(rig.read<bool>("command_timeout"));
 
   CanopenArmConfig c = arm_config(cia402::csp);
-  c.on_command_timeout = CommandTimeoutAction::fault;
+  c.contract.fault_on_command_timeout = true;
   ArmRig faulting(c);
   faulting.enable();
   faulting.write("servo_jp", faulting.joints(0.001, 0, 0));

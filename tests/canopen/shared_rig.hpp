@@ -37,7 +37,7 @@ inline CanopenArmConfig client(const std::string& bus, std::vector<std::uint8_t>
     c.joints[i].node = nodes[i];
     c.joints[i].name = "n" + std::to_string(nodes[i]);
   }
-  c.start_enabled = true;
+  c.contract.start_enabled = true;
   c.feedback_timeout = 20 * ms;
   return c;
 }
@@ -136,7 +136,7 @@ inline CanopenIoConfig gripper_config(const std::string& bus, std::uint8_t node)
   c.channels.push_back(jaw);
   c.node.pdos.push_back(make_pdo(PdoKind::rpdo, 1, node, std::span(&*jaw.output, 1)));
   c.node.pdos.push_back(make_pdo(PdoKind::tpdo, 1, node, std::span(&*jaw.input, 1)));
-  c.start_enabled = true;
+  c.contract.start_enabled = true;
   c.feedback_timeout = 20 * ms;
   return c;
 }

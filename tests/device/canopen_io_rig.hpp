@@ -34,7 +34,7 @@ class CanopenIoRig : public Rig {
     n.node = node;
     node_ = std::make_unique<canopen::sim::SimIoNode>(n, node_port_);
     canopen::CanopenIoConfig c = canopen::test::gripper_config(bus_name_, node);
-    c.start_enabled = false;
+    c.contract.start_enabled = false;
     c.channels[0].offset = 0;
     c.channels[0].safe = safe_value;
     c.startup_pause = [this] {

@@ -18,7 +18,7 @@ using namespace saw::canopen::test;
 class CanopenRig : public Rig {
  public:
   CanopenRig() : config_(arm_config(cia402::cst)), port_(network_.attach("arm bus")) {
-    config_.start_enabled = false;
+    config_.contract.start_enabled = false;
     for (const JointConfig& j : config_.joints) {
       TestDriveConfig d;
       d.node = j.node;

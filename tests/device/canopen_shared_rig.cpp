@@ -20,7 +20,7 @@ class CanopenSharedRig : public Rig {
   CanopenSharedRig() {
     arm_ = bus_.make("arm", {1, 2, 3}, [](CanopenArmConfig& c) {
       c.mode = cia402::cst;
-      c.start_enabled = false;
+      c.contract.start_enabled = false;
       c.feedback_timeout = 0;  // the default: 10 periods
     });
     wire(*arm_, {"servo_jf", "state_command"});

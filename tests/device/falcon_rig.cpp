@@ -36,7 +36,7 @@ class FalconRig : public HapticRig {
  public:
   FalconRig() : HapticRig(2) {
     FalconConfig c;
-    c.start_enabled = false;
+    c.contract.start_enabled = false;
     auto sim = std::make_unique<SimTransport>(SimFirmwareConfig{});
     firmware_ = &sim->firmware();
     auto port = std::make_unique<PortRefusing>(std::move(sim));

@@ -14,7 +14,7 @@ class SimRig : public HapticRig {
  public:
   SimRig() : HapticRig(0) {
     drivers::SimDeviceConfig c;
-    c.start_enabled = false;
+    c.contract.start_enabled = false;
     device_ = std::make_unique<drivers::SimHapticDevice>(
         "sim", TaskConfig::periodic(std::chrono::milliseconds(1), 0), c);
     wire(*device_, {"servo_cf", "state_command"});

@@ -16,8 +16,8 @@ constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 
 DvrkArmConfig psm_in_a_box() {
   DvrkArmConfig c = testing::psm();
-  c.workspace_min = {-0.1, -0.1, -0.2};
-  c.workspace_max = {0.1, 0.1, 0.0};
+  c.contract.workspace_min = {-0.1, -0.1, -0.2};
+  c.contract.workspace_max = {0.1, 0.1, 0.0};
   return c;
 }
 

@@ -136,7 +136,7 @@ TEST(DvrkArm, NothingButStateCommandsReachTheArmBeforeItIsEnabledHomedAndIdle) {
 // sends: an enable or home with no effect is sent again after 1 s, the arm idle.
 TEST(DvrkArm, ALostEnableOrHomeIsSentAgain) {
   DvrkArmConfig c = mtm();
-  c.enable_timeout = 5'000'000'000;
+  c.contract.enable_timeout = 5'000'000'000;
   for (const int lost : {1, 2}) {  // enables lost
     Rig r(c);
     r.import.lose_state_commands = lost;

@@ -117,7 +117,7 @@ class Client : public saw::Task {
 // These tests command a force once and watch the dynamics: the command watchdog (tested on its
 // own below) is set out of their way unless a test sets it.
 SimDeviceConfig patient(SimDeviceConfig c) {
-  if (c.command_timeout == 0) c.command_timeout = 60'000'000'000;
+  if (c.contract.command_timeout == 0) c.contract.command_timeout = 60'000'000'000;
   return c;
 }
 
@@ -303,7 +303,7 @@ TEST(SimHapticDevice, RejectsNonFiniteAndOversizedForcesBeforeTheDynamics) {
 TEST(SimHapticDevice, StateCommandsAndDisabledDeviceIgnoresForces) {
   SimDeviceConfig c;
   c.model = ArmModel::falcon;
-  c.start_enabled = false;
+  c.contract.start_enabled = false;
   Rig rig(c);
   ASSERT_EQ(rig.client.servo_cf(saw::Wrench{{2, 0, 0}, {}}), saw::Status::ok);
   rig.steps(20);
@@ -470,7 +470,7 @@ TEST(SimHapticDevice, AVirtualWallPushesBackByItsStiffness) {
 TEST(SimHapticDevice, CommandWatchdogDropsTheForceWhenCommandsStop) {
   SimDeviceConfig c;
   c.model = ArmModel::falcon;
-  c.command_timeout = 3'000'000;  // 3 periods
+  c.contract.command_timeout = 3'000'000;  // 3 periods
   Rig rig(c);
   const auto& st = rig.device.state_table();
   const auto& col = rig.device.columns();
@@ -508,7 +508,7 @@ TEST(SimHapticDevice, CommandTimeoutDefaultsToThreePeriodsAndIsAtLeastOne) {
   SimHapticDevice d("d", saw::TaskConfig::periodic(2ms, 0), SimDeviceConfig{});
   EXPECT_EQ(d.command_timeout(), 6'000'000);
   SimDeviceConfig c;
-  c.command_timeout = 1'000'000;
+  c.contract.command_timeout = 1'000'000;
   EXPECT_THROW(SimHapticDevice("e", saw::TaskConfig::periodic(2ms, 0), c), std::invalid_argument);
 }
 

@@ -11,8 +11,8 @@
 #include "saw/drivers/falcon/falcon_device.hpp"
 #include "saw/drivers/falcon/registration.hpp"
 #include "saw/drivers/sim_registration.hpp"
-#include "saw/teleop/teleoperation.hpp"
 #include "saw/teleop/registration.hpp"
+#include "saw/teleop/teleoperation.hpp"
 
 namespace {
 
@@ -50,8 +50,13 @@ TEST(FalconDeployment, ParameterErrorsNameFileLineAndKey) {
   EXPECT_NE(e1.find("transport"), std::string::npos) << e1;
   const std::string e2 = error_of("{transport: usb}");
   EXPECT_NE(e2.find("firmware"), std::string::npos) << e2;
-  const std::string e3 = error_of("{transport: sim, max_force: 80}");
+  // The device base's key, in its range up to the most the Falcon takes.
+  const std::string e3 = error_of("{transport: sim, max_force: 25}");
   EXPECT_NE(e3.find("max_force"), std::string::npos) << e3;
+  EXPECT_NE(e3.find("(0, 20] N"), std::string::npos) << e3;
+  const std::string e7 = error_of("{transport: sim, homing_timeout: 5s}");
+  EXPECT_NE(e7.find("falcon.yaml:6"), std::string::npos) << e7;
+  EXPECT_NE(e7.find("is now home_timeout"), std::string::npos) << e7;
   const std::string e4 = error_of("{transport: sim, clutch_buttons: 16}");
   EXPECT_NE(e4.find("clutch_buttons"), std::string::npos) << e4;
   const std::string e5 = error_of("{transport: sim, typo: 1}");

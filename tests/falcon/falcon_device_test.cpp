@@ -93,8 +93,8 @@ TEST(FalconDevice, TheWatchdogDropsTheForceWhenCommandsStop) {
 
 TEST(FalconDevice, OutsideTheWorkspaceNoForcePushesFurtherOut) {
   FalconConfig c;
-  c.workspace_min = Eigen::Vector3d::Constant(-0.001);
-  c.workspace_max = Eigen::Vector3d(0.001, 0.06, 0.06);
+  c.contract.workspace_min = {-0.001, -0.001, -0.001};
+  c.contract.workspace_max = {0.001, 0.06, 0.06};
   FalconRig rig(c);
   rig.home();
   rig.sim->set_hand(true);
@@ -198,7 +198,7 @@ TEST(FalconDevice, HomingLostFaultsAndAnEnableHomesAgain) {
 
 TEST(FalconDevice, HomingThatNeverFinishesFaults) {
   FalconConfig c;
-  c.homing_timeout = 50'000'000;
+  c.contract.home_timeout = 50'000'000;
   SimFirmwareConfig f;
   f.operator_homes = false;  // nobody homes it, and no push (homing_dac 0)
   FalconRig rig(c, f);

@@ -43,8 +43,6 @@ CanopenArmConfig checked(CanopenArmConfig c, const TaskConfig& task) {
   if (c.joints.empty() || c.joints.size() > JointState::max_joints)
     throw std::invalid_argument("a CANopen component has 1 to " + std::to_string(JointState::max_joints) +
                                 " joints");
-  if (c.command_timeout == 0) c.command_timeout = 3 * period;
-  if (c.command_timeout < period) throw std::invalid_argument("command_timeout must be at least one period");
   if (c.feedback_timeout == 0) c.feedback_timeout = std::max<TimeNs>(10 * period, 10'000'000);
   if (c.feedback_timeout < 2 * period)
     throw std::invalid_argument("feedback_timeout must be at least two periods");
@@ -85,14 +83,11 @@ namespace {
 // The contract the base runs for it: drives, whose safe state is disabled (quick stop on a fault).
 DeviceConfig contract_of(const CanopenArmConfig& c) {
   DeviceConfig d;
+  d.settings() = c.contract;
   d.interface_name = c.interface_name;
   d.safe_state = SafeState::drive_disabled;
   d.cartesian = d.servo_cf = c.chain.has_value();
-  d.max_force = c.max_force;
   d.servo_jp = d.servo_jv = d.servo_jf = true;  // one of them per mode: accepts() says which
-  d.command_timeout = c.command_timeout;
-  d.fault_on_command_timeout = c.on_command_timeout == CommandTimeoutAction::fault;
-  d.start_enabled = c.start_enabled;
   // The enable's own limits say more and come first: each transition (cia402::Progress::timeout,
   // with the state), the fault resets, the mode display (transition_timeout after switched on).
   d.enable_timeout = 4 * c.transition_timeout;
@@ -160,7 +155,7 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
   for (std::size_t i = 0; i < n_; ++i) (void)setpoint_js_.set_name(i, config_.joints[i].name);
   status_.joints = static_cast<std::uint8_t>(n_);
   status_.shared_bus = link_.shared() ? 1 : 0;
-  status_.command_timeout = config_.command_timeout;
+  status_.command_timeout = contract().command_timeout;
   provide_interfaces();
 }
 

@@ -19,7 +19,6 @@ CanopenIoConfig checked(CanopenIoConfig c, const TaskConfig& task) {
   if (period <= 0) throw std::invalid_argument("a CANopen component's task must be periodic");
   if (c.channels.empty() || c.channels.size() > JointState::max_joints)
     throw std::invalid_argument("a CANopen I/O component has 1 to 8 channels");
-  if (c.command_timeout == 0) c.command_timeout = 3 * period;
   if (c.feedback_timeout == 0) c.feedback_timeout = std::max<TimeNs>(10 * period, 10'000'000);
   c.rpdo_deadline = resolve_rpdo_deadline(c.rpdo_deadline, period);
   c.node.rpdo_deadline.time = c.rpdo_deadline;
@@ -44,8 +43,7 @@ DeviceConfig contract_of(const CanopenIoConfig& c) {
   d.safe_state = SafeState::hold;
   d.cartesian = d.servo_cf = false;
   d.servo_jp = true;
-  d.command_timeout = c.command_timeout;
-  d.start_enabled = c.start_enabled;
+  d.settings() = c.contract;
   for (const IoChannel& ch : c.channels) d.joints.push_back({ch.name, ch.min, ch.max, ch.max_velocity});
   return d;
 }

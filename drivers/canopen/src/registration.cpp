@@ -12,6 +12,7 @@
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
+#include "saw/deploy/device_settings.hpp"
 
 namespace saw::canopen {
 namespace {
@@ -238,15 +239,11 @@ void parse_common(const ComponentContext& ctx, Params& p, const std::string& typ
                                                     {"disable_voltage", AbortConnection::disable_voltage},
                                                     {"quick_stop", AbortConnection::quick_stop}},
                                                    AbortConnection::quick_stop);
-  c.command_timeout = duration(p, "command_timeout", 3 * period, period, 10s);
   c.rpdo_deadline = params::rpdo_deadline(p, period.count());
-  c.on_command_timeout = p.get_enum<CommandTimeoutAction>(
-      "on_command_timeout", {{"hold", CommandTimeoutAction::hold}, {"fault", CommandTimeoutAction::fault}},
-      CommandTimeoutAction::hold);
   c.feedback_timeout =
       duration(p, "feedback_timeout", std::max<std::chrono::nanoseconds>(10 * period, 10ms), 2 * period, 10s);
-  c.max_force = p.get_in_range("max_force", 0, 1e5, 0);
-  c.start_enabled = p.get_or<bool>("start_enabled", false);
+  c.contract = deploy::parse_device_settings(p, s.task, {.force = p.has("chain"), .enable_timeout = false},
+                                             c.contract);
   c.transition_timeout = duration(p, "transition_timeout", 1s, 10ms, 60s);
   const Params st = p.child("startup");
   c.startup.boot_timeout = duration(st, "boot_timeout", 2s, 10ms, 600s);

@@ -9,6 +9,7 @@
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
+#include "saw/deploy/device_settings.hpp"
 
 namespace saw::canopen {
 namespace {
@@ -162,11 +163,10 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   }
   c.node.writes = params::parse_writes(p);
   const auto period = s.task.period;
-  c.command_timeout = duration(p, "command_timeout", 3 * period, period, 10s);
+  c.contract = deploy::parse_device_settings(p, s.task, {.force = false}, c.contract);
   c.rpdo_deadline = params::rpdo_deadline(p, period.count());
   c.feedback_timeout =
       duration(p, "feedback_timeout", std::max<std::chrono::nanoseconds>(10 * period, 10ms), 2 * period, 10s);
-  c.start_enabled = p.get_or<bool>("start_enabled", false);
   const Params st = p.child("startup");
   c.startup.boot_timeout = duration(st, "boot_timeout", 2s, 10ms, 600s);
   c.startup.sdo_timeout = duration(st, "sdo_timeout", 500ms, 1ms, 60s);

@@ -28,19 +28,11 @@ DvrkArmConfig checked(DvrkArmConfig c) {
 // (safe where it holds).
 DeviceConfig contract_of(const DvrkArmConfig& c) {
   DeviceConfig d;
+  d.settings() = c.contract;
   const bool psm = c.kind == ArmKind::psm;
   d.safe_state = psm ? SafeState::hold : SafeState::zero_force;
   d.servo_cf = !psm;
-  d.max_force = c.max_force;
   d.servo_cp = psm;
-  d.max_linear_speed = c.max_linear_speed;
-  d.max_angular_speed = c.max_angular_speed;
-  d.workspace_min = c.workspace_min;
-  d.workspace_max = c.workspace_max;
-  d.command_timeout = c.command_timeout;
-  d.start_enabled = c.start_enabled;
-  d.enable_timeout = c.enable_timeout;
-  d.home_timeout = c.home_timeout;
   d.joints = c.joints;
   d.servo_jp = c.servo_jp;
   return d;
@@ -263,7 +255,7 @@ void DvrkArm::read_joints() noexcept {
 void DvrkArm::on_move_cp(const Pose& p) noexcept {
   bool inside = move_cp_.is_bound() && finite(p);
   for (std::size_t k = 0; inside && k < 3; ++k)
-    inside = p.position[k] >= arm_config_.workspace_min[k] && p.position[k] <= arm_config_.workspace_max[k];
+    inside = p.position[k] >= contract().workspace_min[k] && p.position[k] <= contract().workspace_max[k];
   if (!inside) {
     ++summary_.moves_refused;
     return;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "saw/deploy/device_settings.hpp"
 #include "saw/drivers/dvrk/dvrk_arm.hpp"
 
 namespace saw::drivers::dvrk {
@@ -69,20 +70,13 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
     p.fail_at("safe_command", "a PSM's is hold or servo_cp_measured (a zero wrench lets it drop)");
   if (!psm && c.safe_command == SafeCommand::servo_cp_measured)
     p.fail_at("safe_command", "an MTM's is zero_wrench or hold");
-  c.max_force = p.get_in_range("max_force", 0.1, 20, c.max_force);
-  c.command_timeout =
-      duration_in(p, "command_timeout", 3 * period, period, std::chrono::nanoseconds(1s).count(),
-                  "at least one period and at most 1 s");
+  c.contract = deploy::parse_device_settings(
+      p, s.task, {.force = !psm, .most_force = 20, .homes = true, .poses = psm}, c.contract);
   // The dVRK publishes at 100 Hz by default (its -p 0.01): three samples' worth at least.
   c.stale_timeout =
       duration_in(p, "stale_timeout", c.stale_timeout, 3 * period, std::chrono::nanoseconds(2s).count(),
                   "at least three periods and at most 2 s");
-  c.enable_timeout = duration_in(p, "enable_timeout", c.enable_timeout, period,
-                                 std::chrono::nanoseconds(60s).count(), "in (0, 60 s]");
-  c.home_timeout = duration_in(p, "home_timeout", c.home_timeout, period,
-                               std::chrono::nanoseconds(600s).count(), "in (0, 600 s]");
   c.home = p.get_or<bool>("home", false);
-  c.start_enabled = p.get_or<bool>("start_enabled", false);
   c.joints = parse_joints(p);
   c.servo_jp = p.get_or<bool>("servo_jp", false);
   if (c.servo_jp && c.joints.empty())
@@ -91,19 +85,10 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
     c.jaw_min = p.get_in_range("jaw_min", -1, 2, c.jaw_min);
     c.jaw_max = p.get_in_range("jaw_max", -1, 2, c.jaw_max);
     if (!(c.jaw_min < c.jaw_max)) p.fail_at("jaw_max", "must be above jaw_min");
-    c.max_linear_speed = p.get_in_range("max_linear_speed", 1e-3, 2, c.max_linear_speed);
-    c.max_angular_speed = p.get_in_range("max_angular_speed", 1e-3, 20, c.max_angular_speed);
     c.following_error = p.get_in_range("following_error", 0, 0.5, c.following_error);
     c.following_time =
         duration_in(p, "following_time", c.following_time, period, std::chrono::nanoseconds(10s).count(),
                     "at least one period and at most 10 s");
-    if (p.has("workspace")) {
-      const Params w = p.child("workspace");
-      c.workspace_min = w.get<Vec3>("min");
-      c.workspace_max = w.get<Vec3>("max");
-      for (std::size_t k = 0; k < 3; ++k)
-        if (!(c.workspace_min[k] < c.workspace_max[k])) w.fail_at("max", "must be above min on every axis");
-    }
   }
   return s;
 }

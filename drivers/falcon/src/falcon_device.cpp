@@ -9,13 +9,9 @@
 namespace saw::drivers::falcon {
 namespace {
 
-FalconConfig checked(FalconConfig c, const TaskConfig& task) {
-  if (c.command_timeout == 0) c.command_timeout = 3 * task.period.count();
-  if (c.command_timeout < task.period.count())
-    throw std::invalid_argument("command_timeout must be at least one period");
-  if (!(c.max_force > 0)) throw std::invalid_argument("max_force must be positive");
-  if ((c.workspace_min.array() >= c.workspace_max.array()).any())
-    throw std::invalid_argument("workspace_min must be below workspace_max");
+// The contract's settings are the base's to check (Device's constructor).
+FalconConfig checked(FalconConfig c) {
+  if (!(c.contract.max_force > 0)) throw std::invalid_argument("max_force must be positive");
   if (c.max_missed < 1) throw std::invalid_argument("max_missed must be at least 1");
   if (!(c.velocity_filter > 0 && c.velocity_filter <= 1))
     throw std::invalid_argument("velocity_filter in (0, 1]");
@@ -25,11 +21,8 @@ FalconConfig checked(FalconConfig c, const TaskConfig& task) {
 // The contract the base runs for it: a haptic device, safe at zero force.
 DeviceConfig contract_of(const FalconConfig& c) {
   DeviceConfig d;
+  d.settings() = c.contract;
   d.safe_state = SafeState::zero_force;
-  d.max_force = c.max_force;
-  d.command_timeout = c.command_timeout;
-  d.start_enabled = c.start_enabled;
-  d.home_timeout = c.homing_timeout;
   for (const char* n : {"arm0", "arm1", "arm2"}) d.joints.push_back(JointLimits{n});
   return d;
 }
@@ -45,8 +38,8 @@ constexpr std::uint8_t leds_of(OperatingStateValue s, bool homing, bool homed) n
 
 FalconDevice::FalconDevice(std::string name, TaskConfig task, FalconConfig config,
                            std::unique_ptr<FalconTransport> transport)
-    : Device(std::move(name), task, contract_of(checked(config, task))),
-      config_(checked(std::move(config), task)),
+    : Device(std::move(name), task, contract_of(checked(config))),
+      config_(checked(std::move(config))),
       kinematics_(config_.geometry),
       transport_(std::move(transport)) {
   if (!transport_) throw std::invalid_argument("FalconDevice '" + this->name() + "': no transport");
@@ -107,8 +100,8 @@ MotorCommand FalconDevice::command(const Setpoint& s) noexcept {
     f = Eigen::Vector3d(s.wrench.force[0], s.wrench.force[1], s.wrench.force[2]);
     const Eigen::Vector3d p = position();
     for (int k = 0; k < 3; ++k) {  // outside the workspace: nothing pushing further out
-      if (p[k] < config_.workspace_min[k] && f[k] < 0) f[k] = 0;
-      if (p[k] > config_.workspace_max[k] && f[k] > 0) f[k] = 0;
+      if (p[k] < contract().workspace_min[static_cast<std::size_t>(k)] && f[k] < 0) f[k] = 0;
+      if (p[k] > contract().workspace_max[static_cast<std::size_t>(k)] && f[k] > 0) f[k] = 0;
     }
     if (kinematics_.dac(j_, f, c.dac) < 1.0) ++summary_.saturated;
   }

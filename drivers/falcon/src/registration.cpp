@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "saw/deploy/device_settings.hpp"
 #include "saw/drivers/falcon/falcon_params.hpp"
 #include "saw/drivers/falcon/threaded_transport.hpp"
 #include "saw/eigen.hpp"
@@ -52,28 +53,16 @@ FalconSpec parse_falcon(const deploy::ComponentContext& ctx, Params& p) {
   if (s.reconnect > 0 && !s.io_thread)
     p.fail_at("reconnect", "needs io_thread: true (the cycle never waits for a USB enumeration)");
   FalconConfig& c = s.device;
-  c.max_force = p.get_in_range("max_force", 0.1, 20, c.max_force);
-  if (p.has("workspace")) {
-    const Params w = p.child("workspace");
-    c.workspace_min = to_eigen(w.get<Vec3>("min"));
-    c.workspace_max = to_eigen(w.get<Vec3>("max"));
-    if ((c.workspace_min.array() >= c.workspace_max.array()).any())
-      w.fail_at("max", "must be above min on every axis");
-  }
+  if (p.has("homing_timeout")) p.fail_at("homing_timeout", "is now home_timeout (a key of every device)");
+  c.contract = deploy::parse_device_settings(p, s.task, {.most_force = 20, .homes = true, .workspace = true},
+                                             c.contract);
   if (p.has("origin")) c.origin = to_eigen(p.get<Vec3>("origin"));
-  c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.home_on_start = p.get_or<bool>("home_on_start", true);
   c.homing_dac = static_cast<std::int16_t>(p.get_in_range("homing_dac", 0, 4096, c.homing_dac));
-  c.homing_timeout = p.get_or<std::chrono::nanoseconds>("homing_timeout", 5s).count();
-  if (c.homing_timeout <= 0 || c.homing_timeout > std::chrono::nanoseconds(60s).count())
-    p.fail_at("homing_timeout", "in (0, 60 s]");
   c.max_missed = static_cast<int>(p.get_in_range("max_missed", 1, 1000, c.max_missed));
   c.velocity_filter = p.get_in_range("velocity_filter", 0.01, 1, c.velocity_filter);
   c.clutch_buttons = buttons(p, "clutch_buttons", c.clutch_buttons);
   c.operator_buttons = buttons(p, "operator_buttons", c.operator_buttons);
-  c.command_timeout = p.get_or<std::chrono::nanoseconds>("command_timeout", 3 * s.task.period).count();
-  if (c.command_timeout < s.task.period.count() || c.command_timeout > std::chrono::nanoseconds(10s).count())
-    p.fail_at("command_timeout", "must be at least one period and at most 10 s");
   if (p.has("calibration")) {
     const Params k = p.child("calibration");
     DeltaGeometry& g = c.geometry;

@@ -11,7 +11,7 @@ namespace saw::drivers {
 namespace {
 
 // Fills the model's defaults where the configuration left zeros.
-SimDeviceConfig with_defaults(SimDeviceConfig c, const TaskConfig& task) {
+SimDeviceConfig with_defaults(SimDeviceConfig c) {
   const bool omni = c.model == ArmModel::omni;
   const falcon::DeltaArmDynamics delta;  // the Falcon's arms, as its simulated firmware has them
   if (c.inertia.isZero())
@@ -22,11 +22,8 @@ SimDeviceConfig with_defaults(SimDeviceConfig c, const TaskConfig& task) {
     c.joint_min = omni ? Eigen::Vector3d(-1.7, -1.2, -0.2) : Eigen::Vector3d::Constant(delta.angle_min);
     c.joint_max = omni ? Eigen::Vector3d(1.7, 1.75, 2.6) : Eigen::Vector3d::Constant(delta.angle_max);
   }
-  if (c.max_force <= 0) c.max_force = omni ? 3.3 : 9.0;
+  if (c.contract.max_force <= 0) c.contract.max_force = omni ? 3.3 : 9.0;
   if (c.substeps < 1) c.substeps = 1;
-  if (c.command_timeout == 0) c.command_timeout = 3 * task.period.count();
-  if (c.command_timeout < task.period.count())
-    throw std::invalid_argument("command_timeout must be at least one period");
   // The straight Omni arm is singular: by default start with the elbow bent. The Falcon starts
   // with its arms at 35°, where its measured_cp is zero.
   if (omni && c.initial_joints.isZero()) c.initial_joints = Eigen::Vector3d(0, 0, 1.2);
@@ -47,9 +44,7 @@ SimDeviceConfig with_defaults(SimDeviceConfig c, const TaskConfig& task) {
 DeviceConfig contract_of(const SimDeviceConfig& c) {
   DeviceConfig d;
   d.safe_state = SafeState::zero_force;
-  d.max_force = c.max_force;
-  d.command_timeout = c.command_timeout;
-  d.start_enabled = c.start_enabled;
+  d.settings() = c.contract;
   const ArmKinematics k(c.model);
   const auto names = k.joint_names();
   for (std::size_t i = 0; i < names.size(); ++i) {
@@ -65,8 +60,8 @@ DeviceConfig contract_of(const SimDeviceConfig& c) {
 }  // namespace
 
 SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config)
-    : Device(std::move(name), task, contract_of(with_defaults(config, task))),
-      config_(with_defaults(std::move(config), task)),
+    : Device(std::move(name), task, contract_of(with_defaults(config))),
+      config_(with_defaults(std::move(config))),
       kinematics_(config_.model) {
   q_ = config_.initial_joints.cwiseMax(config_.joint_min).cwiseMin(config_.joint_max);
   hand_origin_ = kinematics_.fk(q_);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "saw/deploy/device_settings.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
 #include "saw/eigen.hpp"
 
@@ -68,8 +69,6 @@ SimDeviceSpec parse_sim_device(const ComponentContext& ctx, Params& p) {
   c.model =
       p.get_enum<ArmModel>("model", {{"omni", ArmModel::omni}, {"falcon", ArmModel::falcon}}, ArmModel::omni);
   c.initial_joints = to_eigen(p.get_or<Vec3>("initial_joints", {0, 0, 0}));
-  c.max_force = p.get_in_range("max_force", 0, 100, 0);
-  c.start_enabled = p.get_or<bool>("start_enabled", true);
   c.hand = parse_hand(p.child("hand"), ctx.directory);
   if (p.has("wall")) {
     const Params w = p.child("wall");
@@ -81,9 +80,7 @@ SimDeviceSpec parse_sim_device(const ComponentContext& ctx, Params& p) {
     c.wall.damping = w.get_in_range("damping", 0, 1e3, c.wall.damping);
   }
   const TaskConfig task = deploy::periodic_task(ctx, p, "sim_haptic_device");
-  c.command_timeout = p.get_or<std::chrono::nanoseconds>("command_timeout", 3 * task.period).count();
-  if (c.command_timeout < task.period.count() || c.command_timeout > std::chrono::nanoseconds(10s).count())
-    p.fail_at("command_timeout", "must be at least one period and at most 10 s");
+  c.contract = deploy::parse_device_settings(p, task, {.most_force = 100}, c.contract);
   return {task, c};
 }
 

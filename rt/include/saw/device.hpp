@@ -85,24 +85,11 @@ struct JointLimits {
   double max_effort = std::numeric_limits<double>::infinity();    // servo_jf
 };
 
-// The contract's settings, as a driver declares them for its hardware.
-struct DeviceConfig {
-  std::string interface_name = "arm";  // the provided CRTK interface
-  SafeState safe_state = SafeState::zero_force;
-  bool cartesian = true;            // measured_cp, measured_cv
-  bool servo_cf = true;             // takes servo_cf (needs cartesian)
-  double max_force = 0;             // servo_cf: |force| above this (N) is refused; 0: not bounded here
-  std::vector<JointLimits> joints;  // measured_js's joints, 1..8
-  bool servo_jp = false, servo_jv = false, servo_jf = false;
-  // servo_cp (needs cartesian): a pose inside the workspace box, moving from the last accepted
-  // pose (or the measured one: first, and after commands stopped) no faster than these (m/s, rad/s).
-  bool servo_cp = false;
-  double max_linear_speed = std::numeric_limits<double>::infinity();
-  double max_angular_speed = std::numeric_limits<double>::infinity();
-  Vec3 workspace_min{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-                     -std::numeric_limits<double>::infinity()};
-  Vec3 workspace_max{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                     std::numeric_limits<double>::infinity()};
+// What a deployment sets of any device's contract: the device base's own keys, read once for
+// every driver by deploy::parse_device_settings (one range per key). A driver's config holds one
+// (`contract`), with its hardware's defaults.
+struct DeviceSettings {
+  double max_force = 0;  // servo_cf: |force| above this (N) is refused; 0: not bounded here
   // With no fresh servo command for this long, the device takes its safe output (zero force,
   // hold) and says so; with fault_on_command_timeout it also goes to FAULT. 0: 3 periods.
   TimeNs command_timeout = 0;
@@ -110,6 +97,27 @@ struct DeviceConfig {
   bool start_enabled = true;              // enable in the first cycle (a simulator; hardware waits)
   TimeNs enable_timeout = 1'000'000'000;  // enable() pending longer: FAULT
   TimeNs home_timeout = 0;                // home() pending longer: FAULT; 0: no limit here
+  // servo_cp: a pose inside the workspace box, moving from the last accepted pose (or the
+  // measured one: first, and after commands stopped) no faster than these (m/s, rad/s).
+  double max_linear_speed = std::numeric_limits<double>::infinity();
+  double max_angular_speed = std::numeric_limits<double>::infinity();
+  Vec3 workspace_min{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                     -std::numeric_limits<double>::infinity()};
+  Vec3 workspace_max{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                     std::numeric_limits<double>::infinity()};
+};
+
+// The contract the base runs: the deployment's settings and what the driver's hardware is.
+struct DeviceConfig : DeviceSettings {
+  std::string interface_name = "arm";  // the provided CRTK interface
+  SafeState safe_state = SafeState::zero_force;
+  bool cartesian = true;            // measured_cp, measured_cv
+  bool servo_cf = true;             // takes servo_cf (needs cartesian)
+  std::vector<JointLimits> joints;  // measured_js's joints, 1..8
+  bool servo_jp = false, servo_jv = false, servo_jf = false;
+  bool servo_cp = false;  // takes servo_cp (needs cartesian), checked by the settings' box and speeds
+
+  DeviceSettings& settings() noexcept { return *this; }
 };
 
 // Commands refused before they reached the driver, by why.

@@ -67,9 +67,9 @@ co::CanopenArmConfig two_joints(const std::string& bus) {
   }
   c.heartbeat_period = 50'000'000;
   c.heartbeat_timeout = 150'000'000;
-  c.command_timeout = 200'000'000;   // the test thread is no RT thread
-  c.feedback_timeout = 200'000'000;  // a stall of the shared CI machine is not what this tests
-  c.rpdo_deadline = 200'000'000;     // nor here: saw-can-sim's drives watch the RPDOs
+  c.contract.command_timeout = 200'000'000;  // the test thread is no RT thread
+  c.feedback_timeout = 200'000'000;          // a stall of the shared CI machine is not what this tests
+  c.rpdo_deadline = 200'000'000;             // nor here: saw-can-sim's drives watch the RPDOs
   return c;
 }
 

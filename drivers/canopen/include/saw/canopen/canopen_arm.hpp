@@ -44,9 +44,13 @@ struct JointConfig {
   std::vector<std::uint16_t> rpdo_deadline_unwritable;
 };
 
-enum class CommandTimeoutAction : std::uint8_t { hold, fault };
-
 struct CanopenArmConfig {
+  // The base's settings: with no fresh servo_* for command_timeout (0: 3 periods), an enabled arm
+  // holds its position (csp), zero velocity (csv) or zero torque (cst), and says so;
+  // fault_on_command_timeout also makes it a FAULT. max_force: servo_cf above it (N) is refused (0:
+  // the joint torques only). start_enabled: enable once started (a simulation; hardware waits
+  // for `enable`). enable_timeout is the driver's: 4 transition_timeouts.
+  DeviceSettings contract{.start_enabled = false};
   // "virtual:<name>" or "socketcan:<if>": this component is the master of that bus; or the name
   // of a canopen_bus component: a client of its bus task (which sends SYNC and the master's
   // heartbeat; master_node and master_heartbeat_* are then its).
@@ -67,13 +71,7 @@ struct CanopenArmConfig {
   // EMCY 0x8250 and does what 0x6007 says; the master faults on that EMCY. nullopt: max(5 ms,
   // 3 periods); 0: off. checked() rounds it up to whole ms (at least two periods).
   std::optional<TimeNs> rpdo_deadline;
-  // With no fresh servo_* for this long, an enabled arm holds its position (csp), zero velocity
-  // (csv) or zero torque (cst), and says so; `fault` also makes it a FAULT. 0: 3 periods.
-  TimeNs command_timeout = 0;
-  CommandTimeoutAction on_command_timeout = CommandTimeoutAction::hold;
   TimeNs feedback_timeout = 0;  // no TPDO for this long faults; 0: 10 periods (at least 10 ms)
-  double max_force = 0;         // servo_cf: |force| above this (N) is refused; 0: joint torques only
-  bool start_enabled = false;   // enable once started (a simulation; hardware waits for `enable`)
   StartupConfig startup;
   TimeNs transition_timeout = 1'000'000'000;  // a drive's CiA 402 transition; beyond: enable fails
   // What the start-up does between its steps (tests step their simulated drives here);

@@ -65,11 +65,11 @@ struct CanopenIoStatus {
 struct CanopenIoConfig {
   std::string bus;  // the name of a canopen_bus component, or a URI (then it runs a bus task of its own)
   std::string interface_name = "io";
+  // The base's settings: no servo_jp for command_timeout (0: 3 periods): hold. No max_force.
+  DeviceSettings contract{.start_enabled = false};
   IoNodeConfig node;                // master_node and master_timeout: the bus task's
   std::vector<IoChannel> channels;  // 1..8
-  TimeNs command_timeout = 0;       // 0: 3 periods; no servo_jp for this long: hold
   TimeNs feedback_timeout = 0;      // no TPDO for this long faults; 0: 10 periods (at least 10 ms)
-  bool start_enabled = false;
   // The node's RPDO deadline (rpdo_deadline.hpp): no RPDO for this long and it signals EMCY 0x8250
   // and puts out its error values (a FAULT here). nullopt: max(5 ms, 3 periods); 0: off.
   std::optional<TimeNs> rpdo_deadline;

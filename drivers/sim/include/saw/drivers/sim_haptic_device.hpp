@@ -26,6 +26,10 @@ struct VirtualWall {
 };
 
 struct SimDeviceConfig {
+  // The base's settings; max_force 0: the model's (Omni 3.3 N, Falcon 9 N). With no fresh
+  // servo_cf for command_timeout (0: 3 periods) the device applies zero force (a dead
+  // teleoperation process must not leave it pushing).
+  DeviceSettings contract;
   ArmModel model = ArmModel::omni;
   // rad; zero: the model's default (Omni: elbow bent 1.2 rad; Falcon: every arm at 35°).
   Eigen::Vector3d initial_joints = Eigen::Vector3d::Zero();
@@ -33,14 +37,9 @@ struct SimDeviceConfig {
   Eigen::Vector3d damping = Eigen::Vector3d::Zero();  // zero: the model's default
   Eigen::Vector3d joint_min = Eigen::Vector3d::Zero(),
                   joint_max = Eigen::Vector3d::Zero();  // equal: defaults
-  double max_force = 0;  // N; zero: the model's default (Omni 3.3 N, Falcon 9 N)
-  bool start_enabled = true;
   HandScript hand;
   VirtualWall wall;
   int substeps = 4;  // integration steps per cycle
-  // Command watchdog: with no fresh servo_cf for this long, the device applies zero force
-  // (a dead teleoperation process must not leave it pushing). 0: 3 periods.
-  TimeNs command_timeout = 0;
 };
 
 // Buttons on the "sim" interface's set_button.
@@ -70,7 +69,7 @@ class SimHapticDevice : public Device {
 
   const SimDeviceConfig& device_config() const noexcept { return config_; }
   std::uint64_t rejected_commands() const noexcept { return device_status().refused.total(); }
-  TimeNs command_timeout() const noexcept { return config_.command_timeout; }
+  TimeNs command_timeout() const noexcept { return contract().command_timeout; }
   // What the simulated motors apply now (N): the safe output is zero.
   Eigen::Vector3d applied_force() const noexcept { return applied_; }
   // What the virtual wall pushes on the tip now (N).

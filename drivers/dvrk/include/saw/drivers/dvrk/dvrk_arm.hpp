@@ -27,20 +27,18 @@ enum class SafeCommand : std::uint8_t {
 struct DvrkArmConfig {
   ArmKind kind = ArmKind::mtm;
   SafeCommand safe_command = SafeCommand::zero_wrench;
-  double max_force = 3.0;                  // N: MTM servo_cf above this is refused
-  TimeNs command_timeout = 0;              // no servo command for this long: the safe command; 0: 3 periods
-  TimeNs stale_timeout = 50'000'000;       // measured_cp older than this while following: FAULT
-  TimeNs enable_timeout = 10'000'000'000;  // the dVRK powers an arm in a few s
-  TimeNs home_timeout = 60'000'000'000;
-  bool home = false;           // send `home` to an arm that is not homed (it moves!)
-  bool start_enabled = false;  // real hardware: the operator enables
-  // PSM servo_cp: from the last accepted pose no faster than these (m/s, rad/s), in the box.
-  double max_linear_speed = 0.2;
-  double max_angular_speed = 3.0;
-  Vec3 workspace_min{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-                     -std::numeric_limits<double>::infinity()};
-  Vec3 workspace_max{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                     std::numeric_limits<double>::infinity()};
+  // The base's settings: max_force (N: MTM servo_cf above it is refused); command_timeout (no
+  // servo command for this long: the safe command; 0: 3 periods); enable and home timeouts (the
+  // dVRK powers an arm in a few s); start_enabled (real hardware: the operator enables); PSM
+  // servo_cp: from the last accepted pose no faster than max_linear/angular_speed, in the workspace.
+  DeviceSettings contract{.max_force = 3.0,
+                          .start_enabled = false,
+                          .enable_timeout = 10'000'000'000,
+                          .home_timeout = 60'000'000'000,
+                          .max_linear_speed = 0.2,
+                          .max_angular_speed = 3.0};
+  TimeNs stale_timeout = 50'000'000;  // measured_cp older than this while following: FAULT
+  bool home = false;                  // send `home` to an arm that is not homed (it moves!)
   // PSM jaw_servo_jp: its angle (rad) within these, else refused (the dVRK's large needle
   // driver opens to about 80 degrees and closes a little past zero to grip).
   double jaw_min = -0.35, jaw_max = 1.4;

@@ -13,28 +13,28 @@
 namespace saw::drivers::falcon {
 
 struct FalconConfig {
+  // The base's settings: max_force (N, a servo_cf whose norm exceeds it is refused); the
+  // workspace (m, in measured_cp's frame: outside it, force pushing further out is dropped);
+  // home_timeout (homing pending longer: FAULT).
+  DeviceSettings contract{.max_force = 8.0,
+                          .home_timeout = 5'000'000'000,
+                          .workspace_min = {-0.06, -0.06, -0.06},
+                          .workspace_max = {0.06, 0.06, 0.06}};
   DeltaGeometry geometry;
-  double max_force = 8.0;  // N: a servo_cf whose norm exceeds it is refused
-  // The workspace (m, in measured_cp's frame): outside it, force pushing further out is dropped.
-  Eigen::Vector3d workspace_min = Eigen::Vector3d::Constant(-0.06);
-  Eigen::Vector3d workspace_max = Eigen::Vector3d::Constant(0.06);
   // measured_cp = tip − origin, both in libnifalcon's frame (DeltaGeometry); NaN (the default):
   // the tip at encoder counts 0 (the arms at 35°), (0, 0, 134.6 mm) in that frame.
   Eigen::Vector3d origin = Eigen::Vector3d::Constant(NAN);
-  bool start_enabled = true;
   bool home_on_start = true;  // home in the first cycles (the encoders are relative until then)
   // DAC counts driving the arms up onto their index while homing. 0 (the default): no force;
   // the operator homes by hand, pulling the grip all the way out and pushing it in, as
   // libnifalcon does (docs/devices.md). Either way the homing bit is sent in every packet.
   std::int16_t homing_dac = 0;
-  TimeNs homing_timeout = 5'000'000'000;
   // A failed exchange (no answer, USB error, corrupt or short frame, a pose out of the model):
   // this many in a row → FAULT, zero force. An unplug faults at once.
   int max_missed = 10;
   double velocity_filter = 0.3;          // 0..1: weight of the newest finite-difference velocity
   std::uint8_t clutch_buttons = 0x04;    // status:: bits raising the clutch event (centre button)
   std::uint8_t operator_buttons = 0x02;  // ... and operator_present (forward button)
-  TimeNs command_timeout = 0;            // 0: 3 periods (as sim_haptic_device)
 };
 
 // What a run of the hardware comes to (the "summary" column; the contract's counters — refused

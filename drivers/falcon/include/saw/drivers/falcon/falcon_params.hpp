@@ -27,10 +27,11 @@ struct FalconSpec {
   TimeNs reconnect = 0;  // ns between looks for an unplugged Falcon (default 1 s with io_thread)
 };
 
-// params: transport (usb|sim), io_thread, io_priority, reconnect, firmware, usb: {bus, index,
-// exchange_timeout_ms, handshake_tries, load_attempts}, max_force, workspace: {min, max}, origin,
-// start_enabled, home_on_start, homing_dac, homing_timeout, max_missed, clutch_buttons, operator_buttons,
-// command_timeout, calibration: {dac_per_newton_metre, dac_limit, angle_at_zero}, sim: {initial_angles,
+// params: the device base's (deploy/device_settings.hpp: max_force up to 20 N, workspace, home_timeout,
+// command_timeout, on_command_timeout, start_enabled, enable_timeout), transport (usb|sim), io_thread,
+// io_priority, reconnect, firmware, usb: {bus, index, exchange_timeout_ms, handshake_tries,
+// load_attempts}, origin, home_on_start, homing_dac, max_missed, clutch_buttons, operator_buttons,
+// calibration: {dac_per_newton_metre, dac_limit, angle_at_zero}, sim: {initial_angles,
 // operator_homes, inertia, damping, hand: {amplitude, frequency, stiffness, damping}}. Errors name file:line
 // and the key (deploy::Params).
 FalconSpec parse_falcon(const deploy::ComponentContext& ctx, deploy::Params& p);
