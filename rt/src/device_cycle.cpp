@@ -62,9 +62,10 @@ void Device::update_fault(const Outcome& why) noexcept {
   (void)(*fault_event_)(fault_);
 }
 
-void Device::raise(const Outcome& why) noexcept {
+void Device::raise(const Outcome& why, FaultOrigin origin) noexcept {
   if (state_.state == OperatingStateValue::fault) return;  // the first cause stands
   describe(why);
+  status_.origin = origin;
   ++status_.faults;
   enabling_ = homing_ = enable_requested_ = false;
   state_.is_busy = false;
@@ -108,7 +109,8 @@ void Device::step_enable(TimeNs t) noexcept {
   }
   if (t == enable_start_) (void)(*state_event_)(state_);  // DISABLED, busy: under way
   if (t - enable_start_ > config_.enable_timeout)
-    raise(Outcome::failed(FaultCode::device_error, "enable timed out", o.source, o.detail));
+    raise(Outcome::failed(FaultCode::device_error, "enable timed out", o.source, o.detail),
+          FaultOrigin::enable_timeout);
 }
 
 void Device::step_home(TimeNs t) noexcept {
@@ -123,7 +125,8 @@ void Device::step_home(TimeNs t) noexcept {
     return;
   }
   if (config_.home_timeout > 0 && t - home_start_ > config_.home_timeout)
-    raise(Outcome::failed(FaultCode::limit_exceeded, "homing timed out", "homing"));
+    raise(Outcome::failed(FaultCode::limit_exceeded, "homing timed out", "homing"),
+          FaultOrigin::home_timeout);
 }
 
 void Device::watch_commands(TimeNs t) noexcept {
@@ -137,7 +140,8 @@ void Device::watch_commands(TimeNs t) noexcept {
            to_string(config_.safe_state).data());
   if (config_.fault_on_command_timeout && following()) {
     raise(Outcome::failed(FaultCode::input_stale, "no servo command within command_timeout", "commands", 0,
-                          t - watchdog_.last_command()));
+                          t - watchdog_.last_command()),
+          FaultOrigin::command_timeout);
   }
 }
 
@@ -159,7 +163,8 @@ void Device::run() {
     const auto& b = deadline_breach_;
     const bool row = b.kind == DeadlineBreach::Kind::in_a_row;
     raise(Outcome::failed(FaultCode::deadline_missed, "its task missed its deadline",
-                          row ? "in a row" : "in a window", static_cast<std::uint32_t>(b.missed), b.latency));
+                          row ? "in a row" : "in a window", static_cast<std::uint32_t>(b.missed), b.latency),
+          FaultOrigin::deadline_missed);
   }
   // An enable clears a fault first: a cause still present (read() sees it) faults again at once.
   if (enable_requested_) begin_enable(t);

@@ -106,6 +106,7 @@ TEST_F(DeviceBase, ADriverThatThrowsInItsCycleFaultsWithWhatItSaidAndNothingEsca
   EXPECT_EQ(dev.fault().code, FaultCode::device_error);
   EXPECT_EQ(dev.fault().source_name(), "driver");
   EXPECT_EQ(dev.device_status().reason_text(), "the encoder board went away");
+  EXPECT_EQ(dev.device_status().origin, saw::FaultOrigin::driver);
   EXPECT_EQ(dev.last.mode, ServoMode::none) << "the same cycle's write already carried the safe output";
   ASSERT_FALSE(dev.safe_reasons.empty());
   EXPECT_EQ(dev.safe_reasons.back(), SafeReason::fault);
@@ -122,6 +123,7 @@ TEST_F(DeviceBase, AnErrorFromTheHardwareFaultsWithItsReasonOnceAndEnableClearsI
   EXPECT_EQ(dev.fault().detail, 0x1234u);
   EXPECT_EQ(dev.fault().age_ns, 42);
   EXPECT_EQ(dev.device_status().reason_text(), "no heartbeat");
+  EXPECT_EQ(dev.device_status().origin, saw::FaultOrigin::driver);
   dev.update_fault(Outcome::failed(FaultCode::device_lost, "node gone", "node 5"));
   EXPECT_EQ(dev.device_status().reason_text(), "node gone");
   EXPECT_EQ(dev.device_status().faults, 1u) << "known better, still one fault";
@@ -149,6 +151,8 @@ TEST_F(DeviceBase, AnEnableThatNeverCompletesFaultsAtItsTimeoutAndIsBusyUntilThe
   cycle(10);
   EXPECT_EQ(state(), OperatingStateValue::fault);
   EXPECT_EQ(dev.device_status().reason_text(), "enable timed out");
+  EXPECT_EQ(dev.device_status().origin, saw::FaultOrigin::enable_timeout)
+      << "typed: no driver reads the text";
 }
 
 TEST_F(DeviceBase, HomingIsBusyAndTimesOut) {
@@ -163,6 +167,7 @@ TEST_F(DeviceBase, HomingIsBusyAndTimesOut) {
   EXPECT_EQ(state(), OperatingStateValue::fault);
   EXPECT_EQ(dev.fault().code, FaultCode::limit_exceeded);
   EXPECT_EQ(dev.device_status().reason_text(), "homing timed out");
+  EXPECT_EQ(dev.device_status().origin, saw::FaultOrigin::home_timeout);
   dev.home_never = false;
   enable();
   write("state_command", StateCommand::home);

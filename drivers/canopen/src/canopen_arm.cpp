@@ -213,10 +213,10 @@ void CanopenArm::enter_safe_state(SafeReason why) {
   // A fault the base raised itself, in CANopen's terms where there are some: a stale command,
   // an enable that never completed. Any other (a throw caught) keeps none: the base's reason says it.
   if (why == SafeReason::fault && reason_ == FaultReason::none) {
-    const DeviceStatus& d = device_status();
-    if (d.fault.code == FaultCode::input_stale && d.fault.source_name() == "commands")
+    const FaultOrigin origin = device_status().origin;
+    if (origin == FaultOrigin::command_timeout)
       reason_ = FaultReason::command_stale;
-    else if (d.reason_text() == "enable timed out")
+    else if (origin == FaultOrigin::enable_timeout)
       reason_ = FaultReason::enable_timeout;
   }
   switch (why) {

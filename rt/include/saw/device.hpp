@@ -29,6 +29,19 @@ constexpr std::size_t enum_count(SafeState) { return 3; }
 constexpr std::string_view enum_type_name(SafeState) { return "saw::SafeState"; }
 std::string_view to_string(SafeState s) noexcept;
 
+// Which of the base's own checks raised a fault; `driver` for one its hardware calls reported
+// (or threw). Carried typed in DeviceStatus so that a driver tells them apart without reading text.
+enum class FaultOrigin : std::uint8_t {
+  none,
+  driver,           // read(), write(), enable() or home() failed or threw
+  enable_timeout,   // enable() still pending after enable_timeout
+  home_timeout,     // home() still pending after home_timeout
+  command_timeout,  // no servo command within command_timeout (fault_on_command_timeout)
+  deadline_missed,  // the device's task missed its deadline
+};
+constexpr std::size_t enum_count(FaultOrigin) { return 6; }
+constexpr std::string_view enum_type_name(FaultOrigin) { return "saw::FaultOrigin"; }
+
 // Why the base put the device in its safe state (the driver may care: a drive quick-stops on a
 // fault but disables voltage on `disable`).
 enum class SafeReason : std::uint8_t { disable, fault, stop, start_failed };
@@ -136,7 +149,7 @@ struct RefusedCommands {
 // The contract's state and counters: the "device" column (a summary, printed when a run ends).
 struct DeviceStatus {
   static constexpr std::string_view type_name = "saw::DeviceStatus";
-  static constexpr std::uint32_t layout_version = 1;
+  static constexpr std::uint32_t layout_version = 2;  // 2: origin
   static constexpr std::size_t max_reason = 63;
   OperatingStateValue state = OperatingStateValue::disabled;
   SafeState safe_state = SafeState::zero_force;
@@ -148,11 +161,12 @@ struct DeviceStatus {
   RefusedCommands refused{};
   FaultInfo fault{};                          // the last fault (kept after recovery)
   std::array<char, max_reason + 1> reason{};  // the last fault's reason, as the driver said it
+  FaultOrigin origin = FaultOrigin::none;     // the last fault's: which check raised it
   static constexpr auto fields =
       std::tuple{&DeviceStatus::state,           &DeviceStatus::safe_state,     &DeviceStatus::safe_output,
                  &DeviceStatus::faults,          &DeviceStatus::watchdog_trips, &DeviceStatus::safe_entries,
                  &DeviceStatus::command_timeout, &DeviceStatus::refused,        &DeviceStatus::fault,
-                 &DeviceStatus::reason};
+                 &DeviceStatus::reason,          &DeviceStatus::origin};
   std::string_view reason_text() const noexcept;
 };
 
@@ -237,7 +251,7 @@ class Device : public Task {
   // is_homed is false until the next homing is done; said as an operating_state event.
   void lose_homing() noexcept;
   // From a cycle: a fault the driver sees outside its hardware calls.
-  void raise(const Outcome& why) noexcept;
+  void raise(const Outcome& why, FaultOrigin origin = FaultOrigin::driver) noexcept;
   // In FAULT: what is known now about the same fault replaces what was said (a silent node seen
   // first as stale feedback, then as a lost heartbeat); said again as a fault event.
   void update_fault(const Outcome& why) noexcept;
