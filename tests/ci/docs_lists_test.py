@@ -2,6 +2,9 @@
 components (docs/architecture.md, every saw_library's COMPONENT) and the device conformance rigs
 (docs/extending.md, every tests/device/*_rig.cpp). Each list sits after a marker comment
 (`<!-- components: ...`, `<!-- rigs: ...`) and ends at the first name followed by ';' or '.'.
+And the types the gateway and its mapping modules map (every `registry.add<T, ...>` and
+`add_fields<T, ...>` under nonrt/): each named in the paragraph after `<!-- mapped types:`
+(docs/architecture.md), which also names the DDS types they map to.
 
 usage: docs_lists_test.py SOURCE_DIR
 """
@@ -23,6 +26,24 @@ def listed(doc, marker):
     return {n.replace("sawrt::", "") for n in re.findall(r"`([A-Za-z0-9_:.]+)`", body)}
 
 
+def mentioned(doc, marker):
+    """The backquoted names in the paragraph after `<!-- marker:` (to the next list item or blank line)."""
+    text = open(doc).read()
+    at = text.find(f"<!-- {marker}:")
+    if at < 0:
+        raise SystemExit(f"{doc}: no '<!-- {marker}:' marker")
+    body = re.split(r"\n(?:- |\s*\n)", text[text.index("-->", at) + 3:], maxsplit=1)[0]
+    return set(re.findall(r"`([A-Za-z0-9_:]+)`", body))
+
+
+def mapped_types(root):
+    """The rt types registered with a DDS mapping in nonrt/ (std::int64_t as the docs say it: int64)."""
+    found = set()
+    for path in glob.glob(os.path.join(root, "nonrt", "**", "*.cpp"), recursive=True):
+        found |= set(re.findall(r"\badd(?:_fields)?<\s*([A-Za-z0-9_:]+)\s*,", open(path).read()))
+    return {"int64" if t == "std::int64_t" else t for t in found}
+
+
 def components(root):
     found = set()
     for d in ("rt", "bridge", "nonrt", "drivers"):
@@ -42,6 +63,11 @@ def main(root):
         failures += not ok
         print(("ok   " if ok else "FAIL ") + f"{doc} lists the {marker} of the tree"
               + ("" if ok else f": missing {sorted(truth - says)}, not in the tree {sorted(says - truth)}"))
+    types = mapped_types(root)
+    missing = types - mentioned(os.path.join(root, "docs/architecture.md"), "mapped types")
+    failures += bool(missing) or not types
+    print(("FAIL " if missing or not types else "ok   ") + f"docs/architecture.md names the {len(types)} mapped types"
+          + (f": missing {sorted(missing)}" if missing else ""))
     return 1 if failures else 0
 
 
