@@ -90,6 +90,7 @@ class Client : public saw::Task {
     saw::crtk::require(r, arm::measured_cp, measured_cp);
     saw::crtk::require(r, arm::measured_cv, measured_cv);
     saw::crtk::require(r, arm::measured_js, measured_js);
+    saw::crtk::require(r, arm::gripper_measured_js, gripper, saw::Need::optional);
     saw::crtk::require(r, arm::servo_cf, servo_cf);
     saw::crtk::require(r, arm::state_command, state_command);
     saw::crtk::require(r, arm::clutch, [this](const saw::ButtonEvent& b) {
@@ -105,6 +106,7 @@ class Client : public saw::Task {
   saw::FunctionRead<saw::Pose> measured_cp;
   saw::FunctionRead<saw::Twist> measured_cv;
   saw::FunctionRead<saw::JointState> measured_js;
+  saw::FunctionRead<saw::JointState> gripper;
   saw::FunctionWrite<saw::Wrench> servo_cf;
   saw::FunctionWrite<saw::StateCommand> state_command;
   saw::FunctionWrite<saw::drivers::ButtonCommand> set_button;
@@ -140,6 +142,72 @@ struct Rig {
   Client client;
   saw::Manager m;
 };
+
+// A 6-DOF stylus: its orientation is the hand's turn (the gimbal takes what the arm's tip does
+// not), read with its angular velocity and the gimbal's joints; the gripper is the hand's grip;
+// a turn past the gimbal's limits is not followed.
+TEST(SimHapticDevice, AStylusReadsTheHandsTurnAndGrip) {
+  SimDeviceConfig c;
+  c.stylus = true;
+  c.hand.kind = saw::drivers::HandScript::Kind::sinusoid;
+  c.hand.amplitude = Eigen::Vector3d(0.02, 0, 0);
+  c.hand.frequency = 0.5;
+  c.hand.turn_axis = Eigen::Vector3d(0, 0.6, 0.8);
+  c.hand.turn_amplitude = 20 * M_PI / 180;
+  c.hand.grip_mean = 0.5;
+  c.hand.grip_amplitude = 0.2;
+  Rig rig(c);
+  double worst = 0, worst_rate = 0, worst_grip = 0, largest_turn = 0;
+  for (int k = 0; k < 40; ++k) {
+    rig.steps(50);
+    const double t = static_cast<double>(rig.m.simulated_time()) * 1e-9;  // the row's hand
+    const double wave = std::sin(2 * M_PI * 0.5 * t);
+    saw::Pose p;
+    saw::Twist v;
+    saw::JointState js, grip;
+    ASSERT_EQ(rig.client.measured_cp(p), saw::Status::ok);
+    ASSERT_EQ(rig.client.measured_cv(v), saw::Status::ok);
+    ASSERT_EQ(rig.client.measured_js(js), saw::Status::ok);
+    ASSERT_EQ(rig.client.gripper(grip), saw::Status::ok);
+    const Eigen::Quaterniond q(p.orientation[3], p.orientation[0], p.orientation[1], p.orientation[2]);
+    const Eigen::Quaterniond hand(
+        Eigen::AngleAxisd(c.hand.turn_amplitude * wave, c.hand.turn_axis.normalized()));
+    worst = std::max(worst, q.angularDistance(hand));
+    largest_turn = std::max(largest_turn, q.angularDistance(Eigen::Quaterniond::Identity()));
+    const Eigen::Vector3d rate =
+        c.hand.turn_axis.normalized() * c.hand.turn_amplitude * 2 * M_PI * 0.5 * std::cos(2 * M_PI * 0.5 * t);
+    worst_rate =
+        std::max(worst_rate, (Eigen::Vector3d(v.angular[0], v.angular[1], v.angular[2]) - rate).norm());
+    worst_grip = std::max(worst_grip, std::abs(grip.position[0] - (0.5 + 0.2 * wave)));
+    ASSERT_EQ(js.size, 6u);
+    EXPECT_EQ(js.name_of(3), "gimbal_pitch");
+    EXPECT_EQ(grip.size, 1u);
+  }
+  EXPECT_LT(worst, 1e-6) << "the stylus's orientation is the hand's";
+  EXPECT_GT(largest_turn, 0.3) << "and it turned (close to 20 degrees)";
+  EXPECT_LT(worst_rate, 0.01) << "its angular velocity the turn's (rad/s, one cycle's difference)";
+  EXPECT_LT(worst_grip, 1e-9) << "the gripper the hand's grip";
+
+  // A turn of 170 degrees about y (the tip pitched 69 degrees down: 101 degrees for the gimbal)
+  // with the gimbal's pitch limited to 57 degrees: it stops there, the stylus short of the hand.
+  SimDeviceConfig far = c;
+  far.hand.turn_axis = Eigen::Vector3d::UnitY();
+  far.hand.turn_amplitude = 170 * M_PI / 180;
+  far.hand.phase = M_PI / 2;  // the whole turn at t = 0
+  far.gimbal_max[0] = 1.0;
+  Rig held(far);
+  held.steps(2);
+  saw::JointState js;
+  ASSERT_EQ(held.client.measured_js(js), saw::Status::ok);
+  EXPECT_NEAR(js.position[3], 1.0, 1e-12) << "gimbal_pitch at its limit";
+  saw::Pose p;
+  ASSERT_EQ(held.client.measured_cp(p), saw::Status::ok);
+  const Eigen::Quaterniond q(p.orientation[3], p.orientation[0], p.orientation[1], p.orientation[2]);
+  EXPECT_NEAR(q.angularDistance(
+                  Eigen::Quaterniond(Eigen::AngleAxisd(far.hand.turn_amplitude, Eigen::Vector3d::UnitY()))),
+              far.hand.turn_amplitude - (js.position[1] + js.position[2]) - 1.0, 1e-9)
+      << "short of the hand by what the gimbal could not take";
+}
 
 TEST(SimHapticDevice, ForceMovesTheTipAlongItAndDampingStopsIt) {
   for (auto model : {ArmModel::omni, ArmModel::falcon}) {

@@ -114,6 +114,9 @@ HandSample HandScript::target(double t, std::size_t& cursor) const noexcept {
       break;
   }
   if (kind != Kind::none && tremor_amplitude > 0) s.position += tremor(*this, t);
+  const double wave = std::sin(2 * M_PI * frequency * t + phase);
+  s.turn = turn_amplitude * wave;
+  s.grip = grip_mean + grip_amplitude * wave;
   return s;
 }
 

@@ -1,5 +1,6 @@
 #include "saw/drivers/sim_haptic_device.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -36,8 +37,27 @@ SimDeviceConfig with_defaults(SimDeviceConfig c) {
       throw std::invalid_argument("the wall's stiffness and damping must not be negative");
   }
   if ((c.inertia.array() <= 0).any()) throw std::invalid_argument("inertia must be positive");
+  if (!(c.hand.turn_axis.norm() > 1e-9)) throw std::invalid_argument("the hand's turn axis must not be zero");
+  if (c.stylus && !omni) throw std::invalid_argument("a stylus is an Omni's (model omni)");
+  if ((c.gimbal_min.array() >= c.gimbal_max.array()).any())
+    throw std::invalid_argument("gimbal_min must be below gimbal_max");
   if ((c.joint_min.array() > c.joint_max.array()).any()) throw std::invalid_argument("joint_min > joint_max");
   return c;
+}
+
+constexpr std::string_view gimbal_names[3] = {"gimbal_pitch", "gimbal_roll", "gimbal_yaw"};
+
+// The stylus's gimbal angles (about y, then x, then z) of a rotation R = Ry(a)·Rx(b)·Rz(c).
+Eigen::Vector3d gimbal_angles(const Eigen::Matrix3d& r) noexcept {
+  return {std::atan2(r(0, 2), r(2, 2)), std::asin(std::clamp(-r(1, 2), -1.0, 1.0)),
+          std::atan2(r(1, 0), r(1, 1))};
+}
+
+Eigen::Matrix3d gimbal_rotation(const Eigen::Vector3d& g) noexcept {
+  return (Eigen::AngleAxisd(g[0], Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(g[1], Eigen::Vector3d::UnitX()) *
+          Eigen::AngleAxisd(g[2], Eigen::Vector3d::UnitZ()))
+      .toRotationMatrix();
 }
 
 // The contract the base runs for it: a haptic device, safe at zero force.
@@ -54,6 +74,9 @@ DeviceConfig contract_of(const SimDeviceConfig& c) {
     j.max = c.joint_max[static_cast<Eigen::Index>(i)];
     d.joints.push_back(j);
   }
+  if (c.stylus)
+    for (int i = 0; i < 3; ++i)
+      d.joints.push_back(JointLimits{std::string(gimbal_names[i]), c.gimbal_min[i], c.gimbal_max[i]});
   return d;
 }
 
@@ -66,6 +89,10 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   q_ = config_.initial_joints.cwiseMax(config_.joint_min).cwiseMin(config_.joint_max);
   hand_origin_ = kinematics_.fk(q_);
   hand_target_ = hand_origin_;
+  if (config_.stylus) {
+    grip_.size = 1;
+    (void)grip_.set_name(0, "gripper");
+  }
   publish();
 
   auto& st = state_table();
@@ -83,6 +110,7 @@ SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceCon
   crtk_interface().add_command_read("servo_force", columns_.servo_force);
   // A force sensor at the tip: what the environment (the wall) pushes on it with.
   crtk::provide(crtk_interface(), crtk::arm::measured_cf, st, &contact_);
+  if (config_.stylus) crtk::provide(crtk_interface(), crtk::arm::gripper_measured_js, st, &grip_);
   auto& sim = provide("sim");
   sim.add_command_write<ButtonCommand>("set_button",
                                        [this](const ButtonCommand& b) { set_button(b.button, b.pressed); });
@@ -107,7 +135,7 @@ void SimHapticDevice::enter_safe_state(SafeReason) {
 Outcome SimHapticDevice::read() {
   if (t0_ < 0) t0_ = now();
   const double t = static_cast<double>(now() - t0_) * 1e-9;
-  const HandSample h = config_.hand.target(t, hand_cursor_);
+  const HandSample h = hand_ = config_.hand.target(t, hand_cursor_);
   if (config_.hand.kind == HandScript::Kind::csv && h.clutch != hand_clutch_) {
     hand_clutch_ = h.clutch;
     button(Button::clutch, h.clutch);
@@ -178,7 +206,30 @@ void SimHapticDevice::publish() noexcept {
     m.js.position[i] = q_[k];
     m.js.velocity[i] = qd_[k];
   }
+  if (config_.stylus) publish_stylus(static_cast<double>(config().period.count()) * 1e-9);
   rejected_column_ = device_status().refused.total();
+}
+
+// The hand holds the stylus at its turn: the gimbal takes what the arm's tip does not, within
+// its limits; what is past them the stylus cannot follow.
+void SimHapticDevice::publish_stylus(double dt) noexcept {
+  Measured& m = measured();
+  const Eigen::Matrix3d tip = (Eigen::AngleAxisd(q_[0], Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(q_[1] + q_[2], Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();  // the Omni chain's (arm_kinematics.cpp)
+  const Eigen::Matrix3d hand =
+      Eigen::AngleAxisd(hand_.turn, config_.hand.turn_axis.normalized()).toRotationMatrix();
+  gimbal_ = gimbal_angles(tip.transpose() * hand).cwiseMax(config_.gimbal_min).cwiseMin(config_.gimbal_max);
+  const Eigen::Quaterniond now(tip * gimbal_rotation(gimbal_));
+  // Angular velocity from the turn since the last cycle (base frame).
+  const Eigen::AngleAxisd turned(now * stylus_.conjugate());
+  const Eigen::Vector3d w =
+      dt > 0 ? Eigen::Vector3d(turned.axis() * turned.angle() / dt) : Eigen::Vector3d::Zero();
+  stylus_ = now;
+  m.cp.orientation = {now.x(), now.y(), now.z(), now.w()};
+  m.cv.angular = to_vec3(w);
+  for (int k = 0; k < 3; ++k) m.js.position[static_cast<std::size_t>(3 + k)] = gimbal_[k];
+  grip_.position[0] = hand_.grip;
 }
 
 }  // namespace saw::drivers

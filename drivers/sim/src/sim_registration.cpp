@@ -44,6 +44,19 @@ HandScript parse_hand(Params h, const std::string& directory) {
   }
   s.reach_time = h.get_in_range("reach_time", 1e-2, 60, s.reach_time);
   s.dwell = h.get_in_range("dwell", 0, 60, s.dwell);
+  // A stylus's hand (the device's `stylus: true`): its turn (deg about an axis of the base's
+  // frame) and grip (rad), sinusoids at the script's frequency and phase.
+  if (h.has("turn")) {
+    const Params turn = h.child("turn");
+    s.turn_axis = to_eigen(turn.get<Vec3>("axis"));
+    if (!(s.turn_axis.norm() > 1e-9)) turn.fail_at("axis", "must not be zero");
+    s.turn_amplitude = turn.get_in_range("amplitude", 0, 180, 0) * M_PI / 180;
+  }
+  if (h.has("grip")) {
+    const Params grip = h.child("grip");
+    s.grip_mean = grip.get_in_range("mean", -1.6, 1.6, 0);
+    s.grip_amplitude = grip.get_in_range("amplitude", 0, 1.6, 0);
+  }
   const Params tremor = h.child("tremor");
   s.tremor_amplitude = tremor.get_in_range("amplitude", 0, 0.002, 0.0);
   s.tremor_frequency = tremor.get_in_range("frequency", 0.1, 30, s.tremor_frequency);
@@ -70,6 +83,15 @@ SimDeviceSpec parse_sim_device(const ComponentContext& ctx, Params& p) {
       p.get_enum<ArmModel>("model", {{"omni", ArmModel::omni}, {"falcon", ArmModel::falcon}}, ArmModel::omni);
   c.initial_joints = to_eigen(p.get_or<Vec3>("initial_joints", {0, 0, 0}));
   c.hand = parse_hand(p.child("hand"), ctx.directory);
+  c.stylus = p.get_or<bool>("stylus", false);
+  if (c.stylus && c.model != ArmModel::omni) p.fail_at("stylus", "an Omni's (model: omni)");
+  if (p.has("gimbal")) {
+    const Params g = p.child("gimbal");
+    c.gimbal_min = to_eigen(g.get<Vec3>("min"));
+    c.gimbal_max = to_eigen(g.get<Vec3>("max"));
+    if ((c.gimbal_min.array() >= c.gimbal_max.array()).any())
+      g.fail_at("max", "must be above min on every axis");
+  }
   if (p.has("wall")) {
     const Params w = p.child("wall");
     c.wall.enabled = true;

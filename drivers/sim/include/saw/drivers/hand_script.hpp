@@ -11,6 +11,8 @@ struct HandSample {
   double t = 0;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   bool clutch = false;
+  double turn = 0;  // rad about HandScript::turn_axis (a stylus's hand)
+  double grip = 0;  // rad, the gripper's angle
 };
 
 // Target positions are relative to the device's initial tip position (the hand's origin).
@@ -35,6 +37,12 @@ struct HandScript {
   // Physiological tremor on top of any motion: three sinusoids near `tremor_frequency` (one per
   // axis, 8–12 Hz in a person), each of `tremor_amplitude` m peak (sub-millimetre in a person).
   double tremor_amplitude = 0.0, tremor_frequency = 10.0;
+  // A stylus in the hand (SimDeviceConfig::stylus): it turns about `turn_axis` (the base's frame)
+  // by turn_amplitude·sin(2π·frequency·t + phase) and squeezes the gripper to
+  // grip_mean + grip_amplitude·sin(2π·frequency·t + phase), whatever the position's kind.
+  Eigen::Vector3d turn_axis = Eigen::Vector3d::UnitZ();
+  double turn_amplitude = 0.0;                   // rad
+  double grip_mean = 0.0, grip_amplitude = 0.0;  // rad
 
   // Throws std::runtime_error naming the file and line of a bad row.
   static std::vector<HandSample> load_csv(const std::string& path);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
@@ -40,6 +41,14 @@ struct SimDeviceConfig {
   HandScript hand;
   VirtualWall wall;
   int substeps = 4;  // integration steps per cycle
+  // A 6-DOF Omni-like stylus (model omni): on the arm's tip a gimbal of three intersecting axes
+  // — about y, then x, then z of the tip's frame — sensed, with no motors (force feedback stays
+  // 3-DOF, as on an Omni), and a gripper; the hand turns the stylus and squeezes the gripper
+  // (HandScript's turn and grip). measured_cp's orientation is the stylus's (the hand's, within
+  // the gimbal's limits), measured_js has the gimbal's joints after the arm's,
+  // gripper_measured_js the grip (rad).
+  bool stylus = false;
+  Eigen::Vector3d gimbal_min{-2.6, -1.4, -2.6}, gimbal_max{2.6, 1.4, 2.6};  // rad
 };
 
 // Buttons on the "sim" interface's set_button.
@@ -102,6 +111,7 @@ class SimHapticDevice : public Device {
   void integrate(double dt, const Eigen::Vector3d& force, const Eigen::Vector3d& hand_target) noexcept;
   void publish() noexcept;
   Eigen::Vector3d wall(const Eigen::Vector3d& x, const Eigen::Vector3d& xd) const noexcept;
+  void publish_stylus(double dt) noexcept;
 
   SimDeviceConfig config_;
   ArmKinematics kinematics_;
@@ -111,6 +121,10 @@ class SimHapticDevice : public Device {
   TimeNs t0_ = -1;
   std::size_t hand_cursor_ = 0;
   bool hand_clutch_ = false;
+  HandSample hand_{};                                           // this cycle's
+  Eigen::Vector3d gimbal_ = Eigen::Vector3d::Zero();            // the stylus's sensed angles
+  Eigen::Quaterniond stylus_ = Eigen::Quaterniond::Identity();  // its orientation (base frame)
+  JointState grip_{};                                           // gripper_measured_js
   int safe_entries_ = 0;
 
   // State-table sources.
