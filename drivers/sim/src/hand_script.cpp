@@ -115,6 +115,8 @@ HandSample HandScript::target(double t, std::size_t& cursor) const noexcept {
   }
   if (kind != Kind::none && tremor_amplitude > 0) s.position += tremor(*this, t);
   const double wave = std::sin(2 * M_PI * frequency * t + phase);
+  for (const auto& [pressed, released] : clutch_windows)
+    s.clutch = s.clutch || (t >= pressed && t < released);
   s.turn = turn_amplitude * wave;
   s.grip = grip_mean + grip_amplitude * wave;
   return s;

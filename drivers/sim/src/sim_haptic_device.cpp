@@ -136,7 +136,7 @@ Outcome SimHapticDevice::read() {
   if (t0_ < 0) t0_ = now();
   const double t = static_cast<double>(now() - t0_) * 1e-9;
   const HandSample h = hand_ = config_.hand.target(t, hand_cursor_);
-  if (config_.hand.kind == HandScript::Kind::csv && h.clutch != hand_clutch_) {
+  if (h.clutch != hand_clutch_) {  // a csv row's clutch column, or a scripted window
     hand_clutch_ = h.clutch;
     button(Button::clutch, h.clutch);
   }

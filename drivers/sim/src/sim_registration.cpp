@@ -6,6 +6,7 @@
 
 #include "saw/deploy/device_settings.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/drivers/sim_instrument.hpp"
 #include "saw/eigen.hpp"
 
 namespace saw::drivers::sim {
@@ -57,6 +58,17 @@ HandScript parse_hand(Params h, const std::string& directory) {
     s.grip_mean = grip.get_in_range("mean", -1.6, 1.6, 0);
     s.grip_amplitude = grip.get_in_range("amplitude", 0, 1.6, 0);
   }
+  // The operator's clutch: pressed and released at these times (s), alternately.
+  if (h.has("clutch")) {
+    const auto times = h.get<std::vector<double>>("clutch");
+    if (times.size() % 2 != 0)
+      h.fail_at("clutch", "pairs of times: pressed at the first, released at the second");
+    for (std::size_t i = 0; i < times.size(); i += 2) {
+      if (!(times[i] >= 0 && times[i] < times[i + 1]) || (i > 0 && !(times[i] > times[i - 1])))
+        h.fail_at("clutch", "times increasing, each release after its press");
+      s.clutch_windows.emplace_back(times[i], times[i + 1]);
+    }
+  }
   const Params tremor = h.child("tremor");
   s.tremor_amplitude = tremor.get_in_range("amplitude", 0, 0.002, 0.0);
   s.tremor_frequency = tremor.get_in_range("frequency", 0.1, 30, s.tremor_frequency);
@@ -106,6 +118,35 @@ SimDeviceSpec parse_sim_device(const ComponentContext& ctx, Params& p) {
   return {task, c};
 }
 
+struct SimInstrumentSpec {
+  TaskConfig task;
+  SimInstrumentConfig config;
+};
+
+SimInstrumentSpec parse_sim_instrument(const ComponentContext& ctx, Params& p) {
+  SimInstrumentSpec s;
+  SimInstrumentConfig& c = s.config;
+  s.task = deploy::periodic_task(ctx, p, "sim_instrument");
+  c.contract = deploy::parse_device_settings(p, s.task, {.force = false, .poses = true}, c.contract);
+  if (p.has("initial_joints")) {
+    const auto q = p.get<std::vector<double>>("initial_joints");
+    if (q.size() != InstrumentKinematics::dof) p.fail_at("initial_joints", "six values, base to wrist");
+    for (int i = 0; i < InstrumentKinematics::dof; ++i) {
+      c.initial_joints[i] = q[static_cast<std::size_t>(i)];
+      if (!(q[static_cast<std::size_t>(i)] >= c.joint_min[i] &&
+            q[static_cast<std::size_t>(i)] <= c.joint_max[i]))
+        p.fail_at("initial_joints", "each within its joint's stops");
+    }
+  }
+  c.servo_lag = seconds_in_range(p, "servo_lag", std::chrono::microseconds(5000), 0, 0.5);
+  c.jaw_min = p.get_in_range("jaw_min", -1, 2, c.jaw_min);
+  c.jaw_max = p.get_in_range("jaw_max", -1, 2, c.jaw_max);
+  if (!(c.jaw_min < c.jaw_max)) p.fail_at("jaw_max", "must be above jaw_min");
+  c.jaw_rate = p.get_in_range("jaw_rate", 0.01, 100, c.jaw_rate);
+  c.initial_jaw = p.get_in_range("initial_jaw", c.jaw_min, c.jaw_max, c.initial_jaw);
+  return s;
+}
+
 }  // namespace
 
 void register_components(deploy::ComponentRegistry& registry) {
@@ -114,6 +155,12 @@ void register_components(deploy::ComponentRegistry& registry) {
                [](const std::string& name, const SimDeviceSpec& s) {
                  return std::make_unique<SimHapticDevice>(name, s.task, s.config);
                });
+  registry.add(
+      "sim_instrument",
+      "simulated PSM-like instrument arm (remote centre, wrist, jaw; KDL) taking servo_cp and jaw_servo_jp",
+      parse_sim_instrument, [](const std::string& name, const SimInstrumentSpec& s) {
+        return std::make_unique<SimInstrument>(name, s.task, s.config);
+      });
 }
 
 }  // namespace saw::drivers::sim

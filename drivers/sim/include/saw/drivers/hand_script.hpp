@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace saw::drivers {
@@ -43,6 +44,9 @@ struct HandScript {
   Eigen::Vector3d turn_axis = Eigen::Vector3d::UnitZ();
   double turn_amplitude = 0.0;                   // rad
   double grip_mean = 0.0, grip_amplitude = 0.0;  // rad
+  // The operator presses the clutch from the first to the second time of each window (s since
+  // the first cycle), whatever the kind (csv rows carry their own clutch column).
+  std::vector<std::pair<double, double>> clutch_windows;
 
   // Throws std::runtime_error naming the file and line of a bad row.
   static std::vector<HandSample> load_csv(const std::string& path);
