@@ -6,10 +6,12 @@
 
 #include "guard_support.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/drivers/sim_instrument.hpp"
 #include "saw/manager.hpp"
 #include "saw/rt_context.hpp"
 #include "saw/teleop/delay_task.hpp"
 #include "saw/teleop/laws/passive_bilateral.hpp"
+#include "saw/teleop/laws/surgical.hpp"
 #include "saw/teleop/laws/wave_variables.hpp"
 #include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
@@ -102,6 +104,58 @@ struct BilateralDeployment {
   saw::teleop::Teleoperation teleop;
   saw::Manager m;
 };
+
+// Teleoperation in SE(3): the 6-DOF stylus drives the instrument arm (its inverse kinematics in
+// every cycle) with the surgical law, the clutch pressed and released on the way.
+struct Se3Deployment {
+  Se3Deployment()
+      : master("master", saw::TaskConfig::periodic(1ms, 0), master_config()),
+        slave("slave", saw::TaskConfig::periodic(1ms, 0), saw::drivers::SimInstrumentConfig{}),
+        teleop("teleop", saw::TaskConfig::periodic(1ms, 0), teleop_config(),
+               saw::teleop::law_spec<saw::teleop::SurgicalLaw>(law_settings())) {
+    for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &teleop}) m.add(*c);
+    m.connect("teleop", "master", "master", "arm");
+    m.connect("teleop", "slave", "slave", "arm");
+  }
+  static saw::drivers::SimDeviceConfig master_config() {
+    saw::drivers::SimDeviceConfig c = Deployment::master_config();
+    c.stylus = true;
+    c.hand.turn_axis = {0, 0.6, 0.8};
+    c.hand.turn_amplitude = 0.35;
+    c.hand.grip_mean = 0.5;
+    c.hand.grip_amplitude = 0.2;
+    c.hand.clutch_windows = {{1.0, 1.3}};
+    return c;
+  }
+  static saw::teleop::TeleopConfig teleop_config() {
+    saw::teleop::TeleopConfig c;
+    c.slave_servo_cp = true;
+    c.stale_timeout = 0.5;
+    return c;
+  }
+  static saw::teleop::SurgicalLaw::Settings law_settings() {
+    saw::teleop::SurgicalLaw::Settings s;
+    s.scale = 0.2;
+    return s;
+  }
+  saw::drivers::SimHapticDevice master;
+  saw::drivers::SimInstrument slave;
+  saw::teleop::Teleoperation teleop;
+  saw::Manager m;
+};
+
+TEST(RtGuard, TeleoperationInSE3SteppedIsRtClean) {
+  saw::testing::GuardWindow window;
+  Se3Deployment d;
+  d.m.start_stepped();
+  d.m.step_until(3'000'000'000);
+  const auto counts = window.counts();
+  EXPECT_EQ(d.teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_GT(d.slave.summary().poses, 2000u) << "the instrument should be following the stylus";
+  d.m.stop();
+  EXPECT_EQ(counts.cycles, 3 * 3001u);
+  EXPECT_RT_CLEAN(counts);
+}
 
 template <class D>
 double slave_travel(const D& d) {
