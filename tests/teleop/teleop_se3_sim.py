@@ -11,7 +11,12 @@ record, independently of the law's own error columns:
     pose at the release (the largest per-cycle move around it against the hand's own);
 (c) a stylus turned 40° from the instrument at start: no engagement and no motion until its turn
     passes within align_tolerance, then the law engages;
-(d) a gripper squeezed past the jaw's range: the jaw stays within [jaw_min, jaw_max].
+(d) a gripper squeezed past the jaw's range: the jaw stays within [jaw_min, jaw_max];
+(e) the camera frame from an endoscope: a second simulated instrument (the ECM's stand-in) rolled
+    90° about its shaft, connected to the task's `camera` interface: the hand's x becomes the
+    instrument's y;
+(f) a 3-DOF master (the Omni without its stylus; the law's `orientation: false`, as for a
+    Falcon): translation followed, the instrument's orientation held.
 
 usage: teleop_se3_sim.py SAW_RT WORKDIR  (exit 1 if any check failed; the figures are printed)
 """
@@ -151,11 +156,54 @@ def jaw_limits(saw_rt, work):
     check(jaw.max() <= 1.4 + 1e-9 and jaw.max() > 1.35, f"the jaw up to jaw_max 1.4 rad, never past: {jaw.max():.4f}")
 
 
+def camera(saw_rt, work):
+    print("-- (e) the camera frame from a simulated endoscope")
+    ecm = ("  - name: teleop\n",
+           "  - name: ecm               # the endoscope's stand-in: its measured_cp is the camera frame\n"
+           "    type: sim_instrument\n    task: {period: 1ms, priority: 80}\n"
+           "    params: {initial_joints: [0.0, 0.0, 0.1, 1.5707963, 0.0, 0.0]}\n\n  - name: teleop\n")
+    d, out = run(saw_rt, work, "camera", [
+        ecm,
+        ("initial_joints: [0.0, 0.0, 0.1, 0.0, 0.0, 0.0]", "initial_joints: [0.0, 0.0, 0.1, 1.5707963, 0.0, 0.0]"),
+        ("turn: {axis: [0.0, 0.6, 0.8], amplitude: 20}", "turn: {axis: [0.0, 0.0, 1.0], amplitude: 0}"),
+        ("  - {client: teleop, required: slave, server: slave, provided: arm}\n",
+         "  - {client: teleop, required: slave, server: slave, provided: arm}\n"
+         "  - {client: teleop, required: camera, server: ecm, provided: arm}\n")], seconds=3)
+    if d is None:
+        return
+    check("FAULT" not in out, "nothing faulted")
+    s_p, _ = pose(d, "slave")
+    swing_x, swing_y = np.ptp(s_p[:, 0]), np.ptp(s_p[:, 1])
+    print(f"figure: through an endoscope rolled 90°: the hand's ±3 cm along x moves the instrument "
+          f"{swing_y * 1e3:.2f} mm along y, {swing_x * 1e3:.3f} mm along x")
+    check(0.9 * 0.012 < swing_y < 1.1 * 0.012 and swing_x < 0.05 * swing_y,
+          "the hand's x is the instrument's y, seen through the camera")
+
+
+def three_dof(saw_rt, work):
+    print("-- (f) a 3-DOF master: translation followed, orientation held")
+    d, out = run(saw_rt, work, "three_dof", [
+        ("      stylus: true ", "      stylus: false"),
+        ("        turn: {axis: [0.0, 0.6, 0.8], amplitude: 20}   # degrees\n", ""),
+        ("        grip: {mean: 0.5, amplitude: 0.2}              # rad\n", ""),
+        ("      camera_rpy: [0, 0, 0]\n", "      camera_rpy: [0, 0, 0]\n      orientation: false\n"),
+        (" master.gripper_measured_js,", "")], seconds=3)
+    if d is None:
+        return
+    check("FAULT" not in out, "nothing faulted")
+    s_p, s_q = pose(d, "slave")
+    turned = angle(s_q, s_q[:1]).max()
+    check(0.9 * 0.012 < np.ptp(s_p[:, 0]) < 1.1 * 0.012, f"the tip swings 0.2 × ±3 cm: {np.ptp(s_p[:, 0]) * 1e3:.2f} mm")
+    check(turned < 0.01, f"its orientation held ({turned:.4f}°)")
+
+
 def main(saw_rt, work):
     os.makedirs(work, exist_ok=True)
     follow(saw_rt, work)
     misaligned(saw_rt, work)
     jaw_limits(saw_rt, work)
+    camera(saw_rt, work)
+    three_dof(saw_rt, work)
     if failures:
         print("\n".join(failures), file=sys.stderr)
     return 1 if failures else 0
