@@ -80,9 +80,7 @@ struct ForceSensorFeedbackLaw {
       "sensed_force", "N", &ForceSensorFeedbackLaw::sensed_, "|the slave's measured force|, this cycle"}};
 };
 
-void register_law(saw::deploy::ComponentRegistry&) {
-  saw::teleop::law_registry().add<ForceSensorFeedbackLaw>();
-}
+void register_law(saw::deploy::ComponentRegistry& r) { saw::teleop::laws(r).add<ForceSensorFeedbackLaw>(); }
 
 }  // namespace lab
 

@@ -69,7 +69,7 @@ struct CouplingLaw {
       "energy", "J", &CouplingLaw::energy_, "work done by the coupling on both devices"}};
 };
 
-void register_law(saw::deploy::ComponentRegistry&) { saw::teleop::law_registry().add<CouplingLaw>(); }
+void register_law(saw::deploy::ComponentRegistry& r) { saw::teleop::laws(r).add<CouplingLaw>(); }
 
 }  // namespace lab
 

@@ -99,7 +99,11 @@ TEST(Plugins, TheExampleLabLawRunsOnTheTeleoperationTask) {
   saw::deploy::ComponentRegistry r;
   saw::testing::register_packages(r);
   auto d = build(text, "cfg.yaml", r);
-  ASSERT_NE(saw::teleop::law_registry().find("lab_coupling"), nullptr);
+  ASSERT_NE(saw::teleop::laws(r).find("lab_coupling"), nullptr) << "in the registry the plug-in was given";
+  saw::deploy::ComponentRegistry other;
+  saw::testing::register_packages(other);
+  EXPECT_EQ(saw::teleop::laws(other).find("lab_coupling"), nullptr)
+      << "and in no other: no process-wide state";
   auto* t = d.find<saw::teleop::Teleoperation>("teleop");
   ASSERT_NE(t, nullptr);
   EXPECT_EQ(t->law_name(), "lab_coupling");

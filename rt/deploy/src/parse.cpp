@@ -156,7 +156,7 @@ void parse_components(const YAML::Node& root, const Params& top, const Component
     } else if (entry.has("host")) {
       entry.fail_at("host", "placing a component needs a hosts: section");
     }
-    ComponentContext ctx{name, parse_task(entry, deadline), spec.directory};
+    ComponentContext ctx{name, parse_task(entry, deadline), spec.directory, &registry};
     Params params = entry.child("params");
     std::any config;
     try {

@@ -1,4 +1,5 @@
 // The built-in control laws: one line each.
+#include "saw/deploy/registry.hpp"
 #include "saw/teleop/law_registry.hpp"
 #include "saw/teleop/laws/collaborative.hpp"
 #include "saw/teleop/laws/passive_bilateral.hpp"
@@ -8,17 +9,14 @@
 
 namespace saw::teleop {
 
-LawRegistry& law_registry() {
-  static LawRegistry registry = [] {
-    LawRegistry r;
-    r.add<CollaborativeLaw>();
-    r.add<PositionPositionLaw>();
-    r.add<PassiveBilateralLaw>();
-    r.add<WaveVariableLaw>();
-    r.add<SurgicalLaw>();
-    return r;
-  }();
-  return registry;
+LawRegistry& laws(deploy::ComponentRegistry& registry) { return registry.extension<LawRegistry>(); }
+
+void add_builtin_laws(LawRegistry& r) {
+  r.add<CollaborativeLaw>();
+  r.add<PositionPositionLaw>();
+  r.add<PassiveBilateralLaw>();
+  r.add<WaveVariableLaw>();
+  r.add<SurgicalLaw>();
 }
 
 }  // namespace saw::teleop

@@ -23,8 +23,10 @@ struct TeleopSpec {
 TeleopSpec parse_teleop(const ComponentContext& ctx, Params& p) {
   // The law's settings sit beside the task's own keys, each read as the law declares it.
   const auto law = p.get_or<std::string>("law", std::string(CollaborativeLaw::name));
-  const LawRegistry::Entry* entry = law_registry().find(law);
-  if (entry == nullptr) p.fail_at("law", "'" + law + "' is not one of: " + law_registry().names());
+  const LawRegistry* laws = ctx.registry != nullptr ? ctx.registry->find_extension<LawRegistry>() : nullptr;
+  if (laws == nullptr) throw std::logic_error("teleop: parsed without the registry that registered it");
+  const LawRegistry::Entry* entry = laws->find(law);
+  if (entry == nullptr) p.fail_at("law", "'" + law + "' is not one of: " + laws->names());
   TeleopSpec spec{{}, {}, entry->parse(p)};
   TeleopConfig& c = spec.config;
   c.stale_timeout = deploy::seconds_in_range(p, "stale_timeout", 10ms, 1e-6, 10);
@@ -94,9 +96,10 @@ PortSpec parse_port(const ComponentContext& ctx, Params& p) {
 }  // namespace
 
 void register_components(deploy::ComponentRegistry& registry) {
+  add_builtin_laws(laws(registry));
   registry.add("teleop",
                "teleoperation between a master and a slave under a control law (`law:` " +
-                   law_registry().names() + "; default collaborative)",
+                   laws(registry).names() + "; default collaborative)",
                parse_teleop, [](const std::string& name, const TeleopSpec& s) {
                  return std::make_unique<Teleoperation>(name, s.task, s.config, s.law);
                });

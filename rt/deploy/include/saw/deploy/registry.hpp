@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <typeindex>
+#include <typeinfo>
 #include <vector>
 
 #include "saw/component.hpp"
@@ -20,10 +22,15 @@ namespace saw::deploy {
 
 // What a type's parser gets besides its `params:`: the component's name, its `task:` block
 // (absent → the type's default) and the deployment file's directory (for relative paths).
+class ComponentRegistry;
+
 struct ComponentContext {
   std::string name;
   std::optional<TaskConfig> task;
   std::string directory;
+  // The registry the deployment is parsed with: a type's parser finds its package's other
+  // registries there (find_extension), as its registration function filled them.
+  const ComponentRegistry* registry = nullptr;
 };
 
 // The component's task block, or a 1 kHz SCHED_FIFO 80 task when absent; a type that must be
@@ -94,6 +101,22 @@ class ComponentRegistry {
   const std::map<std::string, Section>& sections() const noexcept { return sections_; }
   const Section* find_section(const std::string& key) const;
 
+  // A registry of another kind that packages fill beside their component types (the
+  // teleoperation's laws): one of each type R, made on first use and kept here, so that whatever
+  // a package's registration function is given — this registry — reaches it too, with no
+  // process-wide state. Copies of this registry share them.
+  template <class R>
+  R& extension() {
+    auto& slot = extensions_[std::type_index(typeid(R))];
+    if (!slot) slot = std::make_shared<R>();
+    return *static_cast<R*>(slot.get());
+  }
+  template <class R>
+  const R* find_extension() const {
+    const auto it = extensions_.find(std::type_index(typeid(R)));
+    return it == extensions_.end() ? nullptr : static_cast<const R*>(it->second.get());
+  }
+
   void set_exporter(Exporter e) { exporter_ = std::move(e); }
   const Exporter& exporter() const noexcept { return exporter_; }
 
@@ -113,6 +136,7 @@ class ComponentRegistry {
   std::map<std::string, std::string> section_origins_;
   std::map<std::string, SummaryFormat> summary_formats_;
   std::vector<std::function<std::unique_ptr<RemoteResolver>()>> resolvers_;
+  std::map<std::type_index, std::shared_ptr<void>> extensions_;
   Exporter exporter_;
   bool plugins_allowed_ = true;
   std::vector<std::string> plugins_;  // paths loaded

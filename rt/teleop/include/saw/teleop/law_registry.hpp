@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "saw/deploy/params.hpp"
+#include "saw/deploy/registry.hpp"
 #include "saw/description.hpp"
 #include "saw/provided_interface.hpp"
 #include "saw/state_table.hpp"
@@ -270,8 +271,11 @@ class LawRegistry {
   std::map<std::string, Entry> laws_;
 };
 
-// The process's laws: the built-in ones (registered in laws.cpp), and those a plug-in adds
-// from its registration function.
-LawRegistry& law_registry();
+// The laws of a component registry: the built-in ones (teleop's register_components adds them,
+// laws.cpp), and those a plug-in adds from its registration function, given the same registry:
+//   void register_law(saw::deploy::ComponentRegistry& r) { saw::teleop::laws(r).add<MyLaw>(); }
+LawRegistry& laws(deploy::ComponentRegistry& registry);
+// The built-in laws alone (the docs' tables, tests).
+void add_builtin_laws(LawRegistry& registry);
 
 }  // namespace saw::teleop

@@ -5,7 +5,7 @@
 
 namespace saw::teleop {
 
-// `teleop` (Teleoperation, running a law of law_registry()) and `delay` (DelayTask), each with its
+// `teleop` (Teleoperation, running a law of laws(registry)) and `delay` (DelayTask), each with its
 // parameters' parser, and the teleop summary's format.
 void register_components(deploy::ComponentRegistry& registry);
 
