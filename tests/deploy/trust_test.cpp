@@ -248,12 +248,13 @@ namespace {
 // text of crtk_msgs/StringStamped, on rt/<component>/fault (and on rt/<component>/error, see
 // tests/gateway/error_topic_test.cpp), whoever raised it.
 TEST(TrustBoundaries, TheGatewayMapsAFaultToText) {
-  const auto* m = saw::gateway::find_mapping(saw::type_info_of<saw::FaultInfo>().name);
+  const saw::gateway::MappingRegistry mappings = saw::gateway::core_mappings();
+  const auto* m = mappings.find(saw::type_info_of<saw::FaultInfo>().name);
   ASSERT_NE(m, nullptr);
-  const auto* command = saw::gateway::find_mapping(saw::type_info_of<saw::StateCommand>().name);
+  const auto* command = mappings.find(saw::type_info_of<saw::StateCommand>().name);
   ASSERT_NE(command, nullptr);
   EXPECT_EQ(m->dds_type(), command->dds_type()) << "crtk_msgs/StringStamped";
-  EXPECT_EQ(saw::gateway::find_mapping_by_dds(m->dds_type()), command) << "state commands still decode";
+  EXPECT_EQ(mappings.find_by_dds(m->dds_type()), command) << "state commands still decode";
   saw::FaultInfo f;  // the teleoperation task's
   f.code = saw::FaultCode::input_stale;
   f.set_source("master");

@@ -140,12 +140,22 @@ void sample(const std::uint8_t* data, std::size_t size) {
   (void)Conv::text(v);
 }
 
+// The mappings the gateway would have: the core's and the teleop package's (as its module adds).
+const MappingRegistry& mappings() {
+  static const MappingRegistry r = [] {
+    MappingRegistry x = core_mappings();
+    teleop::dds::register_mappings(x);
+    return x;
+  }();
+  return r;
+}
+
 template <class Rt, class Msg, class PubSub, class Conv>
 struct Entry {
   static void run(const std::uint8_t* d, std::size_t n) { sample<Rt, Msg, PubSub, Conv>(d, n); }
   // This list must be the registry's: the same rt type for the same DDS type.
   static bool listed() {
-    const Mapping* m = find_mapping(type_info_of<Rt>().name);
+    const Mapping* m = mappings().find(type_info_of<Rt>().name);
     return m != nullptr && m->dds_type() == PubSub().getName();
   }
 };
@@ -191,12 +201,11 @@ void run_sample(std::size_t kind, const std::uint8_t* d, std::size_t n) {
 }
 
 const bool list_checked = [] {
-  teleop::dds::register_mappings(mapping_registry());  // the teleop package's, as its module does
   const bool all = [&]<std::size_t... I>(std::index_sequence<I...>) {
     return (std::tuple_element_t<I, Samples>::listed() && ...);
   }
   (std::make_index_sequence<sample_kinds>{});
-  if (!all || mapping_registry().all().size() != sample_kinds)
+  if (!all || mappings().all().size() != sample_kinds)
     defect("the fuzzer's list differs from the registry's mappings");
   return true;
 }();
@@ -222,7 +231,7 @@ void reply_filter(const std::uint8_t* d, std::size_t n) {
 // sawctl call: text parsed into a value and validated as a sample.
 void from_text(const std::uint8_t* d, std::size_t n) {
   if (n == 0) return;
-  const Mapping& m = *mapping_registry().all()[d[0] % sample_kinds];
+  const Mapping& m = *mappings().all()[d[0] % sample_kinds];
   alignas(16) std::byte value[sizeof(JointState)];
   std::string why;
   if (!m.from_text(std::string_view(reinterpret_cast<const char*>(d + 1), n - 1), value, why) && why.empty())

@@ -1,7 +1,7 @@
-// The registry of DDS mappings: the core's types from the start; a package's once its module is
-// loaded (the teleoperation's, the example lab's message type from examples/lab_message); a type
-// that declares its fields carried with one registration line, a message whose members differ
-// refused at registration.
+// A registry of DDS mappings: the core's types from the start; a package's once its module is
+// loaded into it (a registry per program: loading into one changes no other) (the teleoperation's, the
+// example lab's message type from examples/lab_message); a type that declares its fields carried with one
+// registration line, a message whose members differ refused at registration.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,33 +21,36 @@
 
 namespace {
 
-using saw::gateway::find_mapping;
-using saw::gateway::mapping_registry;
+using saw::gateway::core_mappings;
+using saw::gateway::MappingRegistry;
 
 TEST(MappingRegistry, TheCoreTypesAreThereAndAPackagesOnceItsModuleIsLoaded) {
+  MappingRegistry r = core_mappings();
   for (auto name : {saw::type_info_of<saw::Pose>().name, saw::type_info_of<saw::OperatingState>().name,
                     saw::type_info_of<saw::ComponentDescription>().name})
-    EXPECT_NE(find_mapping(name), nullptr) << name;
+    EXPECT_NE(r.find(name), nullptr) << name;
   // The gateway itself knows no teleoperation; the teleop package's module adds its types, and
   // the example lab's module its own (this test is no installed program: both directories are
   // named in $SAW_MAPPING_PATH).
   ASSERT_EQ(setenv("SAW_MAPPING_PATH", SAW_BUILD_MAPPINGS_DIR ":" SAW_EXAMPLE_MAPPINGS_DIR, 1), 0);
-  saw::gateway::load_mapping_modules();
-  const auto* gains = find_mapping(saw::type_info_of<saw::teleop::Gains>().name);
+  saw::gateway::load_mapping_modules(r);
+  const auto* gains = r.find(saw::type_info_of<saw::teleop::Gains>().name);
   ASSERT_NE(gains, nullptr);
   EXPECT_EQ(gains->dds_type(), "saw_msgs::msg::dds_::MasterSlave_");
-  const auto* lab = find_mapping("lab::SpringParams");
+  const auto* lab = r.find("lab::SpringParams");
   ASSERT_NE(lab, nullptr) << "the example's module, from " << SAW_EXAMPLE_MAPPINGS_DIR;
   EXPECT_EQ(lab->dds_type(), "lab_msgs::msg::dds_::SpringParams_");
   // Registering again (a module loaded twice, a test linking the package) changes nothing.
-  const auto before = mapping_registry().all().size();
-  saw::teleop::dds::register_mappings(mapping_registry());
-  EXPECT_EQ(mapping_registry().all().size(), before);
+  const auto before = r.all().size();
+  saw::teleop::dds::register_mappings(r);
+  EXPECT_EQ(r.all().size(), before);
+  EXPECT_EQ(core_mappings().find("lab::SpringParams"), nullptr) << "loaded into that registry, no other";
 }
 
 TEST(MappingRegistry, ATypesFieldsTravelWithoutAConversionWrittenByHand) {
-  saw::teleop::dds::register_mappings(mapping_registry());
-  const auto& m = *find_mapping(saw::type_info_of<saw::teleop::Gains>().name);
+  MappingRegistry r = core_mappings();
+  saw::teleop::dds::register_mappings(r);
+  const auto& m = *r.find(saw::type_info_of<saw::teleop::Gains>().name);
   saw::teleop::Gains g;
   std::string why;
   ASSERT_TRUE(m.from_text("300 250", &g, why)) << why;
@@ -73,9 +76,10 @@ TEST(MappingRegistry, ATypesFieldsTravelWithoutAConversionWrittenByHand) {
 // The collaborative law's offset limits and prediction: one registration line each, and a value
 // outside the type's own range (its `valid`) refused as the bridge refuses it, before it is sent.
 TEST(MappingRegistry, TheCollaborativeLawsOffsetLimitsAndPredictionAreMapped) {
-  saw::teleop::dds::register_mappings(mapping_registry());
-  const auto* limits = find_mapping(saw::type_info_of<saw::teleop::OffsetLimits>().name);
-  const auto* prediction = find_mapping(saw::type_info_of<saw::teleop::Prediction>().name);
+  MappingRegistry r = core_mappings();
+  saw::teleop::dds::register_mappings(r);
+  const auto* limits = r.find(saw::type_info_of<saw::teleop::OffsetLimits>().name);
+  const auto* prediction = r.find(saw::type_info_of<saw::teleop::Prediction>().name);
   ASSERT_NE(limits, nullptr);
   ASSERT_NE(prediction, nullptr);
   EXPECT_EQ(limits->dds_type(), "saw_msgs::msg::dds_::OffsetLimits_");

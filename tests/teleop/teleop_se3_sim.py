@@ -29,14 +29,8 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONFIG = os.path.join(HERE, "..", "..", "config", "teleop-se3-sim.yaml")
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
-    return cond
+sys.path.insert(0, os.path.join(HERE, "..", "interop"))
+from harness import check, failures  # noqa: E402  (the checklist the system tests share)
 
 
 def run(saw_rt, work, name, edits=(), seconds=10):

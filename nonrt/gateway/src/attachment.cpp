@@ -90,13 +90,13 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
   if (proxy_ == nullptr) throw std::runtime_error("attach " + component + ": not a bridge proxy");
   const ProvidedInterface& p = *component_->provided_interfaces().front();
   const std::string prefix = "rt/" + name_ + "/";
-  const Mapping* string_stamped = find_mapping(type_info_of<StateCommand>().name);
+  const Mapping* string_stamped = dds_.mapping(type_info_of<StateCommand>().name);
   error_writer_ = dds_.publisher->create_datawriter(dds_.topic(prefix + "error", *string_stamped),
                                                     DdsContext::writer_qos(Flow::log));
-  const Mapping* operating_state = find_mapping(type_info_of<OperatingState>().name);
+  const Mapping* operating_state = dds_.mapping(type_info_of<OperatingState>().name);
   for (const auto& e : p.events()) {
     const Signature& sig = e->signature();
-    const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : find_mapping(sig.arg.name);
+    const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : dds_.mapping(sig.arg.name);
     EndpointInfo info = describe(name_, p.name(), e->name(), sig);
     auto out = std::make_unique<EventOut>(EventOut{this, m, nullptr});
     if (m != nullptr) {
@@ -115,7 +115,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
           initial_states_.push_back({now, m, out->writer, std::vector<std::byte>(m->size())});
       }
       // CRTK clients watch `error` for why an arm faulted; the fault event says it.
-      out->fault_text = m == find_mapping(type_info_of<FaultInfo>().name);
+      out->fault_text = m == dds_.mapping(type_info_of<FaultInfo>().name);
     }
     // Numbered by ordinal among the interface's events, as the proxy's mailbox numbers them.
     detail::Access::remote_events(*proxy_)->set_target(
@@ -169,7 +169,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
       endpoints_.push_back(std::move(info));
       continue;
     }
-    const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : find_mapping(sig.arg.name);
+    const Mapping* m = sig.arg.size == 0 ? &empty_mapping() : dds_.mapping(sig.arg.name);
     if (m != nullptr) {
       info.dds_type = m->dds_type();
       info.topic = prefix + c->name;
@@ -194,7 +194,7 @@ Attachment::Attachment(DdsContext& dds, const std::string& component, unsigned d
                                      " is not in the bridge's state rows");
           // A task's statistics are cumulative: a tenth of the rows tells a GUI as much, for a
           // tenth of the samples every subscriber takes.
-          if (!latched && m == find_mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
+          if (!latched && m == dds_.mapping(type_info_of<TaskStatistics>().name)) states_.back().every = 10;
           // What a live view draws: the same values at the display rate, on a topic of their own,
           // so that a GUI's reader is not sent (and does not decode) a thousand rows a second.
           if (!latched && display_period_ > 0) {
@@ -304,7 +304,7 @@ void Attachment::publish_fault(const std::string& why) {
   publish_error("FAULT: " + why);
   if (fault_writer_ == nullptr) return;
   const OperatingState fault{OperatingStateValue::fault, false, false};
-  find_mapping(type_info_of<OperatingState>().name)
+  dds_.mapping(type_info_of<OperatingState>().name)
       ->write(*fault_writer_, &fault, wall_from_monotonic(monotonic_now()), name_);
 }
 

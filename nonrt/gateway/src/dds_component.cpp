@@ -37,7 +37,7 @@ DdsComponent::DdsComponent(std::shared_ptr<OwnedDds> dds, const std::string& nam
       detail::Access::add_command(p, std::move(c));
       continue;
     }
-    const Mapping* m = find_mapping_by_dds(e.dds_type);
+    const Mapping* m = ctx.mapping_by_dds(e.dds_type);
     if (m == nullptr || (e.saw_size != 0 && m->size() != e.saw_size)) continue;  // not decodable here
     if (e.kind == "read") {
       auto* r = ctx.subscriber->create_datareader(

@@ -29,6 +29,15 @@ namespace fdds = eprosima::fastdds::dds;
 enum class Flow { state, event, command, latched, log, registry };
 
 struct DdsContext {
+  // The types this program maps (its own registry, handed in: no process-wide one).
+  const MappingRegistry* mappings = nullptr;
+  const Mapping* mapping(std::string_view saw_type) const { return registry().find(saw_type); }
+  const Mapping* mapping_by_dds(std::string_view dds_type) const { return registry().find_by_dds(dds_type); }
+  const MappingRegistry& registry() const {
+    if (mappings == nullptr) throw std::logic_error("DDS context without a mapping registry");
+    return *mappings;
+  }
+
   fdds::DomainParticipant* participant = nullptr;
   fdds::Publisher* publisher = nullptr;
   fdds::Subscriber* subscriber = nullptr;

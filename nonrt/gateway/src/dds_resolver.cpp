@@ -9,8 +9,14 @@ namespace saw::gateway {
 DdsResolver::DdsResolver() : DdsResolver(Options{}) {}
 
 DdsResolver::DdsResolver(Options options) : options_(std::move(options)) {
+  if (options_.mappings == nullptr) {
+    auto mappings = std::make_shared<MappingRegistry>(core_mappings());
+    load_mapping_modules(*mappings);
+    options_.mappings = std::move(mappings);
+  }
   auto owned = std::make_shared<OwnedDds>();
   auto& ctx = owned->ctx;
+  ctx.mappings = options_.mappings.get();
   ctx.participant = make_participant(options_.dds);
   ctx.publisher = ctx.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   ctx.subscriber = ctx.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);

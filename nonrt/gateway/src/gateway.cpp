@@ -36,7 +36,10 @@ struct Gateway::Dds {
 Gateway::Gateway(GatewayConfig config) : config_(std::move(config)), dds_(std::make_unique<Dds>()) {
   if (config_.name.empty()) config_.name = "gateway." + std::to_string(getpid());
   if (config_.dds.name == ParticipantConfig{}.name) config_.dds.name = config_.name;
+  if (config_.mappings == nullptr)
+    config_.mappings = std::make_shared<const MappingRegistry>(core_mappings());
   auto& ctx = dds_->context;
+  ctx.mappings = config_.mappings.get();
   ctx.participant = make_participant(config_.dds);
   try {
     ctx.publisher = ctx.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);

@@ -11,15 +11,15 @@ namespace {
 
 // The mapping of a CRTK member's value type (type_map.cpp has one for each).
 template <class M>
-const Mapping& mapping_of(M) {
-  return *find_mapping(type_info_of<typename M::value_type>().name);
+const Mapping& mapping_of(const DdsContext& dds, M) {
+  return *dds.mapping(type_info_of<typename M::value_type>().name);
 }
 
 }  // namespace
 
 template <class M>
 fdds::DataReader* ImportedArm::reader(M member, const std::string& topic, Flow f) {
-  return reader(std::string(member.name), topic, mapping_of(member), f);
+  return reader(std::string(member.name), topic, mapping_of(dds_, member), f);
 }
 
 ImportedArm::ImportedArm(DdsContext& dds, const ImportConfig& config)
@@ -105,7 +105,7 @@ void ImportedArm::provide_commands(ProvidedInterface& p, const std::string& pref
   const auto allowed = [&](std::string_view c) {
     return std::find(config_.commands.begin(), config_.commands.end(), c) != config_.commands.end();
   };
-  state_command_ = writer("state_command", prefix + "state_command", mapping_of(arm::state_command));
+  state_command_ = writer("state_command", prefix + "state_command", mapping_of(dds_, arm::state_command));
   crtk::provide(p, arm::state_command, [this](const StateCommand& c) {
     if (c == StateCommand::enable) gravity_sent_ = false;
     if (matched(state_command_))
@@ -115,36 +115,36 @@ void ImportedArm::provide_commands(ProvidedInterface& p, const std::string& pref
   });
   // The dVRK has no plain servo_cf: its Cartesian wrench is body/servo_cf.
   if (allowed("servo_cf")) {
-    servo_cf_ = writer("servo_cf", prefix + "body/servo_cf", mapping_of(arm::servo_cf));
+    servo_cf_ = writer("servo_cf", prefix + "body/servo_cf", mapping_of(dds_, arm::servo_cf));
     // A wrench-commanded MTM floats only with the dVRK's gravity compensation on (its own
     // teleoperation turns it on as it engages): sent once matched, again after each enable.
     gravity_ = writer("use_gravity_compensation", prefix + "use_gravity_compensation",
-                      *find_mapping(type_info_of<bool>().name));
+                      *dds_.mapping(type_info_of<bool>().name));
     crtk::provide(p, arm::servo_cf, [this](const Wrench& w) {
       const bool zero = w.force == Vec3{} && w.torque == Vec3{};
       command(servo_cf_, &w, /*motion=*/!zero);
     });
   }
   if (allowed("servo_cp")) {
-    servo_cp_ = writer("servo_cp", prefix + "servo_cp", mapping_of(arm::servo_cp));
+    servo_cp_ = writer("servo_cp", prefix + "servo_cp", mapping_of(dds_, arm::servo_cp));
     crtk::provide(p, arm::servo_cp, [this](const Pose& x) { command(servo_cp_, &x, true); });
   }
   if (allowed("jaw_servo_jp")) {
-    jaw_servo_jp_ = writer("jaw_servo_jp", prefix + "jaw/servo_jp", mapping_of(arm::jaw_servo_jp));
+    jaw_servo_jp_ = writer("jaw_servo_jp", prefix + "jaw/servo_jp", mapping_of(dds_, arm::jaw_servo_jp));
     crtk::provide(p, arm::jaw_servo_jp, [this](const JointState& j) { command(jaw_servo_jp_, &j, true); });
   }
   if (allowed("servo_jp")) {
-    servo_jp_ = writer("servo_jp", prefix + "servo_jp", mapping_of(arm::servo_jp));
+    servo_jp_ = writer("servo_jp", prefix + "servo_jp", mapping_of(dds_, arm::servo_jp));
     crtk::provide(p, arm::servo_jp, [this](const JointState& j) { command(servo_jp_, &j, true); });
   }
   // A move is a trajectory the dVRK plans and ends at a checked goal: not a stream whose silence
   // means its client died (no watchdog); the exit path stops one still under way.
   if (allowed("move_cp")) {
-    move_cp_ = writer("move_cp", prefix + "move_cp", mapping_of(arm::move_cp));
+    move_cp_ = writer("move_cp", prefix + "move_cp", mapping_of(dds_, arm::move_cp));
     crtk::provide(p, arm::move_cp, [this](const Pose& x) { command(move_cp_, &x, false, true); });
   }
   if (allowed("move_jp")) {
-    move_jp_ = writer("move_jp", prefix + "move_jp", mapping_of(arm::move_jp));
+    move_jp_ = writer("move_jp", prefix + "move_jp", mapping_of(dds_, arm::move_jp));
     crtk::provide(p, arm::move_jp, [this](const JointState& j) { command(move_jp_, &j, false, true); });
   }
   if (allowed("hold")) {
@@ -282,7 +282,7 @@ fdds::DataReader* ImportedArm::reader(const std::string& name, const std::string
 template <class T>
 bool ImportedArm::take_newest(fdds::DataReader* r, T& out) {
   if (r == nullptr) return false;
-  const Mapping& m = *find_mapping(type_info_of<T>().name);  // every CRTK value type has one
+  const Mapping& m = *dds_.mapping(type_info_of<T>().name);  // every CRTK value type has one
   bool got = false;
   std::string why;
   T v{};
@@ -353,7 +353,7 @@ void ImportedArm::run() {
   // Buttons are events: every press and release, in order.
   for (auto [r, e] : {std::pair{clutch_, clutch_event_}, std::pair{operator_, operator_event_}}) {
     if (r == nullptr) continue;
-    const Mapping& m = mapping_of(crtk::arm::clutch);
+    const Mapping& m = mapping_of(dds_, crtk::arm::clutch);
     std::string why;
     ButtonEvent b;
     for (auto t = m.take(*r, &b, why); t != Mapping::Take::none; t = m.take(*r, &b, why))

@@ -131,7 +131,10 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   try {
-    saw::gateway::load_mapping_modules();  // the packages' types (the teleoperation's settings, a lab's)
+    // The rt core's types and the packages' (the teleoperation's settings, a lab's).
+    auto mappings = std::make_shared<saw::gateway::MappingRegistry>(saw::gateway::core_mappings());
+    saw::gateway::load_mapping_modules(*mappings);
+    config.mappings = std::move(mappings);
     saw::gateway::Gateway gateway(config);
     std::printf("saw-gateway %s: %zu endpoints\n", gateway.name().c_str(), gateway.endpoints().size());
     saw::gateway::print_security(config.dds);

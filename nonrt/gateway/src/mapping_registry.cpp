@@ -39,16 +39,14 @@ const Mapping* MappingRegistry::find(std::string_view saw_type) const {
 const Mapping* MappingRegistry::find_by_dds(std::string_view dds_type) const {
   for (const auto& m : mappings_)
     if (m->dds_type() == dds_type) return m.get();
+  if (dds_type == empty_mapping().dds_type()) return &empty_mapping();
   return nullptr;
 }
 
-MappingRegistry& mapping_registry() {
-  static MappingRegistry r = [] {
-    MappingRegistry core;
-    register_core_mappings(core);
-    return core;
-  }();
-  return r;
+MappingRegistry core_mappings() {
+  MappingRegistry core;
+  register_core_mappings(core);
+  return core;
 }
 
 std::vector<std::string> mapping_directories() {
@@ -75,7 +73,7 @@ std::vector<std::string> mapping_directories() {
 
 namespace {
 
-void load_module(const std::string& path) {
+void load_module(const std::string& path, MappingRegistry& registry) {
   // RTLD_NOW: an unresolved symbol is an error here, not a crash when a sample arrives.
   void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle == nullptr) throw std::runtime_error(std::string("cannot load: ") + dlerror());
@@ -94,32 +92,29 @@ void load_module(const std::string& path) {
     throw std::runtime_error("built for mapping ABI version " + std::to_string(v) + "; this program has " +
                              std::to_string(mapping_abi_version) + ": rebuild it against this sawrt");
   }
-  reg(mapping_registry());
+  reg(registry);
   // Never dlclose'd: the mappings' code lives in it.
 }
 
 }  // namespace
 
-void load_mapping_modules() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    for (const std::string& dir : mapping_directories()) {
-      std::error_code ec;
-      std::vector<fs::path> modules;
-      for (const auto& entry : fs::directory_iterator(dir, ec))
-        if (entry.path().extension() == ".so" && entry.path().filename().string().rfind("lib", 0) == 0)
-          modules.push_back(entry.path());
-      if (ec) throw std::runtime_error("mapping directory " + dir + ": " + ec.message());
-      std::sort(modules.begin(), modules.end());
-      for (const fs::path& m : modules) {
-        try {
-          load_module(m.string());
-        } catch (const std::exception& e) {
-          throw std::runtime_error("mapping module " + m.string() + ": " + e.what());
-        }
+void load_mapping_modules(MappingRegistry& registry) {
+  for (const std::string& dir : mapping_directories()) {
+    std::error_code ec;
+    std::vector<fs::path> modules;
+    for (const auto& entry : fs::directory_iterator(dir, ec))
+      if (entry.path().extension() == ".so" && entry.path().filename().string().rfind("lib", 0) == 0)
+        modules.push_back(entry.path());
+    if (ec) throw std::runtime_error("mapping directory " + dir + ": " + ec.message());
+    std::sort(modules.begin(), modules.end());
+    for (const fs::path& m : modules) {
+      try {
+        load_module(m.string(), registry);
+      } catch (const std::exception& e) {
+        throw std::runtime_error("mapping module " + m.string() + ": " + e.what());
       }
     }
-  });
+  }
 }
 
 bool within_limits(const Mapping& m, const void* value, const Limits& limits, std::string& why) {
@@ -140,16 +135,8 @@ bool within_limits(const Mapping& m, const void* value, const Limits& limits, st
 }
 
 bool latched(const Mapping* m) {
-  return m != nullptr && (m == find_mapping(type_info_of<OperatingState>().name) ||
-                          m == find_mapping(type_info_of<ComponentDescription>().name));
-}
-
-const Mapping* find_mapping(std::string_view saw_type) { return mapping_registry().find(saw_type); }
-
-const Mapping* find_mapping_by_dds(std::string_view dds_type) {
-  if (const Mapping* m = mapping_registry().find_by_dds(dds_type)) return m;
-  if (dds_type == empty_mapping().dds_type()) return &empty_mapping();
-  return nullptr;
+  return m != nullptr && (m->saw_type() == type_info_of<OperatingState>().name ||
+                          m->saw_type() == type_info_of<ComponentDescription>().name);
 }
 
 std::int64_t wall_from_monotonic(TimeNs monotonic) {

@@ -50,7 +50,7 @@ Mirror::Mirror(DdsContext& dds, const std::string& component, const std::vector<
       detail::Access::add_command(p, std::move(c));
       continue;
     }
-    const Mapping* m = find_mapping_by_dds(e.dds_type);
+    const Mapping* m = dds_.mapping_by_dds(e.dds_type);
     if (m == nullptr || (e.saw_size != 0 && m->size() != e.saw_size)) continue;
     const TypeInfo t = type(e.saw_type, e.saw_size, e.saw_version);
     if (e.kind == "read") {

@@ -22,7 +22,9 @@ std::string label(const saw_msgs::msg::Endpoint& e) {
 }
 
 struct Session {
-  explicit Session(const ParticipantConfig& c) {
+  explicit Session(const ParticipantConfig& c) : mappings(core_mappings()) {
+    load_mapping_modules(mappings);  // the packages' types, as the gateway maps them
+    ctx.mappings = &mappings;
     ctx.participant = make_participant(c);
     ctx.publisher = ctx.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     ctx.subscriber = ctx.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
@@ -59,6 +61,7 @@ struct Session {
     return found;
   }
 
+  MappingRegistry mappings;
   DdsContext ctx;
   fdds::DataReader* registry = nullptr;
   std::map<std::string, saw_msgs::msg::Manifest> known;
@@ -106,7 +109,7 @@ int echo(Session& s, const std::string& topic, int count, double timeout) {
     std::fprintf(stderr, "sawctl: no gateway serves %s\n", topic.c_str());
     return 1;
   }
-  const Mapping* m = find_mapping_by_dds(e->dds_type());
+  const Mapping* m = s.ctx.mapping_by_dds(e->dds_type());
   if (m == nullptr) {
     std::fprintf(stderr, "sawctl: %s carries %s, which sawctl cannot decode\n", topic.c_str(),
                  e->dds_type().c_str());
@@ -161,7 +164,7 @@ int call(Session& s, const std::string& topic, const std::vector<std::string>& w
     std::fprintf(stderr, "sawctl: %s is a %s, not a command\n", topic.c_str(), e->kind().c_str());
     return 1;
   }
-  const Mapping* m = find_mapping_by_dds(e->dds_type());
+  const Mapping* m = s.ctx.mapping_by_dds(e->dds_type());
   std::string text, why;
   for (const auto& w : words) text += (text.empty() ? "" : " ") + w;
   std::vector<std::byte> value(std::max<std::size_t>(m->size(), 1));
@@ -228,7 +231,6 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (security.chosen()) return security.run();
   try {
-    load_mapping_modules();  // the packages' types, as the gateway maps them
     Session s(dds);
     if (*list_cmd) return list(s, timeout);
     if (*echo_cmd) return echo(s, topic, count, timeout);

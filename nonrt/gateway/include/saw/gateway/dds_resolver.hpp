@@ -9,6 +9,8 @@
 
 namespace saw::gateway {
 
+class MappingRegistry;
+
 struct OwnedDds;
 
 // For a non-RT program on any machine: `manager.add_resolver(std::make_unique<DdsResolver>())`,
@@ -28,6 +30,9 @@ class DdsResolver : public RemoteResolver {
     // State older than this reads as `disconnected` (the server's RT process stopped); keep it
     // above the gateway's publishing period (its decimation).
     TimeNs stale_after = 100'000'000;
+    // The types it maps; none: the rt core's and the installation's mapping modules, as
+    // saw-gateway maps them.
+    std::shared_ptr<const MappingRegistry> mappings;
   };
   DdsResolver();
   explicit DdsResolver(Options options);

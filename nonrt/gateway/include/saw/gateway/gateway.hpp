@@ -13,6 +13,8 @@
 
 namespace saw::gateway {
 
+class MappingRegistry;
+
 // A foreign CRTK arm (a dVRK master published by the dVRK's ROS 2 stack) to present through
 // the bridge as component `component`, provided interface "arm", read-only.
 struct ImportConfig {
@@ -47,6 +49,9 @@ struct GatewayConfig {
   double display_rate = default_display_rate;
   TimeNs attach_timeout = 0;  // wait this long for a component to be exported (0: fail at once)
   std::string name;           // unique per host; default "gateway.<pid>"
+  // The types it maps; none: the rt core's alone (core_mappings()). saw-gateway adds the
+  // installation's mapping modules (load_mapping_modules).
+  std::shared_ptr<const MappingRegistry> mappings;
 };
 
 // One row of the manifest: how a command or event of an attached component is mapped.

@@ -78,7 +78,9 @@ class MappingRegistry {
   template <class Rt, class PubSub>
   void add_fields();
 
+  // The mapping for an rt type name (TypeInfo::name), or nullptr if it has none.
   const Mapping* find(std::string_view saw_type) const;
+  // The mapping whose DDS type is `dds_type` (std_msgs/Empty: a void command's), or nullptr.
   const Mapping* find_by_dds(std::string_view dds_type) const;
   const std::vector<std::unique_ptr<Mapping>>& all() const noexcept { return mappings_; }
 
@@ -86,22 +88,20 @@ class MappingRegistry {
   std::vector<std::unique_ptr<Mapping>> mappings_;
 };
 
-// The process's registry: the core types from the start; a package's once its module is loaded.
-MappingRegistry& mapping_registry();
+// A registry of the rt core's types (the gateway's own, core_mappings.cpp). A program makes its
+// registry — no process-wide one — and hands it to what maps values (GatewayConfig::mappings,
+// DdsResolver::Options::mappings, sawctl's).
+MappingRegistry core_mappings();
 
-// Loads every mapping module (lib*.so) of the mapping directory of this installation
-// (<libdir>/sawrt/mappings beside bin/, or the build tree's lib/sawrt/mappings), then of the
-// directories of $SAW_MAPPING_PATH (colon-separated: a lab's), each directory in name order, once
-// per process. Throws std::runtime_error naming the module (not a mapping module, another ABI, a
-// type mapped twice differently) or a directory that cannot be read.
-void load_mapping_modules();
+// Loads into `registry` every mapping module (lib*.so) of the mapping directory of this
+// installation (<libdir>/sawrt/mappings beside bin/, or the build tree's lib/sawrt/mappings), then
+// of the directories of $SAW_MAPPING_PATH (colon-separated: a lab's), each directory in name
+// order. Throws std::runtime_error naming the module (not a mapping module, another ABI, a type
+// mapped twice differently) or a directory that cannot be read.
+void load_mapping_modules(MappingRegistry& registry);
 // The directories load_mapping_modules() reads.
 std::vector<std::string> mapping_directories();
 
-// The mapping for an rt type name (TypeInfo::name), or nullptr if it has none.
-const Mapping* find_mapping(std::string_view saw_type);
-// The mapping whose DDS type is `dds_type`, or nullptr.
-const Mapping* find_mapping_by_dds(std::string_view dds_type);
 // Whether a read of this type is latched: published on change, kept for late joiners (an
 // operating state, a component's description), rather than every row.
 bool latched(const Mapping* m);
