@@ -65,7 +65,7 @@ TEST(CanopenArm, CspFollowsServoJp) {
   rig.cycle();
   const JointState m = rig.read<JointState>("measured_js");
   EXPECT_NEAR(m.position[2], q0 + 0.5 * d, 1.5 * count);
-  EXPECT_EQ(rig.arm->status().refused.total(), 0u);
+  EXPECT_EQ(rig.arm->device_status().refused.total(), 0u);
   EXPECT_EQ(rig.state(), OperatingStateValue::enabled);
 }
 
@@ -112,7 +112,7 @@ TEST(CanopenArm, ServoCfBecomesJointTorquesThroughTheJacobianTranspose) {
   rig.write("servo_cf", Wrench{{0.0, 0.0, -2.0}, {0, 0, 0}});
   rig.cycle();
   EXPECT_EQ(rig.drives[1].target_torque(), 0);
-  EXPECT_EQ(rig.arm->status().refused.over_limit, 1u);
+  EXPECT_EQ(rig.arm->device_status().refused.over_limit, 1u);
 }
 
 TEST(CanopenArm, NonFiniteAndOutOfRangeCommandsAreRefusedCountedAndNeverSent) {
@@ -136,7 +136,7 @@ TEST(CanopenArm, NonFiniteAndOutOfRangeCommandsAreRefusedCountedAndNeverSent) {
   rig.cycle();
   rig.write("servo_jf", rig.joints(0.1, 0, 0));  // a torque to a position-mode arm
   rig.cycle();
-  const RefusedCommands r = rig.arm->status().refused;
+  const RefusedCommands r = rig.arm->device_status().refused;
   EXPECT_EQ(r.not_finite, 2u);
   EXPECT_EQ(r.over_limit, 2u);
   EXPECT_EQ(r.wrong_size, 1u);
@@ -158,7 +158,7 @@ TEST(CanopenArm, NonFiniteAndOutOfRangeCommandsAreRefusedCountedAndNeverSent) {
   cst.write("servo_cf", Wrench{{NAN, 0, 0}, {0, 0, 0}});
   cst.cycle();
   EXPECT_EQ(cst.drives[1].target_torque(), 0);
-  EXPECT_EQ(cst.arm->status().refused.total(), 3u);
+  EXPECT_EQ(cst.arm->device_status().refused.total(), 3u);
 }
 
 TEST(CanopenArm, TheWatchdogHoldsAndReportsWhenCommandsStop) {

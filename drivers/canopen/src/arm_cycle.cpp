@@ -379,8 +379,6 @@ void CanopenArm::publish() noexcept {
   }
   status_.heartbeat_losses = losses;
   status_.bad_pdos = bad + bus.malformed;
-  status_.watchdog_trips = watchdog_trips();
-  status_.refused = d.refused;
 }
 
 }  // namespace saw::canopen

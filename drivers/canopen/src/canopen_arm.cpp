@@ -155,7 +155,6 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig confi
   for (std::size_t i = 0; i < n_; ++i) (void)setpoint_js_.set_name(i, config_.joints[i].name);
   status_.joints = static_cast<std::uint8_t>(n_);
   status_.shared_bus = link_.shared() ? 1 : 0;
-  status_.command_timeout = contract().command_timeout;
   provide_interfaces();
 }
 

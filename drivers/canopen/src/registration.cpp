@@ -356,24 +356,7 @@ std::string summary_line(const CanopenStatus& s) {
                   static_cast<unsigned long long>(s.bad_pdos));
     out += b;
   }
-  if (s.refused.total() != 0) {
-    std::snprintf(
-        b, sizeof b,
-        "\n%llu commands refused, never sent: %llu not finite, %llu over a limit, %llu for another mode, "
-        "%llu of the wrong size",
-        static_cast<unsigned long long>(s.refused.total()),
-        static_cast<unsigned long long>(s.refused.not_finite),
-        static_cast<unsigned long long>(s.refused.over_limit),
-        static_cast<unsigned long long>(s.refused.wrong_mode),
-        static_cast<unsigned long long>(s.refused.wrong_size));
-    out += b;
-  }
-  if (s.watchdog_trips != 0) {
-    std::snprintf(b, sizeof b, "\nheld %llu times: no servo command for %.1f ms (command_timeout)",
-                  static_cast<unsigned long long>(s.watchdog_trips),
-                  static_cast<double>(s.command_timeout) * 1e-6);
-    out += b;
-  }
+  // Refused commands and watchdog trips are the device base's: its "device" line says them.
   if (s.sdo_done + s.sdo_failed + s.sdo_refused != 0) {
     std::snprintf(b, sizeof b, "\nruntime SDO: %llu done, %llu failed, %llu refused (queue full)",
                   static_cast<unsigned long long>(s.sdo_done), static_cast<unsigned long long>(s.sdo_failed),

@@ -41,8 +41,9 @@ using saw::RefusedCommands;
 // A CANopen component's state and counters: a summary column (printed when a run ends).
 struct CanopenStatus {
   static constexpr std::string_view type_name = "saw::canopen::CanopenStatus";
-  // 2: refused is the device base's; 3: fault_node, warnings; 4: shared_bus
-  static constexpr std::uint32_t layout_version = 4;
+  // 2: refused is the device base's; 3: fault_node, warnings; 4: shared_bus; 5: the base's counts
+  // (refused commands, watchdog trips, command_timeout) are the base's DeviceStatus alone
+  static constexpr std::uint32_t layout_version = 5;
   OperatingStateValue state = OperatingStateValue::disabled;
   FaultReason reason = FaultReason::none;  // the last fault's (kept after recovery, as `fault`)
   std::uint8_t bus_state = 0;              // can::BusState
@@ -58,10 +59,7 @@ struct CanopenStatus {
   std::uint64_t frames_received = 0, frames_sent = 0, send_refused = 0, foreign_frames = 0;
   std::uint64_t syncs = 0;
   std::uint64_t emcy = 0, heartbeat_losses = 0, bad_pdos = 0;
-  std::uint64_t watchdog_trips = 0;
   std::uint64_t sdo_done = 0, sdo_failed = 0, sdo_refused = 0;
-  RefusedCommands refused;
-  TimeNs command_timeout = 0;
   static constexpr auto fields = std::tuple{&CanopenStatus::state,
                                             &CanopenStatus::reason,
                                             &CanopenStatus::bus_state,
@@ -82,12 +80,9 @@ struct CanopenStatus {
                                             &CanopenStatus::emcy,
                                             &CanopenStatus::heartbeat_losses,
                                             &CanopenStatus::bad_pdos,
-                                            &CanopenStatus::watchdog_trips,
                                             &CanopenStatus::sdo_done,
                                             &CanopenStatus::sdo_failed,
-                                            &CanopenStatus::sdo_refused,
-                                            &CanopenStatus::refused,
-                                            &CanopenStatus::command_timeout};
+                                            &CanopenStatus::sdo_refused};
 };
 
 }  // namespace saw::canopen
