@@ -10,6 +10,7 @@
 
 #include "saw/crtk_arm.hpp"
 #include "saw/drivers/sim_haptic_device.hpp"
+#include "saw/eigen.hpp"
 #include "saw/manager.hpp"
 
 namespace {
@@ -169,7 +170,7 @@ TEST(SimHapticDevice, AStylusReadsTheHandsTurnAndGrip) {
     ASSERT_EQ(rig.client.measured_cv(v), saw::Status::ok);
     ASSERT_EQ(rig.client.measured_js(js), saw::Status::ok);
     ASSERT_EQ(rig.client.gripper(grip), saw::Status::ok);
-    const Eigen::Quaterniond q(p.orientation[3], p.orientation[0], p.orientation[1], p.orientation[2]);
+    const Eigen::Quaterniond q = saw::to_eigen(p.orientation);
     const Eigen::Quaterniond hand(
         Eigen::AngleAxisd(c.hand.turn_amplitude * wave, c.hand.turn_axis.normalized()));
     worst = std::max(worst, q.angularDistance(hand));
@@ -202,7 +203,7 @@ TEST(SimHapticDevice, AStylusReadsTheHandsTurnAndGrip) {
   EXPECT_NEAR(js.position[3], 1.0, 1e-12) << "gimbal_pitch at its limit";
   saw::Pose p;
   ASSERT_EQ(held.client.measured_cp(p), saw::Status::ok);
-  const Eigen::Quaterniond q(p.orientation[3], p.orientation[0], p.orientation[1], p.orientation[2]);
+  const Eigen::Quaterniond q = saw::to_eigen(p.orientation);
   EXPECT_NEAR(q.angularDistance(
                   Eigen::Quaterniond(Eigen::AngleAxisd(far.hand.turn_amplitude, Eigen::Vector3d::UnitY()))),
               far.hand.turn_amplitude - (js.position[1] + js.position[2]) - 1.0, 1e-9)

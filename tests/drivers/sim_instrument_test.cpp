@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "saw/crtk_arm.hpp"
+#include "saw/eigen.hpp"
 #include "saw/manager.hpp"
 
 namespace {
@@ -107,9 +108,7 @@ struct Rig {
 };
 
 Eigen::Vector3d position(const saw::Pose& p) { return {p.position[0], p.position[1], p.position[2]}; }
-Eigen::Quaterniond orientation(const saw::Pose& p) {
-  return {p.orientation[3], p.orientation[0], p.orientation[1], p.orientation[2]};
-}
+Eigen::Quaterniond orientation(const saw::Pose& p) { return saw::to_eigen(p.orientation); }
 
 saw::JointState jaw_goal(double angle) {
   saw::JointState j;
@@ -119,7 +118,7 @@ saw::JointState jaw_goal(double angle) {
 }
 
 saw::Pose pose_of(const Eigen::Vector3d& x, const Eigen::Quaterniond& q) {
-  return saw::Pose{{x.x(), x.y(), x.z()}, {q.x(), q.y(), q.z(), q.w()}};
+  return saw::Pose{saw::to_vec3(x), saw::to_quat(q)};
 }
 
 // A stream of goals — 1 cm along x and 20° about z over a second — is followed: within the

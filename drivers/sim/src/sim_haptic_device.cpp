@@ -221,13 +221,9 @@ void SimHapticDevice::publish_stylus(double dt) noexcept {
       Eigen::AngleAxisd(hand_.turn, config_.hand.turn_axis.normalized()).toRotationMatrix();
   gimbal_ = gimbal_angles(tip.transpose() * hand).cwiseMax(config_.gimbal_min).cwiseMin(config_.gimbal_max);
   const Eigen::Quaterniond now(tip * gimbal_rotation(gimbal_));
-  // Angular velocity from the turn since the last cycle (base frame).
-  const Eigen::AngleAxisd turned(now * stylus_.conjugate());
-  const Eigen::Vector3d w =
-      dt > 0 ? Eigen::Vector3d(turned.axis() * turned.angle() / dt) : Eigen::Vector3d::Zero();
+  m.cv.angular = to_vec3(angular_velocity(stylus_, now, dt));  // the turn since the last cycle
   stylus_ = now;
-  m.cp.orientation = {now.x(), now.y(), now.z(), now.w()};
-  m.cv.angular = to_vec3(w);
+  m.cp.orientation = to_quat(now);
   for (int k = 0; k < 3; ++k) m.js.position[static_cast<std::size_t>(3 + k)] = gimbal_[k];
   grip_.position[0] = hand_.grip;
 }

@@ -38,9 +38,7 @@ DeviceConfig contract_of(const SimInstrumentConfig& c) {
 
 Eigen::Isometry3d isometry(const Pose& p) noexcept {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = Eigen::Quaterniond(p.orientation[3], p.orientation[0], p.orientation[1], p.orientation[2])
-                   .normalized()
-                   .toRotationMatrix();
+  t.linear() = to_eigen(p.orientation).normalized().toRotationMatrix();
   t.translation() = Eigen::Vector3d(p.position[0], p.position[1], p.position[2]);
   return t;
 }
@@ -105,11 +103,10 @@ void SimInstrument::publish(double dt) noexcept {
   Measured& m = measured();
   const Eigen::Quaterniond q(now.linear());
   m.cp.position = to_vec3(Eigen::Vector3d(now.translation()));
-  m.cp.orientation = {q.x(), q.y(), q.z(), q.w()};
+  m.cp.orientation = to_quat(q);
   if (dt > 0) {
-    const Eigen::AngleAxisd turned(now.linear() * pose_.linear().transpose());
     m.cv.linear = to_vec3(Eigen::Vector3d((now.translation() - pose_.translation()) / dt));
-    m.cv.angular = to_vec3(Eigen::Vector3d(turned.axis() * turned.angle() / dt));
+    m.cv.angular = to_vec3(angular_velocity(Eigen::Quaterniond(pose_.linear()), q, dt));
   }
   pose_ = now;
   for (int i = 0; i < InstrumentKinematics::dof; ++i) m.js.position[static_cast<std::size_t>(i)] = q_[i];

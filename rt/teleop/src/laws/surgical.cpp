@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "saw/eigen.hpp"
+
 namespace saw::teleop {
 namespace {
 
@@ -14,10 +16,7 @@ constexpr double degrees = 180.0 / std::numbers::pi;
 SurgicalLaw::SurgicalLaw(const Settings& s, const LawContext& c) : s_(s), period_(c.period) {}
 
 Eigen::Quaterniond SurgicalLaw::camera(const LawInputs& in) const noexcept {
-  if (const Pose* endoscope = in.declared.get<Pose>(0))
-    return Eigen::Quaterniond(endoscope->orientation[3], endoscope->orientation[0], endoscope->orientation[1],
-                              endoscope->orientation[2])
-        .normalized();
+  if (const Pose* endoscope = in.declared.get<Pose>(0)) return to_eigen(endoscope->orientation).normalized();
   const double r = s_.camera_rpy[0] / degrees, p = s_.camera_rpy[1] / degrees, y = s_.camera_rpy[2] / degrees;
   return Eigen::Quaterniond(Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) *
                             Eigen::AngleAxisd(p, Eigen::Vector3d::UnitY()) *
