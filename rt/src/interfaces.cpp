@@ -64,9 +64,9 @@ void RequiredInterface::check_new_name(const std::string& name, bool handler) co
       if (h->name == name) twice();
 }
 
-void RequiredInterface::add_function(std::string name, FunctionBase& function, Need need) {
+void RequiredInterface::add_function(std::string name, FunctionBase& function, Need need, std::string hint) {
   check_new_name(name, false);
-  functions_.push_back({std::move(name), &function, need});
+  functions_.push_back({std::move(name), &function, need, std::move(hint)});
 }
 
 void RequiredInterface::add_handler(EventHandler h) {

@@ -115,11 +115,13 @@ void Manager::check_ends(const Ends& e) const {
   const RequiredInterface& req = e.required;
   const ProvidedInterface& prov = e.provided;
   std::string errors;
-  const auto check = [&](const std::string& name, const Signature& want, Need need, const Signature* have) {
+  const auto check = [&](const std::string& name, const Signature& want, Need need, const Signature* have,
+                         const std::string& hint = {}) {
     if (have == nullptr) {
       if (need == Need::required)
         errors += "\n  " + quoted(name) + ": the client requires " + to_string(want) +
-                  ", the server provides no such " + (is_event(want.kind) ? "event" : "command");
+                  ", the server provides no such " + (is_event(want.kind) ? "event" : "command") +
+                  (hint.empty() ? "" : " (" + hint + ")");
     } else if (!(*have == want)) {
       const bool layout = to_string(want) == to_string(*have);  // same names: the layouts differ
       errors += "\n  " + quoted(name) + ": the client expects " + to_string(want, layout) +
@@ -128,7 +130,7 @@ void Manager::check_ends(const Ends& e) const {
   };
   for (const auto& f : req.functions()) {
     const Command* c = prov.find_command(f.name);
-    check(f.name, f.function->signature(), f.need, c ? &c->signature : nullptr);
+    check(f.name, f.function->signature(), f.need, c ? &c->signature : nullptr, f.hint);
   }
   for (const auto& h : req.handlers()) {
     const EventBase* ev = prov.find_event(h->name);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "saw/crtk_arm.hpp"
 #include "saw/eigen.hpp"
@@ -22,6 +23,7 @@ using saw::teleop::Input;
 using saw::teleop::LawCommand;
 using saw::teleop::LawInputs;
 using saw::teleop::LawSide;
+using saw::teleop::Output;
 
 // The master feels what the slave's sensor reads; nothing else.
 struct SensorLaw {
@@ -127,6 +129,96 @@ TEST(DeclaredInputs, ARequiredInputTheDeviceDoesNotHaveIsAFailedStartNamingIt) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("measured_cf"), std::string::npos) << e.what();
   }
+}
+
+// Sends a declared value to the slave every cycle it steps (as a passive law its port's energy),
+// and shows in the master's force whether its declared input came with a new row.
+struct SendingLaw {
+  struct Settings {
+    double unused = 0;
+  };
+  static constexpr std::string_view name = "sending_test", description = "test";
+  static constexpr auto declared_settings = std::tuple{};
+  static constexpr auto declared_inputs = std::tuple{Input<saw::Wrench>{LawSide::master, "measured_cf"}};
+  static constexpr auto declared_outputs = std::tuple{Output<double>{LawSide::slave, "remote_value"}};
+  SendingLaw(const Settings& s, const saw::teleop::LawContext&) : s_(s) {}
+  Settings& settings() noexcept { return s_; }
+  void reset(const LawInputs&) noexcept {}
+  LawCommand step(const LawInputs& in) noexcept {
+    LawCommand out;
+    out.slave_force = Eigen::Vector3d(1, 0, 0);
+    out.master_force.x() = in.declared.fresh(0) ? 1 : 0;
+    (void)in.outputs.set(0, ++sent);
+    return out;
+  }
+  Settings s_;
+  double sent = 0;
+};
+
+// A slave that logs, in order, each force ('f') and each declared value ('v') it is sent.
+class Receiver : public saw::testing::FakeDevice {
+ public:
+  Receiver() : FakeDevice("slave") {
+    provided("arm")->add_command_write<double>("remote_value", [this](const double& v) {
+      flush();
+      log += 'v';
+      last = v;
+    });
+  }
+  // The forces counted since the last flush, logged: a force and a value of one cycle are in the
+  // order they came.
+  void flush() {
+    for (; logged < commands; ++logged) log += 'f';
+  }
+  std::string log;
+  int logged = 0;
+  double last = 0;
+};
+
+TEST(DeclaredOutputs, AValueTheLawSetsIsSentBeforeTheForceAndNothingWhileItHolds) {
+  saw::testing::FakeDevice master{"master"};
+  Receiver slave;
+  saw::teleop::Teleoperation teleop("teleop", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0),
+                                    config(), saw::teleop::law_spec<SendingLaw>());
+  saw::Manager manager;
+  manager.add(master);
+  manager.add(slave);
+  manager.add(teleop);
+  manager.connect("teleop", "master", "master", "arm");
+  manager.connect("teleop", "slave", "slave", "arm");
+  manager.start_stepped();
+  saw::testing::Stepper stepper{manager};
+  const auto step = [&](std::initializer_list<saw::testing::FakeDevice*> publish) {
+    stepper(publish);
+    slave.flush();
+  };
+  for (int i = 0; i < 5; ++i) {
+    step({&master, &slave});
+    if (i >= 2) {
+      EXPECT_EQ(slave.log.substr(slave.log.size() - 2), "vf") << "the value before the force: " << slave.log;
+    }
+  }
+  ASSERT_EQ(teleop.operating_state(), saw::OperatingStateValue::enabled);
+  EXPECT_GT(slave.last, 0);
+  // Fresh only with a new row of its side: the master not publishing for 3 cycles (less than
+  // stale_timeout) gives the law its input, not fresh.
+  EXPECT_EQ(master.force[0], 1) << "a new master row each cycle: fresh";
+  step({&slave});
+  EXPECT_EQ(master.force[0], 0) << "no new master row: not fresh";
+  step({&master, &slave});
+  EXPECT_EQ(master.force[0], 1);
+  // Clutched, the law holds: forces (zero) still go to the slave, values do not.
+  master.press_clutch(true);
+  step({&master, &slave});
+  step({&master, &slave});
+  const std::string held_from = slave.log;
+  for (int i = 0; i < 5; ++i) step({&master, &slave});
+  EXPECT_EQ(slave.log.substr(held_from.size()), "fffff") << slave.log;
+  master.press_clutch(false);
+  for (int i = 0; i < 3; ++i) step({&master, &slave});
+  EXPECT_NE(slave.log.rfind("vf"), std::string::npos);
+  EXPECT_EQ(slave.log.back(), 'f');
+  EXPECT_EQ(slave.log[slave.log.size() - 2], 'v') << "sending again once engaged: " << slave.log;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "saw/testing/law_io.hpp"
 #include "saw/testing/teleop_rig.hpp"
 
 namespace {
@@ -14,13 +15,17 @@ using saw::teleop::LawInputs;
 using saw::teleop::PassiveBilateralLaw;
 using V = Eigen::Vector3d;
 
+// The master port's energy in, the slave port's out (the law's declared input and output).
+saw::testing::LawIo<double, double> law_port;
+
 LawInputs inputs(V master, V slave, V v_master = V::Zero(), V v_slave = V::Zero(), double energy = 0) {
   LawInputs in;
+  law_port.value = energy;
+  law_port.attach(in);
   in.master.position = master;
   in.slave.position = slave;
   in.master.velocity = v_master;
   in.slave.velocity = v_slave;
-  in.master_port_energy = energy;
   return in;
 }
 
@@ -44,9 +49,11 @@ TEST(PassiveBilateralLaw, TheSlavesPortGivesOutNoMoreThanEnteredAtTheMaster) {
   for (int k = 0; k < 500; ++k) {
     received += 1e-6;  // a trickle from the master's port
     // The master is 5 mm ahead and the slave moves toward it: the law pushes along the motion.
-    const auto out = law.step(inputs(V(0.005, 0, 0), V::Zero(), V::Zero(), V(0.05, 0, 0), received));
+    (void)law.step(inputs(V(0.005, 0, 0), V::Zero(), V::Zero(), V(0.05, 0, 0), received));
     EXPECT_LE(law.slave_energy_out_, received + 1e-15) << k;
-    EXPECT_GE(out.slave_port_energy, 0);
+    ASSERT_NE(law_port.sent(), nullptr) << k;
+    EXPECT_GE(*law_port.sent(), 0);
+    EXPECT_EQ(*law_port.sent(), law.slave_energy_in_);
   }
   EXPECT_GT(law.slave_dissipated_, 0);
   EXPECT_DOUBLE_EQ(law.master_energy_in_, received);

@@ -26,8 +26,9 @@ def expect_refused(name, rt):
     lines = [line for line in rt.stderr.splitlines() if line.startswith("saw-rt:")]
     line = lines[0] if lines else ""
     ok = (rt.returncode == 1 and len(lines) == 1 and line.startswith("saw-rt: component 'teleop': ")
-          and "impedance 3 N·s/m" in line and "wave_impedance 2 N·s/m" in line
-          and re.search(r"port \('w?port\d*\.arm', through 'link\.arm'\)", line) is not None)
+          and "impedance 3 N·s/m" in line
+          and re.search(r"port_wave_impedance from the master \('w?port\d*\.arm', through 'link\.arm'\) "
+                        r"is 2 N·s/m", line) is not None)
     print(f"{'ok  ' if ok else 'FAIL'} {name}: exit {rt.returncode}: {line}")
     if not ok:
         failures.append(f"{name}: exit {rt.returncode}, not 1 with one line naming both values:\n{rt.stderr}")

@@ -8,12 +8,14 @@
 #include <cmath>
 
 #include "port_chain.hpp"
+#include "saw/eigen.hpp"
 #include "saw/teleop/delay_task.hpp"
 #include "saw/teleop/laws/wave_variables.hpp"
 #include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleoperation.hpp"
 #include "saw/testing/fake_device.hpp"
 #include "saw/testing/fake_wave_port.hpp"
+#include "saw/testing/law_io.hpp"
 #include "saw/testing/stepper.hpp"
 
 namespace {
@@ -36,14 +38,20 @@ TEST(WaveTransform, ThePowerIntoTheNetworkIsHalfTheWavesSquaresDifference) {
   EXPECT_TRUE(limited.u.isApprox((b * velocity - limited.force) / std::sqrt(2 * b)));
 }
 
+// The master port's wave u in, v out (the law's declared input and output).
+saw::testing::LawIo<saw::Vec3, saw::Vec3> law_port;
+
 LawInputs wave_in(V slave, V slave_velocity, V u, bool fresh) {
   LawInputs in;
   in.slave.position = slave;
   in.slave.velocity = slave_velocity;
-  in.master_wave = u;
-  in.master_wave_fresh = fresh;
+  law_port.value = saw::to_vec3(u);
+  law_port.fresh = fresh;
+  law_port.attach(in);
   return in;
 }
+
+V sent_wave() { return law_port.sent() != nullptr ? saw::to_eigen(*law_port.sent()) : V::Constant(NAN); }
 
 TEST(WaveVariableLaw, TheSlavesEndKeepsThePowerIdentityAndALostWaveBringsNothing) {
   WaveVariableLaw law({}, saw::teleop::LawContext{});
@@ -53,18 +61,17 @@ TEST(WaveVariableLaw, TheSlavesEndKeepsThePowerIdentityAndALostWaveBringsNothing
   for (int k = 0; k < 50; ++k) {
     const V u(0.2, 0, 0.1);
     const auto out = law.step(wave_in(V::Zero(), V::Zero(), u, true));
-    ASSERT_TRUE(out.sends_wave);
+    ASSERT_NE(law_port.sent(), nullptr);
     // The slave's desired velocity is what the wave and the force imply; the power out of the
     // network at the slave is F·ẋ_d = ½|u|² − ½|v|².
     const V xd_dot = (std::sqrt(2 * b) * u - out.slave_force) / b;
-    EXPECT_NEAR(out.slave_force.dot(xd_dot), 0.5 * u.squaredNorm() - 0.5 * out.master_wave_out.squaredNorm(),
-                1e-12);
+    EXPECT_NEAR(out.slave_force.dot(xd_dot), 0.5 * u.squaredNorm() - 0.5 * sent_wave().squaredNorm(), 1e-12);
     desired += dt * xd_dot;
   }
   EXPECT_GT(desired.x(), 0) << "the wave moves the slave's goal";
   // No new wave this cycle: a zero wave, whatever the last one was: v = −√(2/b)·F.
   const auto lost = law.step(wave_in(V::Zero(), V::Zero(), V(5, 5, 5), false));
-  EXPECT_TRUE(lost.master_wave_out.isApprox(-lost.slave_force * (std::sqrt(2 * b) / b)));
+  EXPECT_TRUE(sent_wave().isApprox(-lost.slave_force * (std::sqrt(2 * b) / b)));
   EXPECT_LT(lost.slave_force.norm(), 3.0 + 1e-12);
 }
 
@@ -246,20 +253,24 @@ TEST(WaveVariableLaw, TheTaskRefusesToStartItWhenThePortsImpedanceDiffersNamingB
   ASSERT_FALSE(why.empty()) << "a wave channel with b = 3 at the slave and b = 2 at the master started";
   EXPECT_NE(why.find("component 'teleop'"), std::string::npos) << why;
   EXPECT_NE(why.find("impedance 3 N·s/m"), std::string::npos) << why;
-  EXPECT_NE(why.find("wave_impedance 2 N·s/m"), std::string::npos) << why;
-  EXPECT_NE(why.find("master's port ('port.arm', through 'link.arm')"), std::string::npos) << why;
+  EXPECT_NE(why.find("port_wave_impedance from the master ('port.arm', through 'link.arm') is 2 N·s/m"),
+            std::string::npos)
+      << why;
   EXPECT_EQ(why.find('\n'), std::string::npos) << "one line: " << why;
   EXPECT_EQ(rig.master.commands, 0) << "nothing was driven";
   // Different past the digits a setting is shown with: still refused, and shown apart.
   const std::string close = WaveTeleop(3 + 1e-9, 3).start();
-  EXPECT_NE(close.find("wave_impedance 3.000000001"), std::string::npos) << close;
+  EXPECT_NE(close.find("is 3.000000001"), std::string::npos) << close;
 }
 
 TEST(WaveVariableLaw, TheTaskRefusesToStartItWithAPortInThePassivitySchemeOrNoPort) {
   const std::string passivity = WaveTeleop(0, 3).start();
+  EXPECT_NE(passivity.find("is 0 N·s/m"), std::string::npos) << passivity;
   EXPECT_NE(passivity.find("runs time-domain passivity"), std::string::npos) << passivity;
   const std::string none = WaveTeleop(-1, 3).start();
-  EXPECT_NE(none.find("gives no port_wave_impedance"), std::string::npos) << none;
+  EXPECT_NE(none.find("port_wave_impedance from the master ('master.arm', through 'link.arm') gives none"),
+            std::string::npos)
+      << none;
 }
 
 TEST(WaveVariableLaw, ItsImpedanceIsFixedByTheDeploymentNotSetAtRunTime) {
@@ -336,8 +347,8 @@ TEST(WaveVariableLaw, APortWhoseImpedanceChangesMidRunFaultsTheTaskBeforeItsWave
   EXPECT_EQ(f.source_name(), "master");
   const std::string why(rig.teleop->fault_reason());
   EXPECT_NE(why.find("law 'wave_variables' has impedance 3 N·s/m"), std::string::npos) << why;
-  EXPECT_NE(why.find("master's port ('port.arm')"), std::string::npos) << why;
-  EXPECT_NE(why.find("now has wave_impedance 2 N·s/m"), std::string::npos) << why;
+  EXPECT_NE(why.find("port_wave_impedance from the master ('port.arm') is now 2 N·s/m"), std::string::npos)
+      << why;
   EXPECT_EQ(why.find('\n'), std::string::npos) << "one line: " << why;
   // The devices as for any fault: zero force to both, no wave to the port, from that cycle on.
   EXPECT_EQ(rig.port.waves, waves) << "no wave was sent to the port with the other b";
@@ -351,7 +362,7 @@ TEST(WaveVariableLaw, APortWhoseImpedanceChangesMidRunFaultsTheTaskBeforeItsWave
   ASSERT_EQ(rig.teleop->state_table().read_latest(rig.teleop->columns().summary, summary), Status::ok);
   const std::string said = saw::teleop::to_string(summary);
   EXPECT_NE(said.find("master configuration mismatch"), std::string::npos) << said;
-  EXPECT_NE(said.find("now has wave_impedance 2 N·s/m"), std::string::npos) << said;
+  EXPECT_NE(said.find("is now 2 N·s/m"), std::string::npos) << said;
 
   // Re-enabled with the other b still there: FAULT again at once. With the law's b back: it runs.
   ASSERT_EQ(rig.op.state_command(saw::StateCommand::enable), Status::ok);
@@ -375,7 +386,7 @@ TEST(WaveVariableLaw, APortNowInThePassivitySchemeOrSilentFaultsTheTaskSayingSo)
     rig.step();
     EXPECT_EQ(rig.teleop->fault().code, saw::FaultCode::config_mismatch);
     const std::string why(rig.teleop->fault_reason());
-    EXPECT_NE(why.find("now runs time-domain passivity"), std::string::npos) << why;
+    EXPECT_NE(why.find("is now 0 N·s/m"), std::string::npos) << why;
     EXPECT_NE(why.find("impedance 3 N·s/m"), std::string::npos) << why;
   }
   // A port that stops answering its impedance (its process gone, the bridge disconnected) fails
@@ -394,7 +405,7 @@ TEST(WaveVariableLaw, APortNowInThePassivitySchemeOrSilentFaultsTheTaskSayingSo)
   EXPECT_EQ(rig.teleop->fault().code, saw::FaultCode::input_stale);
   EXPECT_EQ(rig.teleop->fault().last_read, Status::disconnected);
   const std::string why(rig.teleop->fault_reason());
-  EXPECT_NE(why.find("master's port ('port.arm') no longer answers port_wave_impedance (disconnected)"),
+  EXPECT_NE(why.find("port_wave_impedance from the master ('port.arm') no longer answers (disconnected)"),
             std::string::npos)
       << why;
 }

@@ -17,6 +17,7 @@ struct FunctionSlot {
   std::string name;
   FunctionBase* function;
   Need need;
+  std::string hint;  // said when a server lacks it: what to connect (e.g. "put a passivity_port ...")
 };
 
 // Runs in the client's thread when the client is a task (queued), else in the emitter's.
@@ -40,7 +41,9 @@ class RequiredInterface {
   Component& owner() const noexcept { return owner_; }
 
   // The function object lives in the client (usually a member); it must outlive the manager's use.
-  void add_function(std::string name, FunctionBase& function, Need need = Need::required);
+  // `hint` is added to the connect error of a server without it.
+  void add_function(std::string name, FunctionBase& function, Need need = Need::required,
+                    std::string hint = {});
 
   template <class F>
   void add_event_handler_void(std::string name, F&& f, Need need = Need::required) {

@@ -1,12 +1,9 @@
 #include "saw/teleop/teleoperation.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <stdexcept>
-#include <thread>
 #include <utility>
 
 #include "saw/crtk_arm.hpp"
@@ -27,7 +24,8 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
     : Task(std::move(name), task),
       config_(config),
       law_(law.make(LawContext{seconds(task) > 0 ? seconds(task) : 0.001})),
-      inputs_(law_->make_inputs()) {
+      inputs_(law_->make_inputs()),
+      outputs_(law_->make_outputs()) {
   auto& st = state_table();
   columns_.operating_state = st.add_column("operating_state", &state_);
   columns_.master_force = st.add_column("master_force", &master_force_);
@@ -65,10 +63,12 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
   slave_.side = FaultSide::slave;
   require_side(master_, "master");
   require_side(slave_, "slave");
-  inputs_.require([this](const std::string& iface) -> RequiredInterface& {
+  const auto interface_of = [this](const std::string& iface) -> RequiredInterface& {
     RequiredInterface* r = required(iface);
     return r != nullptr ? *r : require(iface);
-  });
+  };
+  inputs_.require(interface_of);
+  outputs_.require(interface_of);
   crtk::require(
       *required("master"), crtk::arm::clutch, [this](const ButtonEvent& b) { clutched_ = b.pressed; },
       Need::optional);
@@ -86,66 +86,24 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
 }
 
 void Teleoperation::startup() {
-  // A passive law without the master's port would have no energy to spend: refuse to start.
-  if (law_->uses_ports() && (!master_.port_energy.is_bound() || !master_.remote_energy.is_bound()))
-    throw std::runtime_error("law '" + std::string(law_->name()) +
-                             "' needs a passivity port at the master (" + std::string(port::energy.name) +
-                             ", " + std::string(port::remote_energy.name) +
-                             "): put a passivity_port component between the master device and the link");
-  if (law_->uses_waves() && (!master_.wave.is_bound() || !master_.remote_wave.is_bound()))
-    throw std::runtime_error(
-        "law '" + std::string(law_->name()) + "' needs a wave port at the master (" +
-        std::string(port::wave.name) + ", " + std::string(port::remote_wave.name) +
-        "): put a passivity_port with scheme: wave between the master device and the link");
-  check_wave_port();
+  agreements_.prepare(inputs_, *law_, [this](const detail::InputSlot& in) { return source_words(in); });
+  agreements_.check_at_start(std::max(1.0, config_.startup_timeout));
   // Connected by now: say which components play each role (a client need not guess by name).
   ComponentDescription::set(description_.servers[0], required("master")->connected_to());
   ComponentDescription::set(description_.servers[1], required("slave")->connected_to());
 }
 
-void Teleoperation::check_wave_port() {
-  if (!law_->uses_waves()) return;
-  // The port, named as the deployment names it: behind a delay task, the component it carries.
-  std::string master = "'" + required("master")->connected_to() + "'";
+std::string Teleoperation::source_words(const detail::InputSlot& in) {
+  const std::string iface = in.interface_name();
+  RequiredInterface* r = required(iface);
+  std::string who = "'" + (r != nullptr ? r->connected_to() : std::string()) + "'";
+  // Named as the deployment names it: behind a delay task, the component it carries.
+  Side* side = in.side() == LawSide::master ? &master_ : in.side() == LawSide::slave ? &slave_ : nullptr;
   ComponentDescription via{};
-  if (master_.description.is_bound() && master_.description(via) == Status::ok &&
+  if (side != nullptr && side->description.is_bound() && side->description(via) == Status::ok &&
       ComponentDescription::get(via.kind) == "delay" && !ComponentDescription::get(via.servers[0]).empty())
-    master = "'" + std::string(ComponentDescription::get(via.servers[0])) + "', through " + master;
-  const double law_b = law_->wave_impedance();
-  const std::string law = "law '" + std::string(law_->name()) + "' has impedance " + setting_number(law_b) +
-                          " N·s/m, but the master's port (" + master + ")";
-  wave_port_text_ = law;  // the RT cycle's check says it in the same words
-  if (!master_.wave_impedance.is_bound())
-    throw std::runtime_error(
-        law + " does not say its " + std::string(port::wave_impedance.name) +
-        ": put a passivity_port with scheme: wave between the master device and the link");
-  // A port in another process may not have published its first row yet: wait for it, as the
-  // task waits for its inputs (startup_timeout), at least a second. Not the RT path.
-  const double grace = std::max(1.0, config_.startup_timeout);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace);
-  double port_b = 0;
-  Status st = master_.wave_impedance(port_b);
-  while (st == Status::no_data && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    st = master_.wave_impedance(port_b);
-  }
-  if (st != Status::ok)
-    throw std::runtime_error(law + " gives no " + std::string(port::wave_impedance.name) + " (" +
-                             std::string(saw::to_string(st)) +
-                             "): the master side needs a passivity_port with scheme: wave");
-  if (port_b == 0) throw std::runtime_error(law + " runs time-domain passivity: give the port scheme: wave");
-  // Equal to the last bit: both are the deployment's numbers, carried as float64.
-  if (port_b != law_b) {
-    std::string shown = setting_number(port_b);
-    if (shown == setting_number(law_b)) {  // they differ past %g's digits: say by how much
-      char b[48];
-      std::snprintf(b, sizeof b, "%.17g (%+.3g)", port_b, port_b - law_b);
-      shown = b;
-    }
-    throw std::runtime_error(law + " has wave_impedance " + shown +
-                             " N·s/m: the two ends of a wave channel must share b, or the channel is not "
-                             "passive; set the same value in both");
-  }
+    who = "'" + std::string(ComponentDescription::get(via.servers[0])) + "', through " + who;
+  return "its input " + in.command() + " from the " + iface + " (" + who + ")";
 }
 
 void Teleoperation::require_side(Side& s, const char* iface) {
@@ -171,11 +129,6 @@ void Teleoperation::require_side(Side& s, const char* iface) {
   crtk::require(r, delayed_arm::source_time, s.source_time, Need::optional);
   crtk::require(r, delayed_arm::delay, s.delay, Need::optional);
   crtk::require(r, crtk::operating_state, s.state, Need::optional);
-  crtk::require(r, port::energy, s.port_energy, Need::optional);
-  crtk::require(r, port::remote_energy, s.remote_energy, Need::optional);
-  crtk::require(r, port::wave, s.wave, Need::optional);
-  crtk::require(r, port::remote_wave, s.remote_wave, Need::optional);
-  crtk::require(r, port::wave_impedance, s.wave_impedance, Need::optional);
   r.add_function("description", s.description, Need::optional);
 }
 
@@ -220,6 +173,11 @@ void Teleoperation::explain(const FaultInfo& why) noexcept {
   if (stale_input_ != nullptr) {
     const detail::InputSlot* in = std::exchange(stale_input_, nullptr);
     if (why.code == FaultCode::input_stale || why.code == FaultCode::input_missing) {
+      if (const auto* a = agreements_.find(in)) {  // a value the law must agree with stopped coming
+        (void)agreements_.describe(*a, fault_reason_);
+        fault_reason_.append(" no longer answers (").append(saw::to_string(in->last_status)).append(")");
+        return;
+      }
       fault_reason_.append("the law's input ")
           .append(in->command())
           .append(" (declared) has had no valid value");
@@ -236,25 +194,14 @@ void Teleoperation::explain(const FaultInfo& why) noexcept {
           .append(" periods missed");
     return;
   }
-  if (side_of(why) != FaultSide::master || !law_->uses_waves()) return;
-  if (why.code == FaultCode::config_mismatch) {
-    fault_reason_.append(wave_port_text_);
-    if (master_.port_b == 0)
-      fault_reason_.append(
-          " now runs time-domain passivity (wave_impedance 0): the law's waves mean nothing to it");
-    else
-      fault_reason_.append(" now has wave_impedance ")
-          .append(master_.port_b)
-          .append(
-              " N·s/m: the two ends of a wave channel must share b (was the port restarted with another?)");
-  } else if ((why.code == FaultCode::input_stale || why.code == FaultCode::input_missing) &&
-             master_.impedance_status != Status::ok) {
-    fault_reason_.append(wave_port_text_)
-        .append(" no longer answers ")
-        .append(port::wave_impedance.name)
-        .append(" (")
-        .append(saw::to_string(master_.impedance_status))
-        .append(")");
+  if (why.code == FaultCode::config_mismatch && disagreed_ != nullptr) {
+    const auto& a = *std::exchange(disagreed_, nullptr);
+    const std::string_view unit = agreements_.describe(a, fault_reason_);
+    fault_reason_.append(" is now ")
+        .append(a.seen)
+        .append(unit.empty() ? "" : " ")
+        .append(unit)
+        .append(": not the law's (was its server restarted with another?)");
   }
 }
 
@@ -307,43 +254,15 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
   Twist twist;
   RowStamp stamp;
   TimeNs time = 0;
-  s.wave_fresh = false;
   Status st = s.cp(pose, stamp);
   if (st == Status::ok) st = s.cv(twist);
   if (st == Status::ok) st = read_time(s, stamp.time, time);
-  // A passive law spends the port's energy: a port that reports none valid fails the read.
-  double energy = 0;
-  if (st == Status::ok && law_->uses_ports() && s.port_energy.is_bound()) {
-    st = s.port_energy(energy);
-    if (st == Status::ok && !(energy >= 0 && std::isfinite(energy))) st = Status::invalid;
-  }
-  Vec3 wave{};
-  if (st == Status::ok && law_->uses_waves() && s.wave.is_bound()) {
-    st = s.wave(wave);
-    if (st == Status::ok && !to_eigen(wave).allFinite()) st = Status::invalid;
-  }
-  // The master port's b, every cycle and after its wave: a port restarted with another b (over
-  // the bridge, a new server under the same name) shows its b with its first wave or before it,
-  // so none of its waves is used. A read command's value is a copy (the bridge's mirror): RT-safe.
-  // A port that does not answer fails the read (held, stale after stale_timeout, as any input).
-  s.impedance_status = Status::ok;
-  if (st == Status::ok && law_->uses_waves() && &s == &master_ && s.wave_impedance.is_bound()) {
-    double b = 0;
-    st = s.impedance_status = s.wave_impedance(b);
-    if (st == Status::ok && b != law_->wave_impedance()) {  // to the last bit, as at start-up
-      s.port_b = b;
-      s.status = st;
-      why = fault_on(s.side, FaultCode::config_mismatch);
-      return false;
-    }
-  }
   // A row from the future (more than a period ahead) would never go stale: refused.
   if (st == Status::ok && time > now() + config().period.count()) st = Status::invalid;
   if (st == Status::ok) {
     const Eigen::Vector3d position = to_eigen(pose.position), velocity = to_eigen(twist.linear),
                           angular = to_eigen(twist.angular);
-    const Eigen::Quaterniond q(pose.orientation[3], pose.orientation[0], pose.orientation[1],
-                               pose.orientation[2]);
+    const Eigen::Quaterniond q = to_eigen(pose.orientation);
     // A quaternion off the unit sphere is no rotation: refused as a value that is not one.
     s.not_finite = !position.allFinite() || !velocity.allFinite() || !angular.allFinite() ||
                    !q.coeffs().allFinite() || !Pose::valid(pose);
@@ -356,10 +275,6 @@ bool Teleoperation::read_side(Side& s, FaultInfo& why) noexcept {
       s.last.velocity = velocity;
       s.last.orientation = q;
       s.last.angular_velocity = angular;
-      s.energy = std::max(s.energy, energy);  // only grows: a late row tells nothing new
-      // A wave is new when its row is: one shown again (nothing arrived) is no wave.
-      s.wave_fresh = time != s.time;
-      s.wave_value = to_eigen(wave);
       s.time = time;
       s.valid = true;
     }
@@ -434,11 +349,7 @@ void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Ve
     // A slave that follows a pose gets only goals: while the law holds, nothing (its device's
     // command watchdog holds it).
     if (finite && law != nullptr) {
-      Quat q = held_orientation_;
-      if (law->orients_slave) {
-        const Eigen::Quaterniond& g = law->slave_goal_orientation;
-        q = {g.x(), g.y(), g.z(), g.w()};
-      }
+      const Quat q = law->orients_slave ? to_quat(law->slave_goal_orientation) : held_orientation_;
       // The device refuses a pose that is not one (not finite, off the unit sphere): counted.
       if (slave_.goal(Pose{to_vec3(law->slave_goal), q}) != Status::ok) ++refused_sends_;
       if (std::isfinite(law->slave_jaw) && slave_.jaw.is_bound()) {
@@ -482,18 +393,32 @@ void Teleoperation::account(const LawCommand& law) noexcept {
   if (2 * master_age_ >= config().period.count()) ++master_age_late_;
 }
 
+// Every cycle, after the declared inputs (in declaration order: a wave port's b after its wave, so
+// a port restarted with another b, which shows it with its first wave or before, has none of its
+// waves used). A read command's value is a copy (the bridge's mirror): RT-safe. An input without
+// a value this cycle holds the law (unconfirmed_); for stale_timeout, it is stale as any input.
+bool Teleoperation::check_agreements(FaultInfo& why) noexcept {
+  const auto* a = agreements_.check();
+  if (a == nullptr) return true;
+  disagreed_ = a;
+  why = fault_on(a->slot->side() == LawSide::slave ? FaultSide::slave : FaultSide::master,
+                 FaultCode::config_mismatch);
+  return false;
+}
+
 // The law's declared inputs: a required one without a valid value for stale_timeout is stale,
 // as a device's sample would be (named in the FAULT's words).
 bool Teleoperation::read_declared(FaultInfo& why) noexcept {
   const auto stale = static_cast<TimeNs>(config_.stale_timeout * 1e9);
-  const detail::InputSlot* late = inputs_.read(now(), stale);
+  const detail::InputSlot* late = inputs_.read(now(), stale, master_.time, slave_.time);
   if (late == nullptr) return true;
   stale_input_ = late;
   const FaultSide side = late->side() == LawSide::master  ? FaultSide::master
                          : late->side() == LawSide::slave ? FaultSide::slave
                                                           : FaultSide::none;
   why = fault_on(side, late->last_good < 0 ? FaultCode::input_missing : FaultCode::input_stale,
-                 Status::no_data, inputs_.age(*late, now()));
+                 late->last_status == Status::ok ? Status::no_data : late->last_status,
+                 inputs_.age(*late, now()));
   return false;
 }
 
@@ -570,29 +495,28 @@ bool Teleoperation::waiting_for_devices() noexcept {
 void Teleoperation::cycle_body() noexcept {
   if (start_time_ < 0) start_time_ = now();
   FaultInfo why{};
-  if (!read_side(master_, why) || !read_side(slave_, why) || !read_declared(why))
+  if (!read_side(master_, why) || !read_side(slave_, why) || !read_declared(why) || !check_agreements(why))
     return on_input_failure(why);
   inputs_seen_ = true;
   read_grip(master_);
   read_grip(slave_);
-  LawInputs in{master_.last, slave_.last, seconds(config()), master_.energy};
-  in.master_wave = master_.wave_value;
-  in.master_wave_fresh = master_.wave_fresh;
+  LawInputs in{master_.last, slave_.last, seconds(config())};
   in.declared = inputs_.view();
+  in.outputs = outputs_.prepare();
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const bool busy = waiting_for_devices();
   if (slave_held()) engage_pending_ = true;
-  // The master port did not say its b this cycle (its input is held meanwhile): no wave is made
-  // for a port whose b is not known to be the law's, nor a force from its last one.
-  const bool b_unknown = master_.impedance_status != Status::ok;
+  // An input that must agree with the law gave nothing this cycle (a wave port that did not say
+  // its b): nothing is made from what is not known to agree, nor a force from its last one.
+  const bool unconfirmed = agreements_.unconfirmed();
   const bool absent = config_.needs_operator && !operator_present_;
-  if (state_.state != OperatingStateValue::enabled || clutched_ || absent || busy || b_unknown) {
+  if (state_.state != OperatingStateValue::enabled || clutched_ || absent || busy || unconfirmed) {
     // Forces off; the law holds, so that enabling or releasing the clutch cannot jump.
     law_->hold(in);
     // A device's first position after it was busy may jump (a homed Falcon's counts become
-    // absolute in that very row): engage afresh on that cycle, from that position. So does the
-    // wave channel after its port was silent.
-    engage_pending_ = busy || b_unknown;
+    // absolute in that very row): engage afresh on that cycle, from that position. So does a law
+    // after an input it must agree with was silent (a wave channel).
+    engage_pending_ = busy || unconfirmed;
     ratcheting_ = false;
     send_forces(zero, zero);
     return;
@@ -612,11 +536,9 @@ void Teleoperation::cycle_body() noexcept {
   }
   ratcheting_ = law.limiting;
   account(law);
-  // The energy before the force: the port never applies a force before the energy allowing it.
-  if (law.slave_port_energy >= 0 && master_.remote_energy.is_bound())
-    (void)master_.remote_energy(law.slave_port_energy);
-  if (law.sends_wave && master_.remote_wave.is_bound())
-    (void)master_.remote_wave(to_vec3(law.master_wave_out));
+  // The declared outputs before the force: a port never applies a force before the energy
+  // allowing it.
+  refused_sends_ += outputs_.send();
   send_forces(law.master_force, law.slave_force, &law);
 }
 

@@ -1,5 +1,6 @@
 #include "saw/teleop/laws/passive_bilateral.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -44,7 +45,8 @@ LawCommand PassiveBilateralLaw::step(const LawInputs& in) noexcept {
   out.limiting = fs.norm() > s_.limits.slave || fm.norm() > s_.limits.master;
   out.master_force = saturate(fm, s_.limits.master);
   // The slave's port is here: the force it gets is bounded by what entered at the master.
-  master_energy_in_ = in.master_port_energy;
+  // Only grows: a late row tells nothing new (none yet: nothing has entered).
+  if (const double* e = in.declared.get<double>(0)) master_energy_in_ = std::max(master_energy_in_, *e);
   const PassivityController::Step s =
       slave_port_.step(saturate(fs, s_.limits.slave), in.slave.velocity, master_energy_in_, dt_);
   out.slave_force = s.force;
@@ -52,7 +54,7 @@ LawCommand PassiveBilateralLaw::step(const LawInputs& in) noexcept {
   slave_energy_out_ = slave_port_.energy().out;
   slave_dissipated_ = slave_port_.dissipated();
   slave_damping_ = s.damping;
-  out.slave_port_energy = slave_energy_in_;
+  (void)in.outputs.set(0, slave_energy_in_);
   return out;
 }
 

@@ -12,6 +12,7 @@
 #include "saw/clock.hpp"
 #include "saw/teleop/fault_info.hpp"
 #include "saw/teleop/law_input.hpp"
+#include "saw/teleop/law_output.hpp"
 
 namespace saw::teleop {
 
@@ -30,17 +31,14 @@ struct SideSample {
 struct LawInputs {
   SideSample master, slave;
   double period = 0.001;  // s, the task's
-  // For a law that `uses_ports`: the energy that has entered the network at the master's
-  // passivity port (J), as it arrived here — late by the link's delay. The task fails the master's
-  // read when its port reports nothing valid, so this is a checked, finite value ≥ 0.
-  double master_port_energy = 0;
-  // For a law that `uses_waves`: the wave the master's port sent (u), and whether it is a new one
-  // this cycle (a cycle with none is a zero wave: a lost packet carries no energy).
-  Eigen::Vector3d master_wave = Eigen::Vector3d::Zero();
-  bool master_wave_fresh = false;
   // What the law declared it needs besides these (declared_inputs), in declaration order:
-  // in.declared.get<Wrench>(0) — each checked valid, the last good one while a read fails.
+  // in.declared.get<Wrench>(0) — each checked valid, the last good one while a read fails;
+  // in.declared.fresh(0) — read with this cycle's new row. A passivity port's energy or wave is
+  // one of these.
   DeclaredInputs declared{};
+  // What the law declared it sends (declared_outputs): in.outputs.set(0, energy) in step() sends
+  // it this cycle, before the forces.
+  DeclaredOutputs outputs{};
 };
 
 // What a law answers: the forces to send, and what it shows of itself. The task checks the
@@ -52,12 +50,6 @@ struct LawCommand {
   Eigen::Vector3d master_error = Eigen::Vector3d::Zero(), slave_error = Eigen::Vector3d::Zero();
   Eigen::Vector3d slave_offset = Eigen::Vector3d::Zero();  // m, where the slave's goal sits
   bool limiting = false;                                   // a force is held at its limit (the ratchet slips)
-  // For a law that `uses_ports`: the energy that has entered the network at the slave's port
-  // (J), sent to the master's port with the force.
-  double slave_port_energy = -1;
-  // For a law that `uses_waves`: the wave to send back to the master's port (v).
-  Eigen::Vector3d master_wave_out = Eigen::Vector3d::Zero();
-  bool sends_wave = false;
   // For a law that `gives_slave_goal`: where the slave should be (m), for a slave that follows a
   // pose (servo_cp, a PSM) rather than a force; slave_force is then not sent.
   Eigen::Vector3d slave_goal = Eigen::Vector3d::Zero();
@@ -95,16 +87,17 @@ struct LawContext {
 //     std::uint64_t refusals() const noexcept; int last_refusal() const noexcept;  // e.g. a planner's
 //     static constexpr auto declared_readouts = std::tuple{Readout<MyLaw, double>{...}, ...};
 //                                              // values it computes, shown as the task's state
-//     static constexpr bool uses_ports = true;  // a passive law: the master has a passivity port
-//                                              // (its input energy in, the slave's sent to it)
-//     static constexpr bool uses_waves = true;  // the same, with wave variables, and then
-//     double wave_impedance() const noexcept;   // its b: the master port's must be the same
 //     static constexpr bool gives_slave_goal = true;  // sets LawCommand::slave_goal: it can drive
 //                                              // a slave that follows a pose (slave_command: servo_cp)
 //     static constexpr bool gives_no_force = true;  // and only such a slave
 //     static constexpr auto declared_inputs = std::tuple{Input<Wrench>{LawSide::slave, "measured_cf"}};
 //                                              // read commands of either device it needs, by name
-//                                              // and type (law_input.hpp): no task edit for a new one
+//                                              // and type (law_input.hpp): no task edit for a new one;
+//                                              // one may have to agree with a setting (a wave port's b)
+//     static constexpr auto declared_outputs = std::tuple{Output<double>{LawSide::master,
+//     "port_remote_energy"}};
+//                                              // write commands it sends to (law_output.hpp): a
+//                                              // passive law's energy or wave, through its port
 // step, reset, hold and on_set run in the RT thread: they allocate, lock, block and throw nothing.
 template <class L>
 concept Law = requires(L law, const LawInputs& in) {

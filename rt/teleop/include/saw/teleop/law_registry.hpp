@@ -31,18 +31,16 @@ class LawModel {
   virtual LawCommand step(const LawInputs& in) noexcept = 0;
   virtual std::uint64_t refusals() const noexcept = 0;
   virtual int last_refusal() const noexcept = 0;
-  // The law exchanges energies with a passivity port at the master (law.hpp).
-  virtual bool uses_ports() const noexcept = 0;
-  virtual bool uses_waves() const noexcept = 0;
   // The law sets LawCommand::slave_goal: a slave that follows a pose can be driven by it.
   virtual bool gives_slave_goal() const noexcept = 0;
   virtual bool gives_no_force() const noexcept = 0;
-  // For a law that uses_waves: its wave impedance b (N·s/m), which the master's port must share
-  // (the task refuses to start otherwise); 0 for other laws.
-  virtual double wave_impedance() const noexcept = 0;
+  // The value of its number setting `name` (and its unit), as it is now; false: no such setting.
+  virtual bool setting_value(std::string_view name, double& value, std::string_view& unit) const noexcept = 0;
   // Setup: one slot per declared input (law_input.hpp), in declaration order, for the task to
   // require on the named side and read every cycle.
   virtual std::vector<std::unique_ptr<detail::InputSlot>> make_inputs() const = 0;
+  // Setup: one slot per declared output (law_output.hpp), in declaration order.
+  virtual std::vector<std::unique_ptr<detail::OutputSlot>> make_outputs() const = 0;
   // Setup: each declared setting as a latched state column and read command `name`, and (when
   // it is a command) `set_<name>`, bounded; a refused value counts in `rejected`. Each declared
   // read-out as a state column and read command.
@@ -79,12 +77,6 @@ class LawHolder final : public LawModel {
     else
       return 0;
   }
-  bool uses_ports() const noexcept override {
-    if constexpr (requires { L::uses_ports; })
-      return L::uses_ports;
-    else
-      return false;
-  }
   bool gives_slave_goal() const noexcept override {
     if constexpr (requires { L::gives_slave_goal; })
       return L::gives_slave_goal;
@@ -97,25 +89,37 @@ class LawHolder final : public LawModel {
     else
       return false;
   }
-  bool uses_waves() const noexcept override {
-    if constexpr (requires { L::uses_waves; })
-      return L::uses_waves;
-    else
-      return false;
-  }
-  double wave_impedance() const noexcept override {
-    if constexpr (requires { L::uses_waves; }) {
-      static_assert(
-          !L::uses_waves || requires { law_.wave_impedance(); },
-          "a law that uses_waves says its wave impedance: double wave_impedance() const noexcept");
-      if constexpr (L::uses_waves) return law_.wave_impedance();
-    }
-    return 0;
+  bool setting_value(std::string_view name, double& value, std::string_view& unit) const noexcept override {
+    bool found = false;
+    // settings() is the law's read-back (and set_<name>'s target): reading it changes nothing.
+    const typename L::Settings& s = const_cast<L&>(law_).settings();
+    std::apply(
+        [&](const auto&... d) {
+          const auto one = [&](const auto& setting) {
+            if constexpr (std::is_same_v<typename std::decay_t<decltype(setting)>::Value, double>) {
+              if (!found && setting.name == name) {
+                value = s.*setting.member;
+                unit = setting.unit;
+                found = true;
+              }
+            }
+          };
+          (void)one;  // a law without settings
+          (one(d), ...);
+        },
+        L::declared_settings);
+    return found;
   }
   std::vector<std::unique_ptr<detail::InputSlot>> make_inputs() const override {
     std::vector<std::unique_ptr<detail::InputSlot>> slots;
     if constexpr (requires { L::declared_inputs; })
       std::apply([&](const auto&... in) { (slots.push_back(make_slot(in)), ...); }, L::declared_inputs);
+    return slots;
+  }
+  std::vector<std::unique_ptr<detail::OutputSlot>> make_outputs() const override {
+    std::vector<std::unique_ptr<detail::OutputSlot>> slots;
+    if constexpr (requires { L::declared_outputs; })
+      std::apply([&](const auto&... out) { (slots.push_back(make_slot(out)), ...); }, L::declared_outputs);
     return slots;
   }
   void provide_settings(ProvidedInterface& p, StateTable& table, std::uint64_t& rejected) override {
@@ -139,6 +143,10 @@ class LawHolder final : public LawModel {
   template <class T>
   static std::unique_ptr<InputSlot> make_slot(const Input<T>& in) {
     return std::make_unique<TypedInputSlot<T>>(in);
+  }
+  template <class T>
+  static std::unique_ptr<OutputSlot> make_slot(const Output<T>& out) {
+    return std::make_unique<TypedOutputSlot<T>>(out);
   }
   template <class T>
   static void describe(ComponentDescription& d, const Setting<typename L::Settings, T>& s) noexcept {

@@ -11,6 +11,7 @@
 #include "saw/crtk.hpp"
 #include "saw/description.hpp"
 #include "saw/task.hpp"
+#include "saw/teleop/detail/law_agreements.hpp"
 #include "saw/teleop/fault_info.hpp"
 #include "saw/teleop/law_registry.hpp"
 
@@ -75,9 +76,11 @@ std::string to_string(const TeleopSummary& s);
 // counted as ENABLED — and one still disabled after device_timeout faults it; every force is
 // checked finite before it is sent; every FAULT records why (fault(), the "fault" column, and
 // fault_reason() when a FaultInfo cannot say it all) and sends zero force both ways until the next
-// enable. A wave law's master port must run with the law's impedance b: checked at start-up (a
-// failed start) and every cycle, before the port's wave is used (a port restarted with another b,
-// or in the passivity scheme: FAULT, config_mismatch, naming both values and both components).
+// enable. What a law reads and sends besides the devices' poses, forces and goals it declares
+// (law_input.hpp, law_output.hpp: a passivity port's energies and waves); a declared input that
+// must agree with a law setting (a wave port's b) is checked at start-up (a failed start) and
+// every cycle, before the law uses what came with it (FAULT, config_mismatch, naming both values
+// and the components).
 class Teleoperation : public Task {
  public:
   Teleoperation(std::string name, TaskConfig task, TeleopConfig config, const LawSpec& law);
@@ -91,8 +94,8 @@ class Teleoperation : public Task {
   OperatingStateValue operating_state() const noexcept { return state_.state; }
   const OperatingState& state() const noexcept { return state_; }
   const FaultInfo& fault() const noexcept { return fault_; }
-  // The fault in more words than a FaultInfo holds, when it needs them ("" otherwise): a wave
-  // port whose impedance is no longer the law's names both values and both components.
+  // The fault in more words than a FaultInfo holds, when it needs them ("" otherwise): an input
+  // that no longer agrees with the law (a wave port's b) names both values and the components.
   std::string_view fault_reason() const noexcept { return fault_reason_.view(); }
   std::uint64_t rejected_commands() const noexcept { return rejected_; }
   // Input rows refused (not finite, stamped in the future).
@@ -140,25 +143,15 @@ class Teleoperation : public Task {
     FunctionRead<Pose> cp;
     FunctionRead<Twist> cv;
     FunctionWrite<Wrench> cf;
-    FunctionWrite<Pose> goal;                 // a slave that follows a pose (slave_servo_cp)
-    FunctionRead<JointState> grip;            // the master's gripper, the slave's jaw (optional)
-    FunctionWrite<JointState> jaw;            // the slave's jaw goal (optional)
-    FunctionRead<TimeNs> source_time, delay;  // bound when a DelayTask sits in between
-    FunctionRead<OperatingState> state;       // bound when the device reports its state
-    FunctionRead<double> port_energy;         // bound when the device has a passivity port
-    FunctionWrite<double> remote_energy;
-    double energy = 0;        // the port's input energy, last good read
-    FunctionRead<Vec3> wave;  // bound when the device has a wave port
-    FunctionWrite<Vec3> remote_wave;
-    FunctionRead<double> wave_impedance;   // the wave port's b, checked against the law's every cycle
-    double port_b = 0;                     // its last answer
-    Status impedance_status = Status::ok;  // of this cycle's read of it (ok: not read, or answered)
+    FunctionWrite<Pose> goal;                        // a slave that follows a pose (slave_servo_cp)
+    FunctionRead<JointState> grip;                   // the master's gripper, the slave's jaw (optional)
+    FunctionWrite<JointState> jaw;                   // the slave's jaw goal (optional)
+    FunctionRead<TimeNs> source_time, delay;         // bound when a DelayTask sits in between
+    FunctionRead<OperatingState> state;              // bound when the device reports its state
     FunctionRead<ComponentDescription> description;  // a delay task's: the component behind it
     FunctionRead<std::uint64_t> trips;               // a pose-following slave's watchdog_trips
     std::uint64_t trips_seen = 0;
     bool trips_known = false;
-    Eigen::Vector3d wave_value = Eigen::Vector3d::Zero();
-    bool wave_fresh = false;  // a new wave arrived with this cycle's row
     SideSample last{};
     Quat orientation{0, 0, 0, 1};  // of the last good input
     TimeNs time = 0;               // of the last good input: its row's, or its source row's plus the delay
@@ -169,11 +162,13 @@ class Teleoperation : public Task {
     Status status = Status::ok;  // of the last read
   };
   void require_side(Side& s, const char* iface);
-  // Start-up, a law that uses_waves: the master's port runs the wave scheme with the law's b.
-  // Also prepares wave_port_text_ for the same check made every cycle (read_side).
-  void check_wave_port();
+  // "its input port_wave_impedance from the master ('port.arm', through 'link.arm')" (setup).
+  std::string source_words(const detail::InputSlot& in);
   bool read_side(Side& s, FaultInfo& why) noexcept;
   bool read_declared(FaultInfo& why) noexcept;
+  // Every cycle, after the declared inputs: a value that disagrees with the law is FAULT
+  // (config_mismatch); one not read now holds the law (agreements_.unconfirmed()).
+  bool check_agreements(FaultInfo& why) noexcept;
   // True once after the slave's commands stopped (its watchdog tripped): it holds where it is.
   bool slave_held() noexcept;
   // Fills fault_reason_ for a fault a FaultInfo cannot say all of (clears it otherwise).
@@ -197,7 +192,8 @@ class Teleoperation : public Task {
 
   TeleopConfig config_;
   std::unique_ptr<LawModel> law_;
-  InputSet inputs_;                                 // what the law declared it reads besides the sides
+  InputSet inputs_;    // what the law declared it reads besides the sides
+  OutputSet outputs_;  // what the law declared it sends besides the forces and goals
   const detail::InputSlot* stale_input_ = nullptr;  // the declared input the last FAULT was for
   bool clutched_ = false, ratcheting_ = false;
   bool operator_present_ = false;  // the master's operator_present event, last pressed or released
@@ -210,9 +206,8 @@ class Teleoperation : public Task {
   TimeNs waiting_since_ = -1;  // enabled, a device not: since when
   FaultInfo fault_{};
   FaultText fault_reason_{};
-  // "law 'wave_variables' has impedance 3 N·s/m, but the master's port ('port.arm', through
-  // 'link.arm')": made at start-up, copied into fault_reason_ by the RT cycle.
-  std::string wave_port_text_;
+  detail::LawAgreements agreements_;  // declared inputs that must equal a law setting
+  const detail::LawAgreements::Agreement* disagreed_ = nullptr;  // the last config_mismatch's
   std::uint64_t rejected_ = 0, refused_sends_ = 0, rejected_inputs_ = 0, offset_errors_ = 0;
   double tracking_sum_sq_ = 0, tracking_max_ = 0;
   std::uint64_t enabled_cycles_ = 0;

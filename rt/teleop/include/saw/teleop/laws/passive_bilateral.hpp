@@ -8,6 +8,7 @@
 #include "saw/teleop/law.hpp"
 #include "saw/teleop/law_setting.hpp"
 #include "saw/teleop/passivity.hpp"
+#include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleop_law.hpp"
 
 namespace saw::teleop {
@@ -34,7 +35,16 @@ class PassiveBilateralLaw {
   static constexpr std::string_view description =
       "bilateral spring-damper coupling (force feedback) kept passive at any delay by time-domain "
       "passivity on both ports";
-  static constexpr bool uses_ports = true;
+  static bool valid_energy(const double& e) noexcept { return e >= 0; }
+  // The master's passivity port: the energy that entered there, as it arrived (late by the
+  // link's delay; ≥ 0, only growing), and the slave port's energy sent back to it.
+  static constexpr auto declared_inputs = std::tuple{Input<double>{
+      LawSide::master, port::energy.name, true,
+      "the master's passivity port: put a passivity_port component between the master device and the link",
+      "", &valid_energy}};
+  static constexpr auto declared_outputs = std::tuple{Output<double>{
+      LawSide::master, port::remote_energy.name, true,
+      "the master's passivity port: put a passivity_port component between the master device and the link"}};
   static constexpr auto declared_settings = std::tuple{
       Setting<Settings, double>{"scale", "", min_scale, max_scale, &Settings::scale,
                                 "slave displacement per master displacement"},

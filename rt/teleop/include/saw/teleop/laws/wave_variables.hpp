@@ -7,6 +7,7 @@
 
 #include "saw/teleop/law.hpp"
 #include "saw/teleop/law_setting.hpp"
+#include "saw/teleop/passivity_port.hpp"
 #include "saw/teleop/teleop_law.hpp"
 
 namespace saw::teleop {
@@ -30,7 +31,23 @@ class WaveVariableLaw {
   static constexpr std::string_view description =
       "bilateral teleoperation through wave variables (passive at any delay; velocities travel, "
       "positions may drift)";
-  static constexpr bool uses_waves = true;
+  // The master's port: the wave u it sent (fresh: arrived with this cycle's row; none is a zero
+  // wave), its b, which must be the law's (read after the wave: a port restarted with another b
+  // shows it with its first wave or before), and the wave v sent back to it.
+  static constexpr auto declared_inputs = std::tuple{
+      Input<Vec3>{
+          LawSide::master, port::wave.name, true,
+          "the master's wave port: put a passivity_port with scheme: wave between the master device and "
+          "the link"},
+      Input<double>{LawSide::master, port::wave_impedance.name, true,
+                    "the two ends of a wave channel must share b, or the channel is not passive (0: the port "
+                    "runs time-domain passivity); put a passivity_port with scheme: wave and the law's b "
+                    "between the master device and the link",
+                    "", nullptr, "impedance"}};
+  static constexpr auto declared_outputs =
+      std::tuple{Output<Vec3>{LawSide::master, port::remote_wave.name, true,
+                              "the master's wave port: put a passivity_port with scheme: wave between the "
+                              "master device and the link"}};
   static constexpr auto declared_settings = std::tuple{
       // Fixed by the deployment: both ends of the channel must share b (checked against the
       // master's port at start-up and every cycle), and changing it at one end mid-run would
@@ -49,7 +66,6 @@ class WaveVariableLaw {
 
   WaveVariableLaw(const Settings& s, const LawContext& ctx) : s_(s), dt_(ctx.period) {}
   Settings& settings() noexcept { return s_; }
-  double wave_impedance() const noexcept { return s_.impedance; }
   void reset(const LawInputs& in) noexcept;
   LawCommand step(const LawInputs& in) noexcept;
 
