@@ -421,9 +421,10 @@ TEST(DvrkArmDeployment, ParameterErrorsNameFileLineAndKey) {
       "deployment: {name: d, clock: stepped}\ncomponents:\n  - name: psm1\n    type: dvrk_arm\n"
       "    task: {period: 1ms}\n    params: ";
   const std::pair<const char*, const char*> cases[] = {
-      {"{safe_command: hold}", "key 'components[0].params.kind': say which arm this is: mtm or psm"},
-      {"{kind: ecm}", "key 'components[0].params.kind': 'ecm' is not one of: mtm, psm"},
-      {"{kind: psm, safe_command: zero_wrench}", "key 'components[0].params.safe_command': a PSM's is hold"},
+      {"{safe_command: hold}", "key 'components[0].params.kind': say which arm this is: mtm, psm or ecm"},
+      {"{kind: sjm}", "key 'components[0].params.kind': 'sjm' is not one of: mtm, psm, ecm"},
+      {"{kind: ecm, jaw_max: 1}", "key 'components[0].params.jaw_max'"},
+      {"{kind: psm, safe_command: zero_wrench}", "key 'components[0].params.safe_command': a PSM's or ECM's is hold"},
       {"{kind: mtm, safe_command: servo_cp_measured}",
        "key 'components[0].params.safe_command': an MTM's is"},
       {"{kind: mtm, stale_timeout: 1ms}", "key 'components[0].params.stale_timeout': at least three periods"},

@@ -1,4 +1,4 @@
-"""A simulated dVRK 2.4 arm (MTM or PSM) speaking ROS 2's DDS through Cyclone DDS, for the tests of
+"""A simulated dVRK 2.4 arm (MTM, PSM or ECM) speaking ROS 2's DDS through Cyclone DDS, for the tests of
 our own dVRK driver: it stands where a real `dvrk_system` arm would be.
 
 Written independently of sawrt's code. The facts come from docs/design/dvrk-arms.md Part A (which
@@ -137,11 +137,14 @@ class SimArm:
     dynamics by wall time in fixed 1/step_rate steps, and publishes at `rate` Hz."""
 
     def __init__(self, arm, domain, kind=None, rate=100.0, namespace="", console=None, params=None,
-                 home=None, start=None, hand=None, echo=None):
+                 home=None, start=None, hand=None, echo=None, home_q=None):
         self.arm = arm
-        self.kind = kind or ("mtm" if arm.upper().startswith("MTM") else "psm")
-        if self.kind not in ("mtm", "psm"):
-            raise ValueError(f"kind must be mtm or psm, not {self.kind!r}")
+        self.kind = kind or ("mtm" if arm.upper().startswith("MTM") else "ecm" if arm.upper() == "ECM" else "psm")
+        if self.kind not in ("mtm", "psm", "ecm"):
+            raise ValueError(f"kind must be mtm, psm or ecm, not {self.kind!r}")
+        # A PSM and an ECM follow position goals alike (an ECM is a PSM without a jaw here: its
+        # measured_cp orientation is the camera's).
+        self.follows = self.kind in ("psm", "ecm")
         self.domain = domain
         self.rate = float(rate)
         self.p = params or Params()
@@ -158,8 +161,8 @@ class SimArm:
         self._powering_until = None
         self._published_state = None
         # Motion.
-        self.home_p = tuple(home) if home is not None else ((0.0, 0.0, -0.1) if self.kind == "psm" else (0.0, 0.0, 0.0))
-        self.home_q = (0.0, 0.0, 0.0, 1.0)
+        self.home_p = tuple(home) if home is not None else ((0.0, 0.0, -0.1) if self.follows else (0.0, 0.0, 0.0))
+        self.home_q = qnormalize(tuple(home_q)) if home_q is not None else (0.0, 0.0, 0.0, 1.0)
         start_p = tuple(start) if start is not None else add(self.home_p, (0.01, -0.01, 0.02))
         self._meas_p, self._meas_q = start_p, self.home_q
         self._sp_p, self._sp_q = start_p, self.home_q
@@ -343,7 +346,7 @@ class SimArm:
                  "measured_js": JointState, "setpoint_js": JointState}
         if self.kind == "mtm":
             state.update({"body/measured_cf": WrenchStamped, "gripper/measured_js": JointState})
-        else:
+        elif self.kind == "psm":
             state.update({"jaw/measured_js": JointState, "jaw/setpoint_js": JointState})
         for name, kind in state.items():
             self._writers[name] = DataWriter(self._dp, self._topic(f"{self.arm}/{name}", kind), qos=STATE_QOS)
@@ -411,7 +414,7 @@ class SimArm:
             body = rotate(qconj(self._meas_q), self._applied)
             w["body/measured_cf"].write(WrenchStamped(header=h, wrench=Wrench(force=Vector3(*body))))
             w["gripper/measured_js"].write(JointState(header=h, name=["gripper"], position=[self._gripper]))
-        else:
+        elif self.kind == "psm":
             w["jaw/measured_js"].write(JointState(header=h, name=["jaw"], position=[self._jaw_meas]))
             w["jaw/setpoint_js"].write(JointState(header=h, name=["jaw"], position=[self._jaw_sp]))
 
@@ -536,7 +539,7 @@ class SimArm:
         if not ready:
             self._warn_throttled("not_ready", f"{self.arm}: {method}, arm not ready")
             return False
-        if cartesian and self.kind == "psm" and not self.cannula_ready:
+        if cartesian and self.follows and not self.cannula_ready:
             self._warn_throttled("cannula", f"{self.arm}: tool/endoscope needs to be inserted past the cannula")
             return False
         return True
@@ -631,7 +634,7 @@ class SimArm:
                 self._finish_trajectory()
         elif self._mode == "position":
             self._track_goal(dt)
-        if self.kind == "psm":
+        if self.follows:
             self._step_psm(dt)
         else:
             self._step_mtm(dt, now)
@@ -806,7 +809,9 @@ def _parse(argv):
     ap.add_argument("--arm", required=True, help="arm name, the topic namespace (MTML, MTMR, PSM1, ...)")
     ap.add_argument("--domain", type=int, default=int(os.environ.get("SAW_TEST_DOMAIN", "0")),
                     help="DDS domain (ROS_DOMAIN_ID); default $SAW_TEST_DOMAIN or 0")
-    ap.add_argument("--kind", choices=("mtm", "psm"), help="default: mtm for MTM*, else psm")
+    ap.add_argument("--kind", choices=("mtm", "psm", "ecm"), help="default: mtm for MTM*, ecm for ECM, else psm")
+    ap.add_argument("--home-q", type=float, nargs=4, metavar=("X", "Y", "Z", "W"),
+                    help="the home orientation (an ECM's: the camera frame), default identity")
     ap.add_argument("--rate", type=float, default=100.0, help="state publishing rate, Hz (dVRK default 100)")
     ap.add_argument("--namespace", default="", help="ROS namespace before the arm name")
     ap.add_argument("--console", action=argparse.BooleanOptionalAction, default=None,
@@ -829,7 +834,7 @@ def main(argv=None):
     hand = tuple(float(x) for x in a.hand.split(",")) if a.hand else None
     echo = (lambda c: print(f"cmd {c.time:.6f} {c.topic} {summary(c.value)}", flush=True)) if a.echo else None
     sim = SimArm(a.arm, a.domain, kind=a.kind, rate=a.rate, namespace=a.namespace, console=a.console,
-                 params=params, hand=hand, echo=echo)
+                 params=params, hand=hand, echo=echo, home_q=a.home_q)
     sim.set_invalid_stamps(a.invalid_stamps)
     sim.freeze_stamps(a.freeze_stamps)
     sim.set_cannula_ready(not a.cannula_not_ready)

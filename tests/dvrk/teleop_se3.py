@@ -11,7 +11,10 @@ on this test's DDS domain): the `surgical` law on the MTM's read-only import and
 (c) a PSM turned 40° from the MTM: the law does not engage (`aligned` 0, `misalignment` printed)
     and the PSM is not moved;
 (d) the console's operator_present (the shipped file says needs_operator): no goal moves before
-    the operator is present, none while away, and no step at each return.
+    the operator is present, none while away, and no step at each return;
+(e) the camera frame from an ECM (a third simulated arm, imported read-only and connected to the
+    teleoperation's `camera` interface, as the shipped file's comment says): the ECM rolled 90°
+    about z, the hand's x moves the PSM along y, not x.
 
 Each check is printed; the exit code is 1 if any failed. A phase in which the simulated arms
 stalled (a Python process starved on a loaded machine: the PSM's device FAULTs "stale: the dVRK
@@ -36,7 +39,7 @@ import harness  # noqa: E402
 from harness import check, dds_domain, exit_code  # noqa: E402
 from saw_run import SawRt, arm_ready, shipped  # noqa: E402
 
-NAMES = ("psm1", "psm_teleop", "PSM1_dds", "MTML_dds", "dvrk-mtm-psm")
+NAMES = ("psm1", "psm_teleop", "PSM1_dds", "MTML_dds", "ECM_dds", "dvrk-mtm-psm")
 HAND = (0.03, 0.5, (1.0, 0.0, 0.0), math.radians(20))
 ATTEMPTS = 3
 STALL = re.compile(r"FAULT.*(stopped publishing|deadline missed)")
@@ -69,10 +72,15 @@ def attempted(phase, *args):
     check(False, f"{phase.__name__}: the simulated arms stalled in each of {ATTEMPTS} runs")
 
 
-def start(saw_rt, work, tag, domain, name):
+def start(saw_rt, work, tag, domain, name, ecm=False):
+    text = shipped("dvrk-mtm-psm.yaml", tag, domain, NAMES)
+    if ecm:  # the ECM's import on the teleoperation's camera interface, as the file's comment says
+        text = text.replace("\nconnections:\n", f"\nconnections:\n  - {{client: psm_teleop{tag}, required: camera, "
+                            f"server: ECM_dds{tag}, provided: arm}}\n", 1)
+        text = text.replace("  import:\n", f"  import:\n    - {{component: ECM_dds{tag}, arm: ECM}}\n", 1)
     path = os.path.join(work, f"{name}.yaml")
     with open(path, "w") as f:
-        f.write(shipped("dvrk-mtm-psm.yaml", tag, domain, NAMES))
+        f.write(text)
     return SawRt(saw_rt, path, os.path.join(work, f"{name}.csv"))
 
 
@@ -249,6 +257,42 @@ def operator_present(saw_rt, work, tag, domain, run):
             run["stall"] = stalled(rt, psm, stopped)
 
 
+def camera_from_ecm(saw_rt, work, tag, domain, run):
+    print("-- (e) the camera frame from an ECM")
+    roll = (0.0, 0.0, math.sin(math.radians(45)), math.cos(math.radians(45)))  # 90° about z
+    # The PSM turned as the camera is: the MTM (identity) is then aligned with it in the camera's frame.
+    with S.SimArm("MTML", domain, kind="mtm", rate=500.0, console=True,
+                  hand=(0.03, 0.5, (1.0, 0.0, 0.0), 0.0)) as mtm, \
+            S.SimArm("PSM1", domain, kind="psm", rate=500.0, home_q=roll) as psm, \
+            S.SimArm("ECM", domain, kind="ecm", rate=100.0, home_q=roll, start=(0.0, 0.0, -0.1)):
+        rt = start(saw_rt, work, tag, domain, "camera", ecm=True)
+        try:
+            when_ready(psm)
+            mtm.press("operator_present")
+            first = psm.wait_command("servo_cp", timeout=30.0)
+            p0 = position(first) if first else (0.0, 0.0, 0.0)
+            moving = psm.wait_command("servo_cp", pred=lambda v: math.dist(
+                (v.pose.position.x, v.pose.position.y, v.pose.position.z), p0) > 1e-4, timeout=10.0)
+            if not check(moving is not None, "the law engages in the ECM's frame and the goals move"):
+                print(rt.text())
+                return
+            t0 = time.monotonic()
+            time.sleep(2.5)
+            seen = goals(psm, since=t0)
+            xs, ys = [position(c)[0] for c in seen], [position(c)[1] for c in seen]
+            along_y, along_x = max(ys) - min(ys), max(xs) - min(xs)
+            print(f"figure: through the ECM rolled 90°, the hand's ±3 cm along x moves the PSM "
+                  f"{along_y * 1000:.2f} mm along y and {along_x * 1000:.3f} mm along x")
+            check(0.009 < along_y < 0.015 and along_x < 0.0005,
+                  "the hand's x is the camera's: the PSM moves along y, not x")
+            early = rt.faults_before(time.monotonic())
+            check(not early, f"nothing faulted: {early[:2]}")
+        finally:
+            stopped = time.monotonic()
+            rt.stop()
+            run["stall"] = stalled(rt, psm, stopped)
+
+
 def main(saw_rt):
     tag = str(os.getpid())
     domain = dds_domain()
@@ -256,6 +300,7 @@ def main(saw_rt):
     attempted(follow_and_clutch, saw_rt, work, tag, domain)
     attempted(misaligned, saw_rt, work, tag, domain)
     attempted(operator_present, saw_rt, work, tag, domain)
+    attempted(camera_from_ecm, saw_rt, work, tag, domain)
     return exit_code()
 
 

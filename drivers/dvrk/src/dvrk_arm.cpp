@@ -13,9 +13,10 @@ constexpr int max_not_sent = 10;  // the import's queue full this many cycles in
 constexpr TimeNs resend_state_after = 1'000'000'000;  // an enable or home with no effect: again
 
 DvrkArmConfig checked(DvrkArmConfig c) {
-  const bool psm = c.kind == ArmKind::psm;
+  const bool psm = follows_poses(c.kind);
   if (psm && c.safe_command == SafeCommand::zero_wrench)
-    throw std::invalid_argument("a PSM's safe command is hold or servo_cp_measured (a zero wrench drops it)");
+    throw std::invalid_argument(
+        "a PSM's or ECM's safe command is hold or servo_cp_measured (a zero wrench drops it)");
   if (!psm && c.safe_command == SafeCommand::servo_cp_measured)
     throw std::invalid_argument("an MTM's safe command is zero_wrench or hold");
   if (!(c.stale_timeout > 0)) throw std::invalid_argument("stale_timeout must be positive");
@@ -29,7 +30,7 @@ DvrkArmConfig checked(DvrkArmConfig c) {
 DeviceConfig contract_of(const DvrkArmConfig& c) {
   DeviceConfig d;
   d.settings() = c.contract;
-  const bool psm = c.kind == ArmKind::psm;
+  const bool psm = follows_poses(c.kind);
   d.safe_state = psm ? SafeState::hold : SafeState::zero_force;
   d.servo_cf = !psm;
   d.servo_cp = psm;
@@ -57,7 +58,7 @@ bool finite(const Wrench& w) noexcept {
 DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
     : Device(std::move(name), task, contract_of(checked(config))), arm_config_(checked(std::move(config))) {
   namespace arm = crtk::arm;
-  const bool psm = arm_config_.kind == ArmKind::psm;
+  const bool psm = follows_poses(arm_config_.kind);
   auto& r = require(std::string(source));
   crtk::require(r, arm::measured_cp, read_cp_);
   crtk::require(r, arm::measured_cv, read_cv_, Need::optional);
@@ -90,13 +91,13 @@ DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
     r.add_function("free", free_, Need::optional);
     a.add_command_void("free", [this] { on_free(); });
   }
-  // The gripper (MTM) or the jaw (PSM), passed on checked.
-  if (psm) {
+  // The gripper (MTM) or the jaw (PSM), passed on checked; an ECM has neither.
+  if (arm_config_.kind == ArmKind::psm) {
     crtk::require(r, arm::jaw_measured_js, read_jaw_, Need::optional);
     crtk::require(r, arm::jaw_servo_jp, write_jaw_, Need::optional);
     crtk::provide(a, arm::jaw_measured_js, state_table(), &jaw_);
     crtk::provide(a, arm::jaw_servo_jp, [this](const JointState& j) { on_jaw(j); });
-  } else {
+  } else if (arm_config_.kind == ArmKind::mtm) {
     crtk::require(r, arm::gripper_measured_js, read_jaw_, Need::optional);
     crtk::provide(a, arm::gripper_measured_js, state_table(), &jaw_);
   }
@@ -424,7 +425,7 @@ void DvrkArm::enter_safe_state(SafeReason) {
 }
 
 bool DvrkArm::accepts(ServoMode m) const noexcept {
-  return m == (arm_config_.kind == ArmKind::psm ? ServoMode::cp : ServoMode::cf) ||
+  return m == (follows_poses(arm_config_.kind) ? ServoMode::cp : ServoMode::cf) ||
          (m == ServoMode::jp && arm_config_.servo_jp);
 }
 

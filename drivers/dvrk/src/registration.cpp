@@ -58,16 +58,17 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
   s.task = deploy::periodic_task(ctx, p, "dvrk_arm");
   const TimeNs period = s.task.period.count();
   DvrkArmConfig& c = s.arm;
-  c.kind = p.get_enum<ArmKind>("kind", {{"mtm", ArmKind::mtm}, {"psm", ArmKind::psm}}, ArmKind::mtm);
-  if (!p.has("kind")) p.fail_at("kind", "say which arm this is: mtm or psm");
-  const bool psm = c.kind == ArmKind::psm;
+  c.kind = p.get_enum<ArmKind>("kind", {{"mtm", ArmKind::mtm}, {"psm", ArmKind::psm}, {"ecm", ArmKind::ecm}},
+                               ArmKind::mtm);
+  if (!p.has("kind")) p.fail_at("kind", "say which arm this is: mtm, psm or ecm");
+  const bool psm = follows_poses(c.kind);
   c.safe_command = p.get_enum<SafeCommand>("safe_command",
                                            {{"zero_wrench", SafeCommand::zero_wrench},
                                             {"hold", SafeCommand::hold},
                                             {"servo_cp_measured", SafeCommand::servo_cp_measured}},
                                            psm ? SafeCommand::hold : SafeCommand::zero_wrench);
   if (psm && c.safe_command == SafeCommand::zero_wrench)
-    p.fail_at("safe_command", "a PSM's is hold or servo_cp_measured (a zero wrench lets it drop)");
+    p.fail_at("safe_command", "a PSM's or ECM's is hold or servo_cp_measured (a zero wrench lets it drop)");
   if (!psm && c.safe_command == SafeCommand::servo_cp_measured)
     p.fail_at("safe_command", "an MTM's is zero_wrench or hold");
   c.contract = deploy::parse_device_settings(
@@ -81,10 +82,12 @@ DvrkArmSpec parse_dvrk_arm(const deploy::ComponentContext& ctx, Params& p) {
   c.servo_jp = p.get_or<bool>("servo_jp", false);
   if (c.servo_jp && c.joints.empty())
     p.fail_at("servo_jp", "needs the arm's joints (joints: {names: [...]})");
-  if (psm) {
+  if (c.kind == ArmKind::psm) {
     c.jaw_min = p.get_in_range("jaw_min", -1, 2, c.jaw_min);
     c.jaw_max = p.get_in_range("jaw_max", -1, 2, c.jaw_max);
     if (!(c.jaw_min < c.jaw_max)) p.fail_at("jaw_max", "must be above jaw_min");
+  }
+  if (psm) {
     c.following_error = p.get_in_range("following_error", 0, 0.5, c.following_error);
     c.following_time =
         duration_in(p, "following_time", c.following_time, period, std::chrono::nanoseconds(10s).count(),

@@ -14,7 +14,9 @@
 
 namespace saw::drivers::dvrk {
 
-enum class ArmKind : std::uint8_t { mtm, psm };
+// An MTM takes wrenches; a PSM and an ECM (the endoscope's arm, no jaw) follow poses.
+enum class ArmKind : std::uint8_t { mtm, psm, ecm };
+inline bool follows_poses(ArmKind k) noexcept { return k != ArmKind::mtm; }
 
 // What reaches the arm when our commands stop (disable, a fault, the command watchdog, a stop):
 // once, after the last motion command, and nothing after it (the dVRK keeps its last goal).
