@@ -150,6 +150,69 @@ TEST(SurgicalLaw, ItRefusesToEngageWhileMisalignedAndEngagesWithoutAStepOnceAlig
   EXPECT_NEAR(rig.slave.goal.position[0], 0.002, 1e-12);
 }
 
+// A master that takes move_cp (the dVRK's MTM) is sent, once at each engagement found
+// misaligned, its own position turned to where it is aligned through the camera (C⁻¹ · q_s0);
+// busy while it moves, the task holds; idle there, the law engages without a step. With
+// align_master false, or while aligned, nothing is sent.
+TEST(SurgicalLaw, AMisalignedMasterThatTakesMoveCpIsSentTheAlignedPoseOnceAtEachEngagement) {
+  SurgicalLaw::Settings s;
+  s.camera_rpy = {0, 0, 90};
+  Rig rig = rig_with(s);
+  rig.master.position = {0.05, 0.01, 0.02};
+  rig.master.orientation = about_z(0);  // seen through the camera: 90 degrees from the slave's
+  rig.slave.position = {0, 0, -0.1};
+  rig.step(5);
+  ASSERT_EQ(rig.master.moves, 1) << "one move, not one a cycle";
+  EXPECT_LT(dist(rig.master.move_goal.position, rig.master.position), 1e-12) << "at its position";
+  EXPECT_LT(angle_between(rig.master.move_goal.orientation, about_z(-90)), 1e-9) << "turned to C⁻¹ · q_s0";
+  double aligned = 1;
+  ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
+  EXPECT_EQ(aligned, 0.0);
+  rig.master.busy = true;  // the move runs: the task holds
+  rig.step(3);
+  rig.master.orientation = rig.master.move_goal.orientation;
+  rig.master.busy = false;
+  rig.step(3);
+  ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
+  EXPECT_EQ(aligned, 1.0) << "engaged once the master is there";
+  EXPECT_EQ(rig.master.moves, 1) << "aligned at that engagement: no move";
+  EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "no step at engagement";
+  EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9);
+  // Stopped on the way (the operator held the handle): the next engagement sends it again.
+  rig.master.press_clutch(true);
+  rig.step(2);
+  rig.master.orientation = about_z(30);
+  rig.master.press_clutch(false);
+  rig.step(3);
+  EXPECT_EQ(rig.master.moves, 2);
+  EXPECT_EQ(rig.teleop.refused_sends(), 0u);
+
+  s.align_master = false;
+  Rig by_hand = rig_with(s);
+  by_hand.step(5);
+  EXPECT_EQ(by_hand.master.moves, 0) << "align_master false: the operator turns it";
+}
+
+// A master without move_cp (the Falcon, a read-only import): the optional output is not sent and
+// not counted as refused; the operator is told how far off it is.
+TEST(SurgicalLaw, AMasterWithoutMoveCpIsLeftToTheOperatorAndNothingCountsAsRefused) {
+  saw::testing::FakeDevice master{"master", false}, slave{"slave"};
+  saw::teleop::Teleoperation teleop("teleop", saw::TaskConfig::periodic(std::chrono::milliseconds(1), 0),
+                                    follows_pose(),
+                                    saw::teleop::law_spec<SurgicalLaw>(SurgicalLaw::Settings{}));
+  saw::Manager manager;
+  for (saw::Component* c : std::initializer_list<saw::Component*>{&master, &slave, &teleop}) manager.add(*c);
+  manager.connect("teleop", "master", "master", "arm");
+  manager.connect("teleop", "slave", "slave", "arm");
+  manager.start_stepped();
+  saw::testing::Stepper stepper{manager};
+  master.orientation = about_z(40);
+  for (int i = 0; i < 5; ++i) stepper({&master, &slave});
+  EXPECT_GT(slave.goals, 0) << "held";
+  EXPECT_EQ(teleop.refused_sends(), 0u) << "an optional output not offered is not a refusal";
+  manager.stop();
+}
+
 // Clutched, nothing is sent; the master turned past the tolerance meanwhile must come back before
 // the law engages again; and no step at the release.
 TEST(SurgicalLaw, AClutchDecouplesAndTheReleaseChecksTheOrientationAgain) {

@@ -23,6 +23,7 @@ std::uint64_t OutputSet::send() noexcept {
   for (std::size_t i = 0; i < slots_.size(); ++i) {
     if (!values_[i].set) continue;
     values_[i].set = false;
+    if (!slots_[i]->function().is_bound()) continue;  // optional, and not offered
     if (!slots_[i]->write()) ++refused;
   }
   return refused;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "saw/eigen.hpp"
 
@@ -31,15 +32,31 @@ void SurgicalLaw::reset(const LawInputs& in) noexcept {
   p_goal_ = p_s0_;
   q_goal_ = q_s0_;
   engaged_ = false;
-  (void)engage(in);
+  // Reset runs every cycle the task holds (a clutch, a busy device): the move is sent by the step
+  // after, once.
+  align_pending_ = s_.orientation && s_.align_master;
+  // Engaged by the step (this cycle's inputs, never a held cycle's); told how far off meanwhile.
+  (void)observe(in, camera(in));
+}
+
+void SurgicalLaw::align_master(const LawInputs& in) const noexcept {
+  // Aligned when C · q_m = q_s0 (the master seen through the camera is the instrument).
+  const Eigen::Quaterniond q = (camera(in).conjugate() * q_s0_).normalized();
+  if (in.master.position.allFinite() && q.coeffs().allFinite())
+    (void)in.outputs.set(0, Pose{to_vec3(in.master.position), to_quat(q)});
+}
+
+Eigen::Quaterniond SurgicalLaw::observe(const LawInputs& in, const Eigen::Quaterniond& c) noexcept {
+  const Eigen::Quaterniond seen = c * in.master.orientation;
+  misalignment_ = s_.orientation ? seen.angularDistance(q_s0_) * degrees : 0.0;
+  aligned_ = misalignment_ <= s_.align_tolerance ? 1.0 : 0.0;
+  return seen;
 }
 
 bool SurgicalLaw::engage(const LawInputs& in) noexcept {
   const Eigen::Quaterniond c = camera(in);
-  const Eigen::Quaterniond seen = c * in.master.orientation;
-  misalignment_ = s_.orientation ? seen.angularDistance(q_s0_) * degrees : 0.0;
-  engaged_ = misalignment_ <= s_.align_tolerance;
-  aligned_ = engaged_ ? 1.0 : 0.0;
+  const Eigen::Quaterniond seen = observe(in, c);
+  engaged_ = aligned_ == 1.0;
   if (!engaged_) return false;
   p_m0_ = in.master.position;
   c_ = c;
@@ -67,7 +84,9 @@ void SurgicalLaw::approach(const Eigen::Vector3d& p, const Eigen::Quaterniond& q
 LawCommand SurgicalLaw::step(const LawInputs& in) noexcept {
   LawCommand out;
   out.orients_slave = true;
+  const bool first = std::exchange(align_pending_, false);
   if (!engaged_ && !engage(in)) {
+    if (first) align_master(in);
     approach(p_s0_, q_s0_);
   } else {
     approach(p_s0_ + s_.scale * (c_ * (in.master.position - p_m0_)),

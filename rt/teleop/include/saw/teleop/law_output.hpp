@@ -21,8 +21,10 @@ namespace saw::teleop {
 // the task requires `command` (a write command of type T) on that side's interface; a value the
 // law sets in a cycle it steps is sent that cycle, before the devices' forces (a port never
 // applies a force before the energy allowing it). Nothing is sent while the law holds. A value the
-// device refuses counts in the task's refused sends. The task's own writes (servo_cf, ...) are not
-// declared.
+// device refuses counts in the task's refused sends. An optional output (required = false) the
+// device does not offer is not sent, and not counted: the law's fallback is its own (the surgical
+// law's move_cp: the operator aligns the master by hand). The task's own writes (servo_cf, ...)
+// are not declared.
 template <Plain T>
 struct Output {
   LawSide side = LawSide::master;
@@ -73,7 +75,7 @@ class OutputSlot : public DeclaredSlot {
  public:
   using DeclaredSlot::DeclaredSlot;
   virtual void* storage() noexcept = 0;
-  // Sends the stored value: false when it is not bound or the device refuses it.
+  // Sends the stored value: false when the device refuses it (the caller skips an unbound one).
   virtual bool write() noexcept = 0;
 };
 
@@ -85,7 +87,7 @@ class TypedOutputSlot final : public OutputSlot {
   FunctionBase& function() noexcept override { return fn_; }
   TypeInfo type() const noexcept override { return type_info_of<T>(); }
   void* storage() noexcept override { return &value_; }
-  bool write() noexcept override { return fn_.is_bound() && fn_(value_) == Status::ok; }
+  bool write() noexcept override { return fn_(value_) == Status::ok; }
 
  private:
   FunctionWrite<T> fn_;
@@ -104,7 +106,8 @@ class OutputSet {
   void require(const std::function<RequiredInterface&(const std::string&)>& interface_of);
   // The law's view for this cycle: nothing set yet.
   DeclaredOutputs prepare() noexcept;
-  // (RT) Sends what the law set; returns how many the devices refused (or could not be sent).
+  // (RT) Sends what the law set; returns how many the devices refused. An optional output the
+  // device does not offer is dropped, not counted.
   std::uint64_t send() noexcept;
   std::size_t size() const noexcept { return slots_.size(); }
 

@@ -14,7 +14,8 @@ namespace saw::testing {
 
 class FakeDevice : public Component {
  public:
-  explicit FakeDevice(std::string name) : Component(std::move(name)) {
+  // takes_moves: it provides move_cp (recorded, not acted on: the test moves it).
+  explicit FakeDevice(std::string name, bool takes_moves = true) : Component(std::move(name)) {
     namespace arm = crtk::arm;
     auto& p = provide(std::string(arm::interface_name));
     crtk::provide(p, arm::measured_cp, state_table(), &pose_);
@@ -27,6 +28,11 @@ class FakeDevice : public Component {
       goal = x;
       ++goals;
     });
+    if (takes_moves)
+      crtk::provide(p, arm::move_cp, [this](const Pose& x) {
+        move_goal = x;
+        ++moves;
+      });
     // A gripper (as a master's) and a jaw (as a slave's): `grip`, NaN for a device without.
     crtk::provide(p, arm::gripper_measured_js, state_table(), &grip_js_);
     crtk::provide(p, arm::jaw_measured_js, state_table(), &grip_js_);
@@ -60,6 +66,8 @@ class FakeDevice : public Component {
   Quat orientation{0, 0, 0, 1};
   Pose goal{};  // the last servo_cp
   int goals = 0;
+  Pose move_goal{};  // the last move_cp
+  int moves = 0;
   OperatingStateValue operating = OperatingStateValue::enabled;
   bool busy = false;  // operating_state's is_busy (homing)
   int commands = 0;

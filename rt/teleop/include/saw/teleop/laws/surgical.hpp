@@ -24,7 +24,10 @@ namespace saw::teleop {
 //                 which is no more than align_tolerance: no step either)
 // It engages only while the master's orientation, seen through C, is within align_tolerance of
 // the slave's: until then the slave is held where it was and `misalignment` says how far off the
-// master is (the operator turns the handle, or a master that can is moved there). A clutch
+// master is. A master whose `arm` interface takes move_cp is sent there once at each engagement
+// found misaligned — at its position, turned to C⁻¹ · q_s0 — as the dVRK's teleoperation does
+// (align_master); the device is busy while it moves, the task holds, and the law engages again
+// once it is idle; else, or if it is stopped on the way, the operator turns the handle. A clutch
 // decouples translation; on release the law engages again, orientation checked again. The jaw
 // goal is jaw_scale · gripper + jaw_offset within [jaw_min, jaw_max], reached from the slave's
 // jaw at no more than jaw_rate (no step at engagement). With `orientation: false` (a 3-DOF master:
@@ -38,6 +41,7 @@ class SurgicalLaw {
     double scale = 0.2;
     bool orientation = true;
     double align_tolerance = 10.0;  // deg
+    bool align_master = true;       // a master that takes move_cp is moved to the alignment
     Vec3 camera_rpy{0, 0, 0};       // deg: roll, pitch, yaw of the camera frame in the slave's base
     double jaw_scale = 1.0, jaw_offset = 0.0;
     double jaw_min = -0.35, jaw_max = 1.4;  // rad
@@ -58,6 +62,10 @@ class SurgicalLaw {
                               "follow the master's orientation (false: a 3-DOF master; held)", false},
       Setting<Settings, double>{"align_tolerance", "deg", 0.5, 90, &Settings::align_tolerance,
                                 "engage only with the master this close to the instrument's orientation"},
+      Setting<Settings, bool>{"align_master", "", 0, 0, &Settings::align_master,
+                              "move a misaligned master that takes move_cp to the instrument's orientation "
+                              "at each engagement (false: the operator turns it)",
+                              false},
       Setting<Settings, Vec3>{"camera_rpy", "deg", -180, 180, &Settings::camera_rpy,
                               "the camera frame's roll, pitch, yaw in the slave's base frame", false},
       Setting<Settings, double>{"jaw_scale", "", -10, 10, &Settings::jaw_scale,
@@ -82,6 +90,11 @@ class SurgicalLaw {
       Input<Pose>{LawSide::other, "measured_cp", false,
                   "the endoscope's pose, in the frame of the slave's: the camera frame", "camera"}};
 
+  // A master that can be moved: sent the aligned pose once at each engagement found misaligned.
+  static constexpr auto declared_outputs = std::tuple{Output<Pose>{
+      LawSide::master, "move_cp", false,
+      "the master moved to the instrument's orientation (align_master): a master that takes move_cp"}};
+
   SurgicalLaw(const Settings& s, const LawContext& c);
   Settings& settings() noexcept { return s_; }
 
@@ -91,13 +104,14 @@ class SurgicalLaw {
 
   // Shown as the task's state.
   double misalignment_ = 0;       // deg: the master's orientation (through C) from the slave's
-  double aligned_ = 0;            // 1 while engaged, 0 while waiting for the master to align
+  double aligned_ = 0;            // 1 while aligned (engaged, or to engage), 0 while misaligned
   double orientation_error_ = 0;  // deg: the slave's orientation from its goal
   static constexpr auto declared_readouts = std::tuple{
       Readout<SurgicalLaw, double>{"misalignment", "deg", &SurgicalLaw::misalignment_,
                                    "how far the master's orientation is from the instrument's"},
-      Readout<SurgicalLaw, double>{"aligned", "", &SurgicalLaw::aligned_,
-                                   "1: engaged; 0: holding until the master is aligned"},
+      Readout<SurgicalLaw, double>{
+          "aligned", "", &SurgicalLaw::aligned_,
+          "1: aligned (engaged unless held); 0: holding until the master is aligned"},
       Readout<SurgicalLaw, double>{"orientation_error", "deg", &SurgicalLaw::orientation_error_,
                                    "the instrument's orientation from its goal"},
   };
@@ -105,8 +119,12 @@ class SurgicalLaw {
  private:
   // C: the endoscope's orientation when one is connected and has a pose, else camera_rpy.
   Eigen::Quaterniond camera(const LawInputs& in) const noexcept;
+  // The master's orientation seen through c; sets misalignment_ and aligned_.
+  Eigen::Quaterniond observe(const LawInputs& in, const Eigen::Quaterniond& c) noexcept;
   // Takes the engagement's poses if the master is aligned; true if it is.
   bool engage(const LawInputs& in) noexcept;
+  // A misaligned master that takes move_cp: the pose that aligns it (its position, turned).
+  void align_master(const LawInputs& in) const noexcept;
   double jaw_goal(const LawInputs& in) noexcept;
   // The goal sent: toward (p, q) by no more than the speed limits allow in one period.
   void approach(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) noexcept;
@@ -114,6 +132,7 @@ class SurgicalLaw {
   Settings s_;
   double period_ = 0.001;
   bool engaged_ = false;
+  bool align_pending_ = false;  // the first step since a reset: a misaligned master is moved
   Eigen::Quaterniond c_ = Eigen::Quaterniond::Identity();  // C, taken at each engagement
   Eigen::Vector3d p_m0_ = Eigen::Vector3d::Zero(), p_s0_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_s0_ = Eigen::Quaterniond::Identity(), q_off_ = Eigen::Quaterniond::Identity();
