@@ -170,6 +170,12 @@ void Device::refuse(std::uint64_t& counter) noexcept {
   command_ = {};  // never the refused value, nor the last good one for ever: the safe output
 }
 
+void Device::end_servo() noexcept {
+  command_ = {};
+  watchdog_.disarm();
+  has_jp_ = has_cp_ = false;  // the hardware moves on its own: the next step is judged from where it is
+}
+
 void Device::servo_cf(const Wrench& w) noexcept {
   watchdog_.commanded(now());  // a refused command is fresh too: it takes the safe output itself
   if (!accepts(ServoMode::cf)) return refuse(status_.refused.wrong_mode);
@@ -269,6 +275,7 @@ void Device::state_command(StateCommand c) noexcept {
       command_ = {};
       watchdog_.disarm();
       safe(SafeReason::disable);
+      moving_ = false;
       state_.is_busy = homing_;
       if (state_.state != OperatingStateValue::disabled) set_state(OperatingStateValue::disabled);
       break;

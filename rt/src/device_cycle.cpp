@@ -27,6 +27,15 @@ void Device::start_homing() noexcept {
   state_.is_busy = true;
 }
 
+void Device::set_moving(bool moving) noexcept {
+  if (moving_ == moving) return;
+  moving_ = moving;
+  const bool busy = enabling_ || homing_ || moving_;
+  if (state_.is_busy == busy) return;
+  state_.is_busy = busy;
+  (void)(*state_event_)(state_);
+}
+
 void Device::lose_homing() noexcept {
   if (!state_.is_homed) return;
   state_.is_homed = false;
@@ -67,7 +76,7 @@ void Device::raise(const Outcome& why, FaultOrigin origin) noexcept {
   describe(why);
   status_.origin = origin;
   ++status_.faults;
-  enabling_ = homing_ = enable_requested_ = false;
+  enabling_ = homing_ = enable_requested_ = moving_ = false;
   state_.is_busy = false;
   command_ = {};
   watchdog_.disarm();
@@ -104,7 +113,7 @@ void Device::step_enable(TimeNs t) noexcept {
   if (o.is_failed()) return raise(o);
   if (o.is_done()) {
     enabling_ = false;
-    state_.is_busy = homing_;
+    state_.is_busy = homing_ || moving_;
     return set_state(OperatingStateValue::enabled);
   }
   if (t == enable_start_) (void)(*state_event_)(state_);  // DISABLED, busy: under way
@@ -120,7 +129,7 @@ void Device::step_home(TimeNs t) noexcept {
   if (o.is_done()) {
     homing_ = false;
     state_.is_homed = true;
-    state_.is_busy = enabling_;
+    state_.is_busy = enabling_ || moving_;
     (void)(*state_event_)(state_);
     return;
   }

@@ -85,6 +85,7 @@ TEST(DvrkArmMoves, ServoIsHeldBackDuringAMoveAndAStopEndsIt) {
     r.step();
     r.import.state.is_busy = true;  // the dVRK's trajectory
     r.step();
+    EXPECT_TRUE(r.arm.operating_state().is_busy) << "busy with the client's move: a client waits";
     const auto held = r.arm.summary().held_busy;
     r.servo_cp(at(0, 0, -0.1));
     r.step();
@@ -111,6 +112,37 @@ TEST(DvrkArmMoves, AMoveGivenWhileServoCommandsRunIsRefused) {
   r.step(5);  // commands stopped: the zero wrench, and no late move
   EXPECT_EQ(r.import.count("move_cp"), 0);
   EXPECT_EQ(r.import.received.back().what, "servo_cf");
+}
+
+// A client that streamed servo commands stops and moves the arm (the surgical law aligning an
+// MTM): the move goes in the next cycle, without a hold before it (another topic: it could reach
+// the arm after the move and cut it), and the silence after it trips no watchdog; the next servo
+// command is sent again (it pre-empts what is left of the move at the dVRK).
+TEST(DvrkArmMoves, AMoveEndsTheServoCommandsBeforeItWithoutATripOrAHold) {
+  Rig r(testing::mtm());
+  testing::enable_mtm(r);
+  for (int i = 0; i < 3; ++i) {
+    r.servo_cf({0, 0, 0});
+    r.step();
+  }
+  const auto servo = r.import.count("servo_cf");
+  r.command("move_cp", at(0, 0, 0));
+  r.step();
+  ASSERT_EQ(r.import.count("move_cp"), 1);
+  EXPECT_EQ(r.import.count("servo_cf"), servo) << "the last wrench is not sent again";
+  r.step(20);
+  EXPECT_EQ(r.import.count("hold"), 0) << "nothing cuts the move";
+  EXPECT_EQ(r.arm.watchdog_trips(), 0u) << "the stream's end after a move is no trip";
+  EXPECT_FALSE(r.arm.operating_state().is_busy);
+  r.import.state.is_busy = true;  // the dVRK's trajectory
+  r.step();
+  EXPECT_TRUE(r.arm.operating_state().is_busy) << "the move under way: the client waits";
+  r.import.state.is_busy = false;
+  r.step();
+  EXPECT_FALSE(r.arm.operating_state().is_busy) << "there";
+  r.servo_cf({0, 0, 0});
+  r.step();
+  EXPECT_EQ(r.import.count("servo_cf"), servo + 1);
 }
 
 TEST(DvrkArmMoves, JointGoalsAreTheDeclaredJointsWithinTheirLimits) {

@@ -281,6 +281,18 @@ class SimArm:
             self._send_error(f"{self.arm}: {why}")
             self._publish_operating_state()
 
+    def powered_and_homed(self):
+        """ENABLED and homed, holding where it is, gravity compensated: an MTM as the dVRK's console
+        and its teleoperation leave it (saw-rt sends an MTM no state_command here, nor
+        use_gravity_compensation)."""
+        with self._lock:
+            self._cancel_motion()
+            self._powering_until = None
+            self._state, self._homed, self._busy = "ENABLED", True, False
+            self._gravity_compensation = True
+            self._hold_here()
+            self._publish_operating_state()
+
     def report_error(self, text):
         """An error message on ARM/error without a state change (as the dVRK reports, e.g., a
         tracking error it recovers from)."""
@@ -704,6 +716,10 @@ class SimArm:
         if self._hand:
             force = add(force, self._hand_force(now, p))
             self._hand_twist(now)
+        if self._mode in ("position", "trajectory") and not (self._hand and len(self._hand) > 3):
+            # The wrist is position-controlled too (a move_cp turns the handle): its dynamics are
+            # not simulated, its orientation is the setpoint's.
+            self._meas_q = self._sp_q
         v = add(v, scale(force, dt / m))
         p = add(p, scale(v, dt))
         # The handle's mechanical stops.

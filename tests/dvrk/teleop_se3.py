@@ -14,7 +14,12 @@ on this test's DDS domain): the `surgical` law on the MTM's read-only import and
     the operator is present, none while away, and no step at each return;
 (e) the camera frame from an ECM (a third simulated arm, imported read-only and connected to the
     teleoperation's `camera` interface, as the shipped file's comment says): the ECM rolled 90°
-    about z, the hand's x moves the PSM along y, not x.
+    about z, the hand's x moves the PSM along y, not x;
+(f) the MTM as an RT `dvrk_arm` device that takes move_cp (as the shipped file's comment says),
+    40° from the PSM, powered and homed by the console: the law sends it one move_cp, at its
+    position turned to the PSM's orientation, and no wrench until the arm is busy with it; the
+    law engages once it is idle there, and the PSM's goals make no step; the time to align is
+    printed.
 
 Each check is printed; the exit code is 1 if any failed. A phase in which the simulated arms
 stalled (a Python process starved on a loaded machine: the PSM's device FAULTs "stale: the dVRK
@@ -72,8 +77,24 @@ def attempted(phase, *args):
     check(False, f"{phase.__name__}: the simulated arms stalled in each of {ATTEMPTS} runs")
 
 
-def start(saw_rt, work, tag, domain, name, ecm=False):
+MTM_DEVICE = """  - name: mtml{tag}
+    type: dvrk_arm
+    task: {{period: 1ms, priority: 80, offset: 600us}}
+    params: {{kind: mtm, safe_command: hold, home: true, start_enabled: true, stale_timeout: 50ms}}
+
+"""
+
+
+def start(saw_rt, work, tag, domain, name, ecm=False, mtm_device=False):
     text = shipped("dvrk-mtm-psm.yaml", tag, domain, NAMES)
+    if mtm_device:  # the MTM as an RT device that takes move_cp, as the shipped file's comment says
+        text = text.replace("  - name: psm_teleop", MTM_DEVICE.format(tag=tag) + "  - name: psm_teleop", 1)
+        text = text.replace(f"server: MTML_dds{tag}, provided: arm}}",
+                            f"server: mtml{tag}, provided: arm}}\n"
+                            f"  - {{client: mtml{tag}, required: dvrk, server: MTML_dds{tag}, provided: dvrk}}", 1)
+        text = text.replace(f"- {{component: MTML_dds{tag}, arm: MTML}}",
+                            f"- {{component: MTML_dds{tag}, arm: MTML, commands: [servo_cf, move_cp, hold], "
+                            f"command_timeout: 50ms, offset: 800us}}", 1)
     if ecm:  # the ECM's import on the teleoperation's camera interface, as the file's comment says
         text = text.replace("\nconnections:\n", f"\nconnections:\n  - {{client: psm_teleop{tag}, required: camera, "
                             f"server: ECM_dds{tag}, provided: arm}}\n", 1)
@@ -293,6 +314,56 @@ def camera_from_ecm(saw_rt, work, tag, domain, run):
             run["stall"] = stalled(rt, psm, stopped)
 
 
+def aligned_by_move(saw_rt, work, tag, domain, run):
+    print("-- (f) a misaligned MTM brought to the PSM's orientation by move_cp")
+    turned = (0.0, 0.0, math.sin(math.radians(20)), math.cos(math.radians(20)))  # 40° about z
+    with S.SimArm("MTML", domain, kind="mtm", rate=500.0, console=True, home_q=turned) as mtm, \
+            S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
+        mtm.powered_and_homed()
+        rt = start(saw_rt, work, tag, domain, "align", mtm_device=True)
+        try:
+            when_ready(psm)
+            t_present = time.monotonic()
+            mtm.press("operator_present")
+            move = mtm.wait_command("move_cp", timeout=30.0, since=t_present - 0.1)
+            if not check(move is not None, "the law sent the misaligned MTM a move_cp"):
+                print(rt.text())
+                return
+            q = move.value.pose.orientation
+            off = math.degrees(2.0 * math.acos(min(1.0, abs(q.w))))  # from the PSM's (identity)
+            at = math.dist(position(move), mtm.position())
+            check(off < 0.01 and at < 0.002,
+                  f"to the PSM's orientation ({off:.3f}° from it), at the MTM's position ({at * 1000:.2f} mm)")
+            wrench = [c for c in mtm.commands("body/servo_cf", since=move.time) if c.time < move.time + 0.05]
+            check(not wrench, f"no wrench reached the MTM while its move began ({len(wrench)})")
+            deadline = time.monotonic() + 10.0  # busy while it turns, then idle: the law engages
+            while time.monotonic() < deadline and (mtm.operating_state()[2] or time.monotonic() < move.time + 0.2):
+                time.sleep(0.05)
+            time.sleep(1.0)
+            moves = mtm.commands("move_cp")
+            check(len(moves) == 1, f"one move_cp ({len(moves)} sent)")
+            seen = goals(psm, since=t_present)
+            yaws = [yaw(c) for c in seen]
+            check(seen and largest_step(seen) < 1e-4 and max(yaws) - min(yaws) < 0.1,
+                  f"the PSM's goals made no step ({largest_step(seen) * 1000:.3f} mm, "
+                  f"{max(yaws) - min(yaws) if yaws else 0:.3f}°)")
+            early = rt.faults_before(time.monotonic())
+            check(not early, f"nothing faulted: {early[:2]}")
+        finally:
+            stopped = time.monotonic()
+            rt.stop()
+            run["stall"] = stalled(rt, psm, stopped)
+        rows = [r for r in csv.DictReader(open(os.path.join(work, "align.csv")))
+                if r[f"psm_teleop{tag}.operating_state"] == "ENABLED" and r[f"psm_teleop{tag}.operator_present"] == "1"]
+        engaged = [r for r in rows if r[f"psm_teleop{tag}.aligned"] == "1"]
+        if check(rows and engaged, "the law engaged once the MTM was aligned"):
+            first_off = float(rows[0][f"psm_teleop{tag}.misalignment"])
+            took = float(engaged[0]["time"]) - float(rows[0]["time"])
+            print(f"figure: time to align by move_cp: {took:.2f} s from the operator's press "
+                  f"(the MTM {first_off:.1f}° off; the simulated arm's trajectory included)")
+            check(abs(first_off - 40) < 1 and took < 5.0, "from 40° off, aligned within 5 s")
+
+
 def main(saw_rt):
     tag = str(os.getpid())
     domain = dds_domain()
@@ -301,6 +372,7 @@ def main(saw_rt):
     attempted(misaligned, saw_rt, work, tag, domain)
     attempted(operator_present, saw_rt, work, tag, domain)
     attempted(camera_from_ecm, saw_rt, work, tag, domain)
+    attempted(aligned_by_move, saw_rt, work, tag, domain)
     return exit_code()
 
 

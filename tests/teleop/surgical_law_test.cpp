@@ -152,7 +152,8 @@ TEST(SurgicalLaw, ItRefusesToEngageWhileMisalignedAndEngagesWithoutAStepOnceAlig
 
 // A master that takes move_cp (the dVRK's MTM) is sent, once at each engagement found
 // misaligned, its own position turned to where it is aligned through the camera (C⁻¹ · q_s0);
-// busy while it moves, the task holds; idle there, the law engages without a step. With
+// no wrench goes to it until it is busy with the move; busy, the task holds; idle there, the law
+// engages without a step. With
 // align_master false, or while aligned, nothing is sent.
 TEST(SurgicalLaw, AMisalignedMasterThatTakesMoveCpIsSentTheAlignedPoseOnceAtEachEngagement) {
   SurgicalLaw::Settings s;
@@ -168,6 +169,10 @@ TEST(SurgicalLaw, AMisalignedMasterThatTakesMoveCpIsSentTheAlignedPoseOnceAtEach
   double aligned = 1;
   ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
   EXPECT_EQ(aligned, 0.0);
+  const int wrenches = rig.master.commands;
+  rig.step(3);
+  EXPECT_EQ(rig.master.commands, wrenches)
+      << "no wrench to the master until it is busy: it would pre-empt the move";
   rig.master.busy = true;  // the move runs: the task holds
   rig.step(3);
   rig.master.orientation = rig.master.move_goal.orientation;
@@ -176,6 +181,7 @@ TEST(SurgicalLaw, AMisalignedMasterThatTakesMoveCpIsSentTheAlignedPoseOnceAtEach
   ASSERT_EQ(rig.op.aligned(aligned), saw::Status::ok);
   EXPECT_EQ(aligned, 1.0) << "engaged once the master is there";
   EXPECT_EQ(rig.master.moves, 1) << "aligned at that engagement: no move";
+  EXPECT_GT(rig.master.commands, wrenches) << "engaged: the master's (zero) wrench again";
   EXPECT_LT(dist(rig.slave.goal.position, rig.slave.position), 1e-12) << "no step at engagement";
   EXPECT_LT(angle_between(rig.slave.goal.orientation, rig.slave.orientation), 1e-9);
   // Stopped on the way (the operator held the handle): the next engagement sends it again.

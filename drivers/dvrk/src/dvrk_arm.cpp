@@ -142,6 +142,8 @@ Outcome DvrkArm::read() {
     summary_.arm = arm;
     have_state_ = true;
   }
+  // The arm's trajectory after a move of ours is this device's busy (not a homing by the console).
+  set_moving(moved_ && summary_.arm.is_busy);
   std::uint64_t errors = 0;
   const bool errors_read = read_errors_.is_bound() && read_errors_(errors) == Status::ok;
   // The arm's errors before it was driven (the dVRK latches its last ones) are not this run's.
@@ -262,6 +264,7 @@ void DvrkArm::on_move_cp(const Pose& p) noexcept {
     return;
   }
   request_ = Request{Request::Kind::move_cp, p, {}};
+  end_servo();
 }
 
 void DvrkArm::on_move_jp(const JointState& j) noexcept {
@@ -279,6 +282,7 @@ void DvrkArm::on_move_jp(const JointState& j) noexcept {
     return;
   }
   request_ = r;
+  end_servo();
 }
 
 void DvrkArm::on_free() noexcept {
@@ -287,6 +291,7 @@ void DvrkArm::on_free() noexcept {
     return;
   }
   request_ = Request{Request::Kind::free, {}, {}};
+  end_servo();
 }
 
 // In a cycle without a servo command: the client's move or free, once the arm is driven. The
@@ -316,7 +321,9 @@ Outcome DvrkArm::send_request() noexcept {
   request_ = {};
   ++summary_.moves;
   moved_ = kind != Kind::free;
-  if (kind == Kind::free) commanded_ = false;  // free is no effort: nothing of ours left to undo
+  // Our servo commands are replaced: a move is undone by the safe command on a stop (moved_),
+  // free is no effort (nothing of ours left to undo).
+  commanded_ = false;
   return Outcome::done();
 }
 
@@ -349,7 +356,9 @@ Outcome DvrkArm::write(const Setpoint& s) {
   goal_live_ = false;
   if (s.mode == ServoMode::none) {
     jaw_pending_ = false;  // a jaw goal goes only with the arm's motion
-    (void)send_safe();
+    // A move replaces our servo commands at the dVRK: a hold before it could reach the arm after
+    // it (another topic) and cut it.
+    if (request_.kind == Request::Kind::none) (void)send_safe();
     return send_request();
   }
   // A move or free given while servo commands run would pre-empt them, or be pre-empted: refused.

@@ -250,6 +250,14 @@ class Device : public Task {
   // From a cycle: the hardware lost its reference (a Falcon no longer reports its arms homed):
   // is_homed is false until the next homing is done; said as an operating_state event.
   void lose_homing() noexcept;
+  // From a command handler: the client ended its servo commands with one the hardware carries
+  // out itself (the dVRK's move_cp): the last servo command is not written again, and the silence
+  // after it is no watchdog trip, until the next servo command.
+  void end_servo() noexcept;
+  // From a cycle: the hardware carries out a move of the client's (the dVRK's trajectory after a
+  // move_cp): busy while it does, as CRTK's is_busy says, so that a client waits for it; an
+  // operating_state event on each change. A fault or a disable ends it.
+  void set_moving(bool moving) noexcept;
   // From a cycle: a fault the driver sees outside its hardware calls.
   void raise(const Outcome& why, FaultOrigin origin = FaultOrigin::driver) noexcept;
   // In FAULT: what is known now about the same fault replaces what was said (a silent node seen
@@ -292,7 +300,7 @@ class Device : public Task {
   OperatingState state_{};
   FaultInfo fault_{};
   DeviceStatus status_{};
-  bool enable_requested_ = false, enabling_ = false, homing_ = false;
+  bool enable_requested_ = false, enabling_ = false, homing_ = false, moving_ = false;
   TimeNs enable_start_ = 0, home_start_ = -1, t0_ = -1;
   std::array<bool, 2> buttons_{};
   bool deadline_breached_ = false;

@@ -343,7 +343,8 @@ void Teleoperation::send_forces(const Eigen::Vector3d& f_master, const Eigen::Ve
   }
   Wrench w;
   w.force = to_vec3(fm);
-  if (master_.cf.is_bound() && master_.cf(w) != Status::ok) ++refused_sends_;
+  const bool master_moving = law != nullptr && law->master_moving;
+  if (master_.cf.is_bound() && !master_moving && master_.cf(w) != Status::ok) ++refused_sends_;
   master_force_ = to_vec3(fm);
   if (config_.slave_servo_cp) {
     // A slave that follows a pose gets only goals: while the law holds, nothing (its device's

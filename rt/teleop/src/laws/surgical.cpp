@@ -35,15 +35,16 @@ void SurgicalLaw::reset(const LawInputs& in) noexcept {
   // Reset runs every cycle the task holds (a clutch, a busy device): the move is sent by the step
   // after, once.
   align_pending_ = s_.orientation && s_.align_master;
+  moving_master_ = false;  // held: the move, if any, is under way or over (the device says busy)
   // Engaged by the step (this cycle's inputs, never a held cycle's); told how far off meanwhile.
   (void)observe(in, camera(in));
 }
 
-void SurgicalLaw::align_master(const LawInputs& in) const noexcept {
+void SurgicalLaw::align_master(const LawInputs& in) noexcept {
   // Aligned when C · q_m = q_s0 (the master seen through the camera is the instrument).
   const Eigen::Quaterniond q = (camera(in).conjugate() * q_s0_).normalized();
   if (in.master.position.allFinite() && q.coeffs().allFinite())
-    (void)in.outputs.set(0, Pose{to_vec3(in.master.position), to_quat(q)});
+    moving_master_ = in.outputs.set(0, Pose{to_vec3(in.master.position), to_quat(q)});
 }
 
 Eigen::Quaterniond SurgicalLaw::observe(const LawInputs& in, const Eigen::Quaterniond& c) noexcept {
@@ -93,6 +94,7 @@ LawCommand SurgicalLaw::step(const LawInputs& in) noexcept {
              s_.orientation ? (c_ * in.master.orientation * q_off_).normalized() : q_s0_);
     out.slave_jaw = jaw_goal(in);
   }
+  out.master_moving = moving_master_ && !engaged_;
   out.slave_goal = p_goal_;
   out.slave_goal_orientation = q_goal_;
   out.slave_error = in.slave.position - out.slave_goal;

@@ -59,6 +59,9 @@ struct LawCommand {
   bool orients_slave = false;
   // The slave's jaw goal (rad), sent to a slave that has a jaw; NaN: none.
   double slave_jaw = std::numeric_limits<double>::quiet_NaN();
+  // The law moves the master itself (a move_cp it sent, not yet under way or done): no wrench
+  // goes to the master this cycle, for a servo command would pre-empt the move.
+  bool master_moving = false;
   // False when the law's arithmetic overflowed (a huge input): the task then faults with zero
   // force, naming `bad_side`.
   bool finite = true;

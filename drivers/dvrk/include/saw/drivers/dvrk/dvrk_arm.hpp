@@ -89,9 +89,12 @@ struct DvrkSummary {
 // and servo_jp when `servo_jp`. move_cp and move_jp (the dVRK plans the trajectory: alignment
 // before following), and an MTM's `free`: checked when given (finite, a unit quaternion, in the
 // workspace; every joint within its limits), sent in the next cycle only while the arm is driven
-// and no servo command runs (refused and counted otherwise); servo commands are held back while
-// the move makes the arm busy, and every stop path after a move sends the safe command, which
-// stops a move still under way. Enabling walks
+// and no servo command is given in it (refused and counted otherwise). A move ends the client's
+// servo commands (the last one is not sent again, their silence trips no watchdog, no hold cuts
+// the move): a client stops streaming and moves the arm (the surgical law aligning an MTM).
+// Servo commands are held back while
+// the move makes the arm busy (this device is busy then too: a client waits for it), and every
+// stop path after a move sends the safe command, which stops a move still under way. Enabling walks
 // the dVRK's handshake: `enable` sent (again after 1 s idle without effect: one lost) and ENABLED awaited; a
 // not-homed arm homed (`home: true`, only once ENABLED) or refused; no motion command reaches the arm before
 // it is ENABLED, homed and not busy, nor while it is busy. Following, an arm that leaves ENABLED, loses its

@@ -26,8 +26,9 @@ namespace saw::teleop {
 // the slave's: until then the slave is held where it was and `misalignment` says how far off the
 // master is. A master whose `arm` interface takes move_cp is sent there once at each engagement
 // found misaligned — at its position, turned to C⁻¹ · q_s0 — as the dVRK's teleoperation does
-// (align_master); the device is busy while it moves, the task holds, and the law engages again
-// once it is idle; else, or if it is stopped on the way, the operator turns the handle. A clutch
+// (align_master); no wrench goes to the master until it is busy with the move (a servo command
+// would pre-empt it), the task holds while it is, and the law engages again once it is idle;
+// else, or if it is stopped on the way, the operator turns the handle. A clutch
 // decouples translation; on release the law engages again, orientation checked again. The jaw
 // goal is jaw_scale · gripper + jaw_offset within [jaw_min, jaw_max], reached from the slave's
 // jaw at no more than jaw_rate (no step at engagement). With `orientation: false` (a 3-DOF master:
@@ -124,7 +125,7 @@ class SurgicalLaw {
   // Takes the engagement's poses if the master is aligned; true if it is.
   bool engage(const LawInputs& in) noexcept;
   // A misaligned master that takes move_cp: the pose that aligns it (its position, turned).
-  void align_master(const LawInputs& in) const noexcept;
+  void align_master(const LawInputs& in) noexcept;
   double jaw_goal(const LawInputs& in) noexcept;
   // The goal sent: toward (p, q) by no more than the speed limits allow in one period.
   void approach(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) noexcept;
@@ -133,6 +134,7 @@ class SurgicalLaw {
   double period_ = 0.001;
   bool engaged_ = false;
   bool align_pending_ = false;  // the first step since a reset: a misaligned master is moved
+  bool moving_master_ = false;  // a move sent, the master not yet busy with it: no wrench to it
   Eigen::Quaterniond c_ = Eigen::Quaterniond::Identity();  // C, taken at each engagement
   Eigen::Vector3d p_m0_ = Eigen::Vector3d::Zero(), p_s0_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_s0_ = Eigen::Quaterniond::Identity(), q_off_ = Eigen::Quaterniond::Identity();
