@@ -125,6 +125,14 @@ def yaw(c):
     return math.degrees(2.0 * math.atan2(q.z, q.w))
 
 
+def goals_move(psm, first):
+    """The first goal more than 0.1 mm from `first` (the law engaged: the hand drives it), or None
+    after 10 s."""
+    p0 = position(first) if first else (0.0, 0.0, 0.0)
+    return psm.wait_command("servo_cp", pred=lambda v: math.dist(
+        (v.pose.position.x, v.pose.position.y, v.pose.position.z), p0) > 1e-4, timeout=10.0)
+
+
 def largest_step(cmds):
     return max((math.dist(position(a), position(b)) for a, b in zip(cmds, cmds[1:])), default=0.0)
 
@@ -143,10 +151,7 @@ def follow_and_clutch(saw_rt, work, tag, domain, run):
                 return
             # Held until the hand's turn passes within align_tolerance of the PSM's: engaged once
             # the goals move.
-            p0 = position(first)
-            moving = psm.wait_command("servo_cp", pred=lambda v: math.dist(
-                (v.pose.position.x, v.pose.position.y, v.pose.position.z), p0) > 1e-4, timeout=10.0)
-            if not check(moving is not None, "the law engages and the goals move"):
+            if not check(goals_move(psm, first) is not None, "the law engages and the goals move"):
                 print(rt.text())
                 return
             t0 = time.monotonic()
@@ -291,10 +296,7 @@ def camera_from_ecm(saw_rt, work, tag, domain, run):
             when_ready(psm)
             mtm.press("operator_present")
             first = psm.wait_command("servo_cp", timeout=30.0)
-            p0 = position(first) if first else (0.0, 0.0, 0.0)
-            moving = psm.wait_command("servo_cp", pred=lambda v: math.dist(
-                (v.pose.position.x, v.pose.position.y, v.pose.position.z), p0) > 1e-4, timeout=10.0)
-            if not check(moving is not None, "the law engages in the ECM's frame and the goals move"):
+            if not check(goals_move(psm, first) is not None, "the law engages in the ECM's frame and the goals move"):
                 print(rt.text())
                 return
             t0 = time.monotonic()
