@@ -29,6 +29,7 @@ device must; it is run again, up to three times, and a phase stalled in all thre
 usage: teleop_se3.py SAW_RT
 """
 import csv
+from contextlib import contextmanager
 import math
 import os
 import re
@@ -60,6 +61,20 @@ def stalled(rt, psm, stopped):
     held = [c for c in psm.commands("hold", since=at[0] - 1.0) if c.time < min(stopped, at[0] + 1.0)]
     check(held, f"after the stall the PSM was held: {at[1].strip()}")
     return at[1].strip()
+
+
+@contextmanager
+def running(rt, psm, run):
+    """A phase's checks while saw-rt runs: then nothing faulted (a stall aside, which `attempted`
+    judges), and saw-rt is stopped whatever happened, the run's stall noted."""
+    try:
+        yield
+        early = rt.faults_before(time.monotonic())
+        check(not early, f"nothing faulted: {early[:2]}")
+    finally:
+        stopped = time.monotonic()
+        rt.stop()
+        run["stall"] = stalled(rt, psm, stopped)
 
 
 def attempted(phase, *args):
@@ -142,7 +157,7 @@ def follow_and_clutch(saw_rt, work, tag, domain, run):
     with S.SimArm("MTML", domain, kind="mtm", rate=500.0, console=True, hand=HAND) as mtm, \
             S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
         rt = start(saw_rt, work, tag, domain, "follow")
-        try:
+        with running(rt, psm, run):
             when_ready(psm)
             mtm.press("operator_present")
             first = psm.wait_command("servo_cp", timeout=30.0)
@@ -182,12 +197,6 @@ def follow_and_clutch(saw_rt, work, tag, domain, run):
             if after:
                 print(f"figure: largest commanded-pose step at the clutch's release: {step * 1000:.3f} mm, "
                       f"{abs(yaw(after[0]) - yaw(last)):.2f}°")
-            early = rt.faults_before(time.monotonic())
-            check(not early, f"nothing faulted: {early[:2]}")
-        finally:
-            stopped = time.monotonic()
-            rt.stop()
-            run["stall"] = stalled(rt, psm, stopped)
         # The law's goals, bursts of the MTM's stream and the clutch's release included, are
         # within the PSM device's own step checks. After the PSM's commands stopped (the clutch; a
         # stall), the law engages afresh where it holds; a goal sent in the same cycle as the
@@ -220,7 +229,7 @@ def misaligned(saw_rt, work, tag, domain, run):
         mtm.home_q = (0.0, 0.0, math.sin(math.radians(20)), math.cos(math.radians(20)))  # 40° about z
         mtm.set_hand((0.03, 0.5, (1.0, 0.0, 0.0), 0.0))  # moving, but turned away from the PSM
         rt = start(saw_rt, work, tag, domain, "misaligned")
-        try:
+        with running(rt, psm, run):
             when_ready(psm)
             mtm.press("operator_present")
             if not check(psm.wait_command("servo_cp", timeout=30.0) is not None, "the PSM gets goals (held)"):
@@ -231,10 +240,6 @@ def misaligned(saw_rt, work, tag, domain, run):
             seen = goals(psm, since=t0)
             xs = [position(c)[0] for c in seen]
             check(seen and max(xs) - min(xs) < 1e-9, "the PSM is held where it was while the MTM moves")
-        finally:
-            stopped = time.monotonic()
-            rt.stop()
-            run["stall"] = stalled(rt, psm, stopped)
         rows = list(csv.DictReader(open(os.path.join(work, "misaligned.csv"))))
         off = [float(r[f"psm_teleop{tag}.misalignment"]) for r in rows
                if r[f"psm_teleop{tag}.operating_state"] == "ENABLED"]
@@ -248,7 +253,7 @@ def operator_present(saw_rt, work, tag, domain, run):
     with S.SimArm("MTML", domain, kind="mtm", rate=500.0, console=True, hand=HAND) as mtm, \
             S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
         rt = start(saw_rt, work, tag, domain, "operator")
-        try:
+        with running(rt, psm, run):
             # Once the PSM is enabled, homed and idle, the law could drive it: give it a while.
             when_ready(psm)
             time.sleep(1.0)
@@ -275,12 +280,6 @@ def operator_present(saw_rt, work, tag, domain, run):
             if steps:
                 print(f"figure: largest commanded-pose step at the operator's return: {max(steps) * 1000:.3f} mm")
                 check(max(steps) < 0.001, f"no step at the operator's return ({max(steps) * 1000:.3f} mm)")
-            early = rt.faults_before(time.monotonic())
-            check(not early, f"nothing faulted: {early[:2]}")
-        finally:
-            stopped = time.monotonic()
-            rt.stop()
-            run["stall"] = stalled(rt, psm, stopped)
 
 
 def camera_from_ecm(saw_rt, work, tag, domain, run):
@@ -292,7 +291,7 @@ def camera_from_ecm(saw_rt, work, tag, domain, run):
             S.SimArm("PSM1", domain, kind="psm", rate=500.0, home_q=roll) as psm, \
             S.SimArm("ECM", domain, kind="ecm", rate=100.0, home_q=roll, start=(0.0, 0.0, -0.1)):
         rt = start(saw_rt, work, tag, domain, "camera", ecm=True)
-        try:
+        with running(rt, psm, run):
             when_ready(psm)
             mtm.press("operator_present")
             first = psm.wait_command("servo_cp", timeout=30.0)
@@ -308,12 +307,6 @@ def camera_from_ecm(saw_rt, work, tag, domain, run):
                   f"{along_y * 1000:.2f} mm along y and {along_x * 1000:.3f} mm along x")
             check(0.009 < along_y < 0.015 and along_x < 0.0005,
                   "the hand's x is the camera's: the PSM moves along y, not x")
-            early = rt.faults_before(time.monotonic())
-            check(not early, f"nothing faulted: {early[:2]}")
-        finally:
-            stopped = time.monotonic()
-            rt.stop()
-            run["stall"] = stalled(rt, psm, stopped)
 
 
 def aligned_by_move(saw_rt, work, tag, domain, run):
@@ -323,7 +316,7 @@ def aligned_by_move(saw_rt, work, tag, domain, run):
             S.SimArm("PSM1", domain, kind="psm", rate=500.0) as psm:
         mtm.powered_and_homed()
         rt = start(saw_rt, work, tag, domain, "align", mtm_device=True)
-        try:
+        with running(rt, psm, run):
             when_ready(psm)
             t_present = time.monotonic()
             mtm.press("operator_present")
@@ -349,12 +342,6 @@ def aligned_by_move(saw_rt, work, tag, domain, run):
             check(seen and largest_step(seen) < 1e-4 and max(yaws) - min(yaws) < 0.1,
                   f"the PSM's goals made no step ({largest_step(seen) * 1000:.3f} mm, "
                   f"{max(yaws) - min(yaws) if yaws else 0:.3f}°)")
-            early = rt.faults_before(time.monotonic())
-            check(not early, f"nothing faulted: {early[:2]}")
-        finally:
-            stopped = time.monotonic()
-            rt.stop()
-            run["stall"] = stalled(rt, psm, stopped)
         rows = [r for r in csv.DictReader(open(os.path.join(work, "align.csv")))
                 if r[f"psm_teleop{tag}.operating_state"] == "ENABLED" and r[f"psm_teleop{tag}.operator_present"] == "1"]
         engaged = [r for r in rows if r[f"psm_teleop{tag}.aligned"] == "1"]
