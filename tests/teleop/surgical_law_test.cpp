@@ -213,9 +213,12 @@ TEST(SurgicalLaw, AMasterWithoutMoveCpIsLeftToTheOperatorAndNothingCountsAsRefus
   manager.start_stepped();
   saw::testing::Stepper stepper{manager};
   master.orientation = about_z(40);
+  for (int i = 0; i < 3; ++i) stepper({&master, &slave});
+  const int wrenches = master.commands;
   for (int i = 0; i < 5; ++i) stepper({&master, &slave});
   EXPECT_GT(slave.goals, 0) << "held";
   EXPECT_EQ(teleop.refused_sends(), 0u) << "an optional output not offered is not a refusal";
+  EXPECT_EQ(master.commands, wrenches + 5) << "its wrench goes on every cycle: no move is under way";
   manager.stop();
 }
 

@@ -14,7 +14,10 @@ void OutputSet::require(const std::function<RequiredInterface&(const std::string
 }
 
 DeclaredOutputs OutputSet::prepare() noexcept {
-  for (auto& v : values_) v.set = false;
+  for (std::size_t i = 0; i < values_.size(); ++i) {
+    values_[i].set = false;
+    values_[i].offered = slots_[i]->function().is_bound();
+  }
   return DeclaredOutputs(values_.data(), values_.size());
 }
 
@@ -23,7 +26,6 @@ std::uint64_t OutputSet::send() noexcept {
   for (std::size_t i = 0; i < slots_.size(); ++i) {
     if (!values_[i].set) continue;
     values_[i].set = false;
-    if (!slots_[i]->function().is_bound()) continue;  // optional, and not offered
     if (!slots_[i]->write()) ++refused;
   }
   return refused;

@@ -43,6 +43,7 @@ void SurgicalLaw::reset(const LawInputs& in) noexcept {
 void SurgicalLaw::align_master(const LawInputs& in) noexcept {
   // Aligned when C · q_m = q_s0 (the master seen through the camera is the instrument).
   const Eigen::Quaterniond q = (camera(in).conjugate() * q_s0_).normalized();
+  // Not set for a master without move_cp: its wrench goes on, the operator turns it.
   if (in.master.position.allFinite() && q.coeffs().allFinite())
     moving_master_ = in.outputs.set(0, Pose{to_vec3(in.master.position), to_quat(q)});
 }

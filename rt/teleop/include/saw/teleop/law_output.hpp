@@ -39,6 +39,7 @@ struct OutputValue {
   TypeInfo type{};
   void* value = nullptr;  // where the value is set: storage of the output's type
   bool set = false;       // set this cycle: to be sent
+  bool offered = true;    // the device has the command (an optional output's may not)
 };
 
 // The law's declared outputs, in declaration order: in.outputs.set(0, energy) sends it this cycle.
@@ -48,10 +49,11 @@ class DeclaredOutputs {
   DeclaredOutputs() = default;
   DeclaredOutputs(OutputValue* values, std::size_t count) noexcept : values_(values), count_(count) {}
   std::size_t size() const noexcept { return count_; }
-  // Sets the i-th output; false (nothing set) if there is none or T is not its type.
+  // Sets the i-th output; false (nothing set) if there is none, T is not its type, or the device
+  // does not offer it (an optional output: the law falls back on its own).
   template <Plain T>
   bool set(std::size_t i, const T& v) const noexcept {
-    if (i >= count_ || values_[i].type.name != type_info_of<T>().name) return false;
+    if (i >= count_ || !values_[i].offered || values_[i].type.name != type_info_of<T>().name) return false;
     std::memcpy(values_[i].value, &v, sizeof(T));
     values_[i].set = true;
     return true;
@@ -75,7 +77,7 @@ class OutputSlot : public DeclaredSlot {
  public:
   using DeclaredSlot::DeclaredSlot;
   virtual void* storage() noexcept = 0;
-  // Sends the stored value: false when the device refuses it (the caller skips an unbound one).
+  // Sends the stored value: false when the device refuses it (an unbound one is never set).
   virtual bool write() noexcept = 0;
 };
 
@@ -107,7 +109,7 @@ class OutputSet {
   // The law's view for this cycle: nothing set yet.
   DeclaredOutputs prepare() noexcept;
   // (RT) Sends what the law set; returns how many the devices refused. An optional output the
-  // device does not offer is dropped, not counted.
+  // device does not offer cannot be set (prepare() says so): nothing is sent, nothing counted.
   std::uint64_t send() noexcept;
   std::size_t size() const noexcept { return slots_.size(); }
 
