@@ -73,10 +73,11 @@ CanopenArmConfig checked(CanopenArmConfig c, const TaskConfig& task) {
 }
 
 CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config)
-    : CanopenArm(std::move(name), task, std::move(config), nullptr) {}
+    : CanopenArm(std::move(name), task, Checked<CanopenArmConfig>{checked(std::move(config), task)},
+                 nullptr) {}
 
 CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus& bus)
-    : CanopenArm(std::move(name), task, std::move(config), &bus) {}
+    : CanopenArm(std::move(name), task, Checked<CanopenArmConfig>{checked(std::move(config), task)}, &bus) {}
 
 namespace {
 
@@ -131,11 +132,11 @@ CanopenArmConfig with_bus_task(CanopenArmConfig c, const BusLink& l) {
 
 }  // namespace
 
-CanopenArm::CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus* bus)
+CanopenArm::CanopenArm(std::string name, TaskConfig task, Checked<CanopenArmConfig> config, can::Bus* bus)
     // A client of a canopen_bus runs between its two phases (its offset given one if none).
-    : Device(name, bus == nullptr ? client_task(config.bus, name, task) : task,
-             contract_of(checked(config, task))),
-      config_(checked(std::move(config), task)),
+    : Device(name, bus == nullptr ? client_task(config.value.bus, name, task) : task,
+             contract_of(config.value)),
+      config_(std::move(config.value)),
       n_(config_.joints.size()),
       link_(link_of(this->name(), config_, task.period.count(), bus)),
       bus_(*link_.bus) {

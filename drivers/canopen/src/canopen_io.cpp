@@ -129,8 +129,10 @@ std::vector<std::uint32_t> tpdo_ids(const IoNodeConfig& n) {
 }  // namespace
 
 CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
-    : Device(std::move(name), task, contract_of(checked(config, task))),
-      config_(checked(std::move(config), task)) {
+    : CanopenIo(std::move(name), task, Checked<CanopenIoConfig>{checked(std::move(config), task)}) {}
+
+CanopenIo::CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig> config)
+    : Device(std::move(name), task, contract_of(config.value)), config_(std::move(config.value)) {
   // The node's own safe state when the controller dies: before the deployment's writes (which may
   // set them otherwise), so the start-up and every re-configuration after a reboot write them.
   // The log keeps the name's pointer until it is drained: the channel's own, in config_.

@@ -56,7 +56,10 @@ bool finite(const Wrench& w) noexcept {
 }  // namespace
 
 DvrkArm::DvrkArm(std::string name, TaskConfig task, DvrkArmConfig config)
-    : Device(std::move(name), task, contract_of(checked(config))), arm_config_(checked(std::move(config))) {
+    : DvrkArm(std::move(name), task, Checked<DvrkArmConfig>{checked(std::move(config))}) {}
+
+DvrkArm::DvrkArm(std::string name, TaskConfig task, Checked<DvrkArmConfig> config)
+    : Device(std::move(name), task, contract_of(config.value)), arm_config_(std::move(config.value)) {
   namespace arm = crtk::arm;
   const bool psm = follows_poses(arm_config_.kind);
   auto& r = require(std::string(source));

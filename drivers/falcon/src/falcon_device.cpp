@@ -38,8 +38,13 @@ constexpr std::uint8_t leds_of(OperatingStateValue s, bool homing, bool homed) n
 
 FalconDevice::FalconDevice(std::string name, TaskConfig task, FalconConfig config,
                            std::unique_ptr<FalconTransport> transport)
-    : Device(std::move(name), task, contract_of(checked(config))),
-      config_(checked(std::move(config))),
+    : FalconDevice(std::move(name), task, Checked<FalconConfig>{checked(std::move(config))},
+                   std::move(transport)) {}
+
+FalconDevice::FalconDevice(std::string name, TaskConfig task, Checked<FalconConfig> config,
+                           std::unique_ptr<FalconTransport> transport)
+    : Device(std::move(name), task, contract_of(config.value)),
+      config_(std::move(config.value)),
       kinematics_(config_.geometry),
       transport_(std::move(transport)) {
   if (!transport_) throw std::invalid_argument("FalconDevice '" + this->name() + "': no transport");

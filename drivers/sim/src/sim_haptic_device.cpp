@@ -83,8 +83,11 @@ DeviceConfig contract_of(const SimDeviceConfig& c) {
 }  // namespace
 
 SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, SimDeviceConfig config)
-    : Device(std::move(name), task, contract_of(with_defaults(config))),
-      config_(with_defaults(std::move(config))),
+    : SimHapticDevice(std::move(name), task, Checked<SimDeviceConfig>{with_defaults(std::move(config))}) {}
+
+SimHapticDevice::SimHapticDevice(std::string name, TaskConfig task, Checked<SimDeviceConfig> config)
+    : Device(std::move(name), task, contract_of(config.value)),
+      config_(std::move(config.value)),
       kinematics_(config_.model) {
   q_ = config_.initial_joints.cwiseMax(config_.joint_min).cwiseMin(config_.joint_max);
   hand_origin_ = kinematics_.fk(q_);

@@ -46,7 +46,10 @@ Eigen::Isometry3d isometry(const Pose& p) noexcept {
 }  // namespace
 
 SimInstrument::SimInstrument(std::string name, TaskConfig task, SimInstrumentConfig config)
-    : Device(std::move(name), task, contract_of(checked(config))), config_(checked(std::move(config))) {
+    : SimInstrument(std::move(name), task, Checked<SimInstrumentConfig>{checked(std::move(config))}) {}
+
+SimInstrument::SimInstrument(std::string name, TaskConfig task, Checked<SimInstrumentConfig> config)
+    : Device(std::move(name), task, contract_of(config.value)), config_(std::move(config.value)) {
   q_ = setpoint_ = solved_ = config_.initial_joints;
   jaw_ = jaw_setpoint_ = jaw_goal_ = config_.initial_jaw;
   jaw_js_.size = 1;

@@ -180,7 +180,10 @@ def main(argv=None) -> int:
         if not sum(t.take(writer) for t in tracks):
             stop.wait(0.002)
     time.sleep(0.05)  # what was on its way when told to stop
-    while sum(t.take(writer) for t in tracks):
+    # Then what is still queued, for at most a second: a stream the recorder cannot keep up with
+    # (1 kHz rows on a loaded machine) never runs dry, and a recorder told to stop must stop.
+    drained_by = time.monotonic() + 1.0
+    while sum(t.take(writer) for t in tracks) and time.monotonic() < drained_by:
         pass
     writer.finish()
     out.close()

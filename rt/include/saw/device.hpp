@@ -9,6 +9,7 @@
 #include <string>
 #include <string_view>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "saw/command_watchdog.hpp"
@@ -131,6 +132,15 @@ struct DeviceConfig : DeviceSettings {
   bool servo_cp = false;  // takes servo_cp (needs cartesian), checked by the settings' box and speeds
 
   DeviceSettings& settings() noexcept { return *this; }
+};
+
+// A driver's configuration, checked (and completed) once: its public constructor delegates with
+// it, so that the base's contract and the driver's own copy come from one check.
+// Explicit, without a default: `{}` for a config still means the driver's own config type.
+template <class Config>
+struct Checked {
+  explicit Checked(Config v) : value(std::move(v)) {}
+  Config value;
 };
 
 // Commands refused before they reached the driver, by why.

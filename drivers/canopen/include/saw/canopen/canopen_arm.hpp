@@ -131,7 +131,7 @@ class CanopenArm : public Device {
   bool accepts(ServoMode m) const noexcept override;
 
  private:
-  CanopenArm(std::string name, TaskConfig task, CanopenArmConfig config, can::Bus* bus);
+  CanopenArm(std::string name, TaskConfig task, Checked<CanopenArmConfig> config, can::Bus* bus);
   void provide_interfaces();
   // The cycle.
   void read_feedback() noexcept;

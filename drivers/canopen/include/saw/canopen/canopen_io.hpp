@@ -115,6 +115,7 @@ class CanopenIo : public Device {
   bool accepts(ServoMode m) const noexcept override { return m == ServoMode::jp; }
 
  private:
+  CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig> config);
   Outcome check_node() noexcept;
   Outcome check_emcy() noexcept;
   Outcome failure(const char* why, FaultCode code, std::uint32_t detail = 0, TimeNs age = 0) noexcept;

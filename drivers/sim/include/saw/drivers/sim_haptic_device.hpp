@@ -107,6 +107,7 @@ class SimHapticDevice : public Device {
   void enter_safe_state(SafeReason) override;
 
  private:
+  SimHapticDevice(std::string name, TaskConfig task, Checked<SimDeviceConfig> config);
   void set_button(std::uint8_t id, bool pressed) noexcept;
   void integrate(double dt, const Eigen::Vector3d& force, const Eigen::Vector3d& hand_target) noexcept;
   void publish() noexcept;

@@ -60,6 +60,7 @@ class SimInstrument : public Device {
   void enter_safe_state(SafeReason) override;
 
  private:
+  SimInstrument(std::string name, TaskConfig task, Checked<SimInstrumentConfig> config);
   void on_jaw(const JointState& j) noexcept;
   void publish(double dt) noexcept;
 

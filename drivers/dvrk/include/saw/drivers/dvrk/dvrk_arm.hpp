@@ -118,6 +118,7 @@ class DvrkArm final : public Device {
   bool accepts(ServoMode m) const noexcept override;
 
  private:
+  DvrkArm(std::string name, TaskConfig task, Checked<DvrkArmConfig> config);
   Outcome send_state(StateCommand c, bool& sent, const char* why) noexcept;
   void on_jaw(const JointState& j) noexcept;
   Status send_safe() noexcept;

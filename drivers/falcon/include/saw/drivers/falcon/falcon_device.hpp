@@ -75,6 +75,8 @@ class FalconDevice : public Device {
   void enter_safe_state(SafeReason) override {}  // the next exchange carries zero force
 
  private:
+  FalconDevice(std::string name, TaskConfig task, Checked<FalconConfig> config,
+               std::unique_ptr<FalconTransport> transport);
   MotorCommand command(const Setpoint& s) noexcept;
   Outcome measure(const DeviceReport& r) noexcept;
   Outcome missed(FaultCode code, const char* why, std::int32_t error) noexcept;
