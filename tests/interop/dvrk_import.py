@@ -1,8 +1,9 @@
 """The da Vinci stream, imported: a Cyclone DDS publisher (Python) replays a synthetic dVRK master
 (rt/MTML/measured_cp, measured_cv, operating_state, as the dVRK's ROS 2 stack publishes them); a
 real saw-rt process whose deployment imports it (`gateway: import:` by arm name) runs a simulated
-slave and the teleoperation task connected to it exactly as to a local master. The slave follows;
-when the stream stops, teleoperation goes to FAULT.
+slave and the teleoperation task connected to it exactly as to a local master. The slave follows
+(the stream runs until teleoperation was ENABLED for 2000 cycles, as the record shows); when the
+stream stops, teleoperation goes to FAULT and stays there.
 
 usage: dvrk_import.py SAW_RT SAW_GATEWAY
 """
@@ -17,6 +18,7 @@ import threading
 import time
 
 
+import harness  # noqa: E402
 from harness import check, dds_domain, exit_code  # noqa: E402
 from sawdds import Client, msgs  # noqa: E402
 from cyclonedds.core import Policy, Qos  # noqa: E402
@@ -55,17 +57,22 @@ class SyntheticMaster(threading.Thread):
             time.sleep(0.001)
 
 
-def main(saw_rt, saw_gateway):
-    tag = str(os.getpid())
-    arm = "MTML"
-    component = f"mtml{tag}"
-    domain = dds_domain()
-    client = Client(domain)
-    master = SyntheticMaster(client, arm)
-    master.start()
-    work = tempfile.mkdtemp()
-    record = os.path.join(work, "run.csv")
-    yaml = f"""deployment:
+ATTEMPTS = 3
+ENGAGED = 2000  # ENABLED cycles of teleoperation before the stream is stopped
+
+
+def rows_of(path):
+    """The record's complete rows so far (it is written as the run goes, a few rows behind)."""
+    try:
+        with open(path) as f:
+            lines = f.read().split("\n")[:-1]  # the last, maybe partial, line left out
+    except FileNotFoundError:
+        return []
+    return list(csv.DictReader(lines))
+
+
+def deployment(tag, domain, component, arm):
+    return f"""deployment:
   name: dvrk-import-{tag}
 components:
   - name: slave{tag}
@@ -91,34 +98,55 @@ gateway:
   import:
     - {{component: {component}, arm: {arm}}}
 """
-    path = os.path.join(work, "deploy.yaml")
+
+
+def run(saw_rt, client, domain, tag, work):
+    """One run: the stream until teleoperation was ENABLED for ENGAGED cycles, then silence.
+    Returns why the run stalled (a FAULT before the stream stopped: the machine starved a process
+    for over the stale timeout), or None; a stalled run must still end in FAULT and stay there."""
+    arm, component, state = "MTML", f"mtml{tag}", f"teleop{tag}.operating_state"
+    path, record = os.path.join(work, f"deploy{tag}.yaml"), os.path.join(work, f"run{tag}.csv")
     with open(path, "w") as f:
-        f.write(yaml)
-    rt = None
-    out = None
+        f.write(deployment(tag, domain, component, arm))
+    master = SyntheticMaster(client, arm)
+    master.start()
+    rt = out = None
     try:
-        rt = subprocess.Popen([saw_rt, path, "--duration", "4", "--record", record], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        time.sleep(2.5)  # teleoperate for 2.5 s (the run's length, not a wait for a result)
+        rt = subprocess.Popen([saw_rt, path, "--duration", "8", "--record", record], stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+        # Until the record shows ENGAGED ENABLED cycles (or a FAULT): bounded, 6 s of the 8.
+        give_up, seen = time.monotonic() + 6.0, []
+        while time.monotonic() < give_up:
+            seen = [r.get(state) for r in rows_of(record)]
+            if seen.count("ENABLED") >= ENGAGED or "FAULT" in seen:
+                break
+            time.sleep(0.05)
         master.running = False
+        stopped_at = len(seen)  # rows recorded when the stream stopped (at most a few behind)
         out, _ = rt.communicate(timeout=30)
         print(out)
+        rows = rows_of(record) if os.path.exists(record) else []
+        first_fault = next((i for i, r in enumerate(rows) if r[state] == "FAULT"), None)
+        if first_fault is not None and first_fault < stopped_at:
+            after = {r[state] for r in rows[first_fault:]}
+            check(after == {"FAULT"}, f"after the stall teleoperation stayed in FAULT: {sorted(after)}")
+            return next((l for l in out.splitlines() if "FAULT" in l), "a FAULT before the stream stopped")
         check(rt.returncode == 0, f"saw-rt started its gateway, which imported the master, and connected to it "
                                   f"(exit {rt.returncode})")
-        rows = list(csv.DictReader(open(record)))
         check(len(rows) > 1000, f"recorded {len(rows)} rows")
         t0 = float(rows[0]["time"]) if rows else 0
-        first_fault = next((i for i, r in enumerate(rows) if r[f"teleop{tag}.operating_state"] == "FAULT"), None)
-        enabled = [r for r in rows[:first_fault] if r[f"teleop{tag}.operating_state"] == "ENABLED"]
+        enabled = [r for r in rows[:first_fault] if r[state] == "ENABLED"]
         xs_before = [float(r[f"slave{tag}.measured_cp.x"]) for r in enabled]
         swing = (max(xs_before) - min(xs_before)) if xs_before else 0.0
-        check(len(enabled) > 1500, f"teleoperation ENABLED while the stream ran ({len(enabled)} cycles)")
+        check(len(enabled) >= ENGAGED, f"teleoperation ENABLED while the stream ran ({len(enabled)} cycles)")
         check(swing > 0.03, f"the slave follows the imported master: it swung {swing * 100:.1f} cm (master: 6 cm)")
         check(first_fault is not None, "the stream stopping moved teleoperation to FAULT")
         if first_fault is not None:
-            states_after = {r[f"teleop{tag}.operating_state"] for r in rows[first_fault:]}
+            states_after = {r[state] for r in rows[first_fault:]}
             check(states_after == {"FAULT"}, f"and it stays there: {sorted(states_after)}")
-            dt = float(rows[first_fault]["time"]) - t0
-            print(f"figure: FAULT {dt:.3f} s into the run (stream stopped ~2.5 s in; stale_timeout 50 ms)")
+            print(f"figure: FAULT {float(rows[first_fault]['time']) - t0:.3f} s into the run, "
+                  f"{first_fault - stopped_at} rows after the stream's stop was seen (stale_timeout 50 ms)")
+        return None
     finally:
         master.running = False
         if rt is not None and rt.poll() is None:
@@ -127,6 +155,25 @@ gateway:
         print(imported[-1] if imported else "(no gateway statistics)")
         check(bool(imported) and " 0 rejected" in imported[-1].split("imported")[1],
               "every imported sample was a valid value")
+
+
+def main(saw_rt, saw_gateway):
+    """A run in which the machine stalled (a FAULT before the stream stopped) gives no verdict if
+    teleoperation stayed in FAULT, as it must; it is run again, up to three times, and a stall in
+    all three fails."""
+    domain = dds_domain()
+    client = Client(domain)
+    work = tempfile.mkdtemp()
+    for attempt in range(1, ATTEMPTS + 1):
+        before = len(harness.failures)
+        why = run(saw_rt, client, domain, f"{os.getpid()}{attempt}", work)
+        if why is None:
+            return exit_code()
+        unsafe = [f for f in harness.failures[before:] if f.startswith("after the stall")]
+        del harness.failures[before:]
+        harness.failures.extend(unsafe)
+        print(f"stalled run ({attempt} of {ATTEMPTS}), no verdict from it: {why}")
+    check(False, f"the run stalled in each of {ATTEMPTS} attempts")
     return exit_code()
 
 
