@@ -276,7 +276,7 @@ void Device::state_command(StateCommand c) noexcept {
       watchdog_.disarm();
       safe(SafeReason::disable);
       moving_ = false;
-      state_.is_busy = homing_;
+      state_.is_busy = busy();
       if (state_.state != OperatingStateValue::disabled) set_state(OperatingStateValue::disabled);
       break;
     case StateCommand::pause:

@@ -24,15 +24,14 @@ void Device::set_state(OperatingStateValue s) noexcept {
 void Device::start_homing() noexcept {
   homing_ = true;
   home_start_ = -1;
-  state_.is_busy = true;
+  state_.is_busy = busy();
 }
 
 void Device::set_moving(bool moving) noexcept {
   if (moving_ == moving) return;
   moving_ = moving;
-  const bool busy = enabling_ || homing_ || moving_;
-  if (state_.is_busy == busy) return;
-  state_.is_busy = busy;
+  if (state_.is_busy == busy()) return;
+  state_.is_busy = busy();
   (void)(*state_event_)(state_);
 }
 
@@ -77,7 +76,7 @@ void Device::raise(const Outcome& why, FaultOrigin origin) noexcept {
   status_.origin = origin;
   ++status_.faults;
   enabling_ = homing_ = enable_requested_ = moving_ = false;
-  state_.is_busy = false;
+  state_.is_busy = busy();
   command_ = {};
   watchdog_.disarm();
   safe(SafeReason::fault);
@@ -104,7 +103,7 @@ void Device::begin_enable(TimeNs t) noexcept {
   command_ = {};
   has_jp_ = has_cp_ = false;
   watchdog_.disarm();
-  state_.is_busy = true;                         // DISABLED and busy until the hardware says it is powered
+  state_.is_busy = busy();                       // DISABLED and busy until the hardware says it is powered
   state_.state = OperatingStateValue::disabled;  // said by step_enable(), unless done at once
 }
 
@@ -113,7 +112,7 @@ void Device::step_enable(TimeNs t) noexcept {
   if (o.is_failed()) return raise(o);
   if (o.is_done()) {
     enabling_ = false;
-    state_.is_busy = homing_ || moving_;
+    state_.is_busy = busy();
     return set_state(OperatingStateValue::enabled);
   }
   if (t == enable_start_) (void)(*state_event_)(state_);  // DISABLED, busy: under way
@@ -129,7 +128,7 @@ void Device::step_home(TimeNs t) noexcept {
   if (o.is_done()) {
     homing_ = false;
     state_.is_homed = true;
-    state_.is_busy = enabling_ || moving_;
+    state_.is_busy = busy();
     (void)(*state_event_)(state_);
     return;
   }

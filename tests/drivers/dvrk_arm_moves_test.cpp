@@ -75,7 +75,7 @@ TEST(DvrkArmMoves, AMoveIsCheckedAndSentOnlyWhileTheArmIsDriven) {
 }
 
 // While the dVRK runs the trajectory (busy), servo commands are held back; a stop during it sends
-// the safe command, which ends the move; after a move that ended, a stop sends it too (harmless).
+// the safe command, which ends the move.
 TEST(DvrkArmMoves, ServoIsHeldBackDuringAMoveAndAStopEndsIt) {
   for (const bool stop_by_fault : {false, true}) {
     Rig r(psm_in_a_box());
@@ -98,6 +98,36 @@ TEST(DvrkArmMoves, ServoIsHeldBackDuringAMoveAndAStopEndsIt) {
     r.step(3);
     EXPECT_EQ(r.import.count("hold"), 1) << (stop_by_fault ? "fault" : "disable") << ": the move is stopped";
     EXPECT_EQ(r.import.received.back().what, "hold");
+  }
+}
+
+// The move is over once the arm is idle after its trajectory (or never showed one): a later busy
+// (a homing from the console) is not the client's move, and a stop has nothing of ours to undo.
+TEST(DvrkArmMoves, AMoveEndsWhenTheArmIsIdleAfterIt) {
+  for (const bool seen_busy : {true, false}) {
+    Rig r(psm_in_a_box());
+    r.import.pose = at(0, 0, -0.1);
+    enable(r);
+    r.command("move_cp", at(0.05, 0, -0.1));
+    r.step();
+    ASSERT_EQ(r.import.count("move_cp"), 1);
+    if (seen_busy) {
+      r.import.state.is_busy = true;  // the dVRK's trajectory
+      r.step(3);
+      ASSERT_TRUE(r.arm.operating_state().is_busy);
+      r.import.state.is_busy = false;
+      r.step();
+    } else {
+      r.step(600);  // never shown busy: over after the window
+    }
+    EXPECT_FALSE(r.arm.operating_state().is_busy);
+    r.import.state.is_busy = true;  // the console homes the arm
+    r.step(3);
+    EXPECT_FALSE(r.arm.operating_state().is_busy)
+        << "not the client's move" << (seen_busy ? "" : " (never seen)");
+    r.state_command(StateCommand::disable);
+    r.step(3);
+    EXPECT_EQ(r.import.count("hold"), 0) << "nothing of ours under way: no safe command";
   }
 }
 

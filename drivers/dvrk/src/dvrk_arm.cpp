@@ -11,6 +11,9 @@ namespace {
 constexpr std::string_view source = "dvrk";
 constexpr int max_not_sent = 10;  // the import's queue full this many cycles in a row: FAULT
 constexpr TimeNs resend_state_after = 1'000'000'000;  // an enable or home with no effect: again
+// A move the arm has not shown busy within this long is over (or was too short to be seen): the
+// dVRK says busy as its trajectory starts, within a few of its 1 ms cycles and the import's hops.
+constexpr TimeNs move_start_window = 500'000'000;
 
 DvrkArmConfig checked(DvrkArmConfig c) {
   const bool psm = follows_poses(c.kind);
@@ -146,6 +149,14 @@ Outcome DvrkArm::read() {
     have_state_ = true;
   }
   // The arm's trajectory after a move of ours is this device's busy (not a homing by the console).
+  // The move is over once the arm is idle after it was busy, or was never busy for a while (a
+  // move too short to be seen; the arm's busy lags the command): a later busy is not ours.
+  if (moved_) {
+    if (summary_.arm.is_busy)
+      move_seen_busy_ = true;
+    else if (move_seen_busy_ || now() - moved_at_ > move_start_window)
+      moved_ = false;
+  }
   set_moving(moved_ && summary_.arm.is_busy);
   std::uint64_t errors = 0;
   const bool errors_read = read_errors_.is_bound() && read_errors_(errors) == Status::ok;
@@ -324,6 +335,8 @@ Outcome DvrkArm::send_request() noexcept {
   request_ = {};
   ++summary_.moves;
   moved_ = kind != Kind::free;
+  moved_at_ = now();
+  move_seen_busy_ = false;
   // Our servo commands are replaced: a move is undone by the safe command on a stop (moved_),
   // free is no effort (nothing of ours left to undo).
   commanded_ = false;

@@ -311,6 +311,8 @@ class Device : public Task {
   FaultInfo fault_{};
   DeviceStatus status_{};
   bool enable_requested_ = false, enabling_ = false, homing_ = false, moving_ = false;
+  // CRTK's is_busy, the one rule: an enable, a homing or a move of the hardware's under way.
+  bool busy() const noexcept { return enabling_ || homing_ || moving_; }
   TimeNs enable_start_ = 0, home_start_ = -1, t0_ = -1;
   std::array<bool, 2> buttons_{};
   bool deadline_breached_ = false;

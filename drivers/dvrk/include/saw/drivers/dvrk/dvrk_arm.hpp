@@ -155,7 +155,9 @@ class DvrkArm final : public Device {
     JointState joints{};
   };
   Request request_{};
-  bool moved_ = false;             // a move went out since the last safe command: a stop sends it
+  bool moved_ = false;             // a move of ours is under way at the arm: a stop sends the safe command
+  TimeNs moved_at_ = 0;            // when it went out
+  bool move_seen_busy_ = false;    // the arm has shown it busy since
   JointState jaw_{}, jaw_goal_{};  // the last good gripper/jaw sample; the last accepted jaw goal
   bool jaw_pending_ = false;
   DvrkSummary summary_{};
