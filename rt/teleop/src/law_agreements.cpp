@@ -16,29 +16,20 @@ void LawAgreements::prepare(const InputSet& inputs, const LawModel& law,
   law_ = &law;
   for (const auto& slot : inputs.slots()) {
     if (slot->agrees_with().empty()) continue;
-    double v = 0;
     std::string_view unit;
-    if (slot->type().name != type_info_of<double>().name || !law.setting_value(slot->agrees_with(), v, unit))
+    const double* value = law.setting_address(slot->agrees_with(), unit);
+    if (slot->type().name != type_info_of<double>().name || value == nullptr)
       throw std::invalid_argument("law '" + std::string(law.name()) + "': its input " + slot->command() +
                                   " agrees with '" + slot->agrees_with() +
                                   "', which is no number setting of it");
-    agreements_.push_back({slot.get(), slot->agrees_with(), source_words(*slot)});
+    agreements_.push_back({slot.get(), slot->agrees_with(), value, unit, source_words(*slot)});
   }
-}
-
-double LawAgreements::value(const Agreement& a, std::string_view* unit) const noexcept {
-  double v = 0;
-  std::string_view u;
-  (void)law_->setting_value(a.setting, v, u);
-  if (unit != nullptr) *unit = u;
-  return v;
 }
 
 void LawAgreements::check_at_start(double grace) const {
   for (const Agreement& a : agreements_) {
-    std::string_view unit;
-    const double want = value(a, &unit);
-    const std::string u = unit.empty() ? "" : " " + std::string(unit);
+    const double want = *a.value;
+    const std::string u = a.unit.empty() ? "" : " " + std::string(a.unit);
     const std::string said = "law '" + std::string(law_->name()) + "' has " + a.setting + " " +
                              setting_number(want) + u + ", but " + a.source;
     // A server in another process may not have published its first row yet: wait for it, as the
@@ -72,7 +63,7 @@ LawAgreements::Agreement* LawAgreements::check() noexcept {
       continue;
     }
     const double seen = *static_cast<const double*>(a.slot->value());
-    if (seen != value(a)) {  // to the last bit, as at start-up
+    if (seen != *a.value) {  // to the last bit, as at start-up
       a.seen = seen;
       return &a;
     }
@@ -87,8 +78,8 @@ const LawAgreements::Agreement* LawAgreements::find(const InputSlot* slot) const
 }
 
 std::string_view LawAgreements::describe(const Agreement& a, FaultText& text) const noexcept {
-  std::string_view unit;
-  const double want = value(a, &unit);
+  const std::string_view unit = a.unit;
+  const double want = *a.value;
   text.append("law '")
       .append(law_->name())
       .append("' has ")

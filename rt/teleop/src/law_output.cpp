@@ -13,11 +13,12 @@ void OutputSet::require(const std::function<RequiredInterface&(const std::string
   detail::require_slots(slots, "output", interface_of);
 }
 
+void OutputSet::connected() noexcept {
+  for (std::size_t i = 0; i < values_.size(); ++i) values_[i].offered = slots_[i]->function().is_bound();
+}
+
 DeclaredOutputs OutputSet::prepare() noexcept {
-  for (std::size_t i = 0; i < values_.size(); ++i) {
-    values_[i].set = false;
-    values_[i].offered = slots_[i]->function().is_bound();
-  }
+  for (OutputValue& v : values_) v.set = false;
   return DeclaredOutputs(values_.data(), values_.size());
 }
 

@@ -86,6 +86,7 @@ Teleoperation::Teleoperation(std::string name, TaskConfig task, TeleopConfig con
 }
 
 void Teleoperation::startup() {
+  outputs_.connected();
   agreements_.prepare(inputs_, *law_, [this](const detail::InputSlot& in) { return source_words(in); });
   agreements_.check_at_start(std::max(1.0, config_.startup_timeout));
   // Connected by now: say which components play each role (a client need not guess by name).

@@ -40,9 +40,9 @@ void SurgicalLaw::reset(const LawInputs& in) noexcept {
   (void)observe(in, camera(in));
 }
 
-void SurgicalLaw::align_master(const LawInputs& in) noexcept {
+void SurgicalLaw::align_master(const LawInputs& in, const Eigen::Quaterniond& c) noexcept {
   // Aligned when C · q_m = q_s0 (the master seen through the camera is the instrument).
-  const Eigen::Quaterniond q = (camera(in).conjugate() * q_s0_).normalized();
+  const Eigen::Quaterniond q = (c.conjugate() * q_s0_).normalized();
   // Not set for a master without move_cp: its wrench goes on, the operator turns it.
   if (in.master.position.allFinite() && q.coeffs().allFinite())
     moving_master_ = in.outputs.set(0, Pose{to_vec3(in.master.position), to_quat(q)});
@@ -55,8 +55,7 @@ Eigen::Quaterniond SurgicalLaw::observe(const LawInputs& in, const Eigen::Quater
   return seen;
 }
 
-bool SurgicalLaw::engage(const LawInputs& in) noexcept {
-  const Eigen::Quaterniond c = camera(in);
+bool SurgicalLaw::engage(const LawInputs& in, const Eigen::Quaterniond& c) noexcept {
   const Eigen::Quaterniond seen = observe(in, c);
   engaged_ = aligned_ == 1.0;
   if (!engaged_) return false;
@@ -87,8 +86,11 @@ LawCommand SurgicalLaw::step(const LawInputs& in) noexcept {
   LawCommand out;
   out.orients_slave = true;
   const bool first = std::exchange(align_pending_, false);
-  if (!engaged_ && !engage(in)) {
-    if (first) align_master(in);
+  if (!engaged_) {
+    const Eigen::Quaterniond c = camera(in);
+    if (!engage(in, c) && first) align_master(in, c);
+  }
+  if (!engaged_) {
     approach(p_s0_, q_s0_);
   } else {
     approach(p_s0_ + s_.scale * (c_ * (in.master.position - p_m0_)),

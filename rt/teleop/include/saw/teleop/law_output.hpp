@@ -106,10 +106,12 @@ class OutputSet {
   explicit OutputSet(std::vector<std::unique_ptr<detail::OutputSlot>> slots);
   // Setup: each output's function on its interface, as InputSet::require.
   void require(const std::function<RequiredInterface&(const std::string&)>& interface_of);
+  // Start-up, once connected: which outputs the devices offer (an optional one's may not).
+  void connected() noexcept;
   // The law's view for this cycle: nothing set yet.
   DeclaredOutputs prepare() noexcept;
   // (RT) Sends what the law set; returns how many the devices refused. An optional output the
-  // device does not offer cannot be set (prepare() says so): nothing is sent, nothing counted.
+  // device does not offer cannot be set (connected() says so): nothing is sent, nothing counted.
   std::uint64_t send() noexcept;
   std::size_t size() const noexcept { return slots_.size(); }
 

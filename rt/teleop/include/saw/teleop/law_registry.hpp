@@ -34,8 +34,9 @@ class LawModel {
   // The law sets LawCommand::slave_goal: a slave that follows a pose can be driven by it.
   virtual bool gives_slave_goal() const noexcept = 0;
   virtual bool gives_no_force() const noexcept = 0;
-  // The value of its number setting `name` (and its unit), as it is now; false: no such setting.
-  virtual bool setting_value(std::string_view name, double& value, std::string_view& unit) const noexcept = 0;
+  // Setup: where its number setting `name` lives (read it for the value as it is now; the law's
+  // settings are its members, they do not move), and its unit; nullptr: no such setting.
+  virtual const double* setting_address(std::string_view name, std::string_view& unit) const noexcept = 0;
   // Setup: one slot per declared input (law_input.hpp), in declaration order, for the task to
   // require on the named side and read every cycle.
   virtual std::vector<std::unique_ptr<detail::InputSlot>> make_inputs() const = 0;
@@ -89,18 +90,17 @@ class LawHolder final : public LawModel {
     else
       return false;
   }
-  bool setting_value(std::string_view name, double& value, std::string_view& unit) const noexcept override {
-    bool found = false;
+  const double* setting_address(std::string_view name, std::string_view& unit) const noexcept override {
+    const double* found = nullptr;
     // settings() is the law's read-back (and set_<name>'s target): reading it changes nothing.
     const typename L::Settings& s = const_cast<L&>(law_).settings();
     std::apply(
         [&](const auto&... d) {
           const auto one = [&](const auto& setting) {
             if constexpr (std::is_same_v<typename std::decay_t<decltype(setting)>::Value, double>) {
-              if (!found && setting.name == name) {
-                value = s.*setting.member;
+              if (found == nullptr && setting.name == name) {
+                found = &(s.*setting.member);
                 unit = setting.unit;
-                found = true;
               }
             }
           };

@@ -21,6 +21,8 @@ class LawAgreements {
   struct Agreement {
     InputSlot* slot = nullptr;
     std::string setting;
+    const double* value = nullptr;  // the law's setting, found once (law_registry.hpp)
+    std::string_view unit;
     std::string source;  // "its input port_wave_impedance from the master ('port.arm', through 'link.arm')"
     double seen = 0;     // the value that disagreed
   };
@@ -42,8 +44,6 @@ class LawAgreements {
   std::string_view describe(const Agreement& a, FaultText& text) const noexcept;
 
  private:
-  double value(const Agreement& a, std::string_view* unit = nullptr) const noexcept;
-
   const LawModel* law_ = nullptr;
   std::vector<Agreement> agreements_;
   bool unconfirmed_ = false;

@@ -123,9 +123,9 @@ class SurgicalLaw {
   // The master's orientation seen through c; sets misalignment_ and aligned_.
   Eigen::Quaterniond observe(const LawInputs& in, const Eigen::Quaterniond& c) noexcept;
   // Takes the engagement's poses if the master is aligned; true if it is.
-  bool engage(const LawInputs& in) noexcept;
+  bool engage(const LawInputs& in, const Eigen::Quaterniond& c) noexcept;
   // A misaligned master that takes move_cp: the pose that aligns it (its position, turned).
-  void align_master(const LawInputs& in) noexcept;
+  void align_master(const LawInputs& in, const Eigen::Quaterniond& c) noexcept;
   double jaw_goal(const LawInputs& in) noexcept;
   // The goal sent: toward (p, q) by no more than the speed limits allow in one period.
   void approach(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) noexcept;
