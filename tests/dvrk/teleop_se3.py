@@ -47,7 +47,6 @@ from saw_run import SawRt, arm_ready, shipped  # noqa: E402
 
 NAMES = ("psm1", "psm_teleop", "PSM1_dds", "MTML_dds", "ECM_dds", "dvrk-mtm-psm")
 HAND = (0.03, 0.5, (1.0, 0.0, 0.0), math.radians(20))
-ATTEMPTS = 3
 STALL = re.compile(r"FAULT.*(stopped publishing|deadline missed)")
 
 
@@ -78,18 +77,13 @@ def running(rt, psm, run):
 
 
 def attempted(phase, *args):
-    """Runs phase(*args, run) until a run has no stall (the phase sets run["stall"])."""
-    for attempt in range(1, ATTEMPTS + 1):
+    """Runs phase(*args, run) until a run gives a verdict (the phase sets run["stall"]); a stalled
+    run whose checks all held is one."""
+    def once():
         before, run = len(harness.failures), {}
         phase(*args, run)
-        why = run.get("stall")
-        if why is None or len(harness.failures) == before:
-            return
-        unsafe = [f for f in harness.failures[before:] if f.startswith("after the stall")]
-        del harness.failures[before:]
-        harness.failures.extend(unsafe)
-        print(f"stalled run of {phase.__name__} ({attempt} of {ATTEMPTS}), no verdict from it: {why}")
-    check(False, f"{phase.__name__}: the simulated arms stalled in each of {ATTEMPTS} runs")
+        return run.get("stall") if len(harness.failures) > before else None
+    harness.until_no_stall(once, phase.__name__)
 
 
 MTM_DEVICE = """  - name: mtml{tag}

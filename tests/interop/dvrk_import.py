@@ -8,6 +8,7 @@ stream stops, teleoperation goes to FAULT and stays there.
 usage: dvrk_import.py SAW_RT SAW_GATEWAY
 """
 import csv
+import itertools
 import math
 import os
 import signal
@@ -57,7 +58,6 @@ class SyntheticMaster(threading.Thread):
             time.sleep(0.001)
 
 
-ATTEMPTS = 3
 ENGAGED = 2000  # ENABLED cycles of teleoperation before the stream is stopped
 
 
@@ -164,16 +164,9 @@ def main(saw_rt, saw_gateway):
     domain = dds_domain()
     client = Client(domain)
     work = tempfile.mkdtemp()
-    for attempt in range(1, ATTEMPTS + 1):
-        before = len(harness.failures)
-        why = run(saw_rt, client, domain, f"{os.getpid()}{attempt}", work)
-        if why is None:
-            return exit_code()
-        unsafe = [f for f in harness.failures[before:] if f.startswith("after the stall")]
-        del harness.failures[before:]
-        harness.failures.extend(unsafe)
-        print(f"stalled run ({attempt} of {ATTEMPTS}), no verdict from it: {why}")
-    check(False, f"the run stalled in each of {ATTEMPTS} attempts")
+    attempt = itertools.count(1)  # each run its own names
+    harness.until_no_stall(lambda: run(saw_rt, client, domain, f"{os.getpid()}{next(attempt)}", work),
+                           "the imported stream")
     return exit_code()
 
 
