@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "arm_rig.hpp"
+#include "saw/can/borrowed_bus.hpp"
 #include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/canopen_arm.hpp"
 #include "saw/canopen/canopen_io.hpp"
@@ -16,18 +17,7 @@
 namespace saw::canopen::test {
 
 // The bus task owns its bus; the network owns the test's ports: a bus that forwards to one.
-class Borrowed final : public can::Bus {
- public:
-  explicit Borrowed(can::Bus& b) : b_(b) {}
-  std::size_t receive(std::span<can::Received> out) noexcept override { return b_.receive(out); }
-  std::size_t send(std::span<const can::Frame> f) noexcept override { return b_.send(f); }
-  can::BusState state() const noexcept override { return b_.state(); }
-  can::BusCounters counters() const noexcept override { return b_.counters(); }
-  const std::string& name() const noexcept override { return b_.name(); }
-
- private:
-  can::Bus& b_;
-};
+using Borrowed = can::BorrowedBus;
 
 inline CanopenArmConfig client(const std::string& bus, std::vector<std::uint8_t> nodes) {
   CanopenArmConfig c = arm_config(cia402::csp, nodes.size());

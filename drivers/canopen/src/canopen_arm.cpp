@@ -104,13 +104,7 @@ namespace {
 // A caller's bus (tests) is known by its address: two of them may share a name. A shared bus's
 // master heartbeat is its bus task's: the drives' consumers watch that one.
 BusLink link_of(const std::string& name, const CanopenArmConfig& c, TimeNs period, can::Bus* bus) {
-  if (bus != nullptr) {
-    BusLink l;
-    l.claim = std::make_unique<BusClaim>(
-        "'" + bus->name() + "' at " + std::to_string(reinterpret_cast<std::uintptr_t>(bus)), name);
-    l.bus = bus;
-    return l;
-  }
+  if (bus != nullptr) return link_callers_bus(*bus, name);
   std::vector<std::uint8_t> nodes;
   std::vector<std::uint32_t> tpdos;
   for (const AxisConfig& a : axes_of(c)) {

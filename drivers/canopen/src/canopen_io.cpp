@@ -129,9 +129,12 @@ std::vector<std::uint32_t> tpdo_ids(const IoNodeConfig& n) {
 }  // namespace
 
 CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config)
-    : CanopenIo(std::move(name), task, Checked<CanopenIoConfig>{checked(std::move(config), task)}) {}
+    : CanopenIo(std::move(name), task, Checked<CanopenIoConfig>{checked(std::move(config), task)}, nullptr) {}
 
-CanopenIo::CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig> config)
+CanopenIo::CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config, can::Bus& bus)
+    : CanopenIo(std::move(name), task, Checked<CanopenIoConfig>{checked(std::move(config), task)}, &bus) {}
+
+CanopenIo::CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig> config, can::Bus* bus)
     : Device(std::move(name), task, contract_of(config.value)), config_(std::move(config.value)) {
   // The node's own safe state when the controller dies: before the deployment's writes (which may
   // set them otherwise), so the start-up and every re-configuration after a reboot write them.
@@ -151,7 +154,8 @@ CanopenIo::CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig>
   check(config_.node);
   const std::uint8_t nodes[] = {config_.node.node};
   const auto tpdos = tpdo_ids(config_.node);
-  link_ = link_bus(config_.bus, this->name(), task.period.count(), nodes, tpdos);
+  link_ = bus != nullptr ? link_callers_bus(*bus, this->name())
+                         : link_bus(config_.bus, this->name(), task.period.count(), nodes, tpdos);
   if (!link_.shared()) {  // its own bus: it runs the bus task in its own cycle
     BusTaskConfig k;
     k.period = task.period.count();

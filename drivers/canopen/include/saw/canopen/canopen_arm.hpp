@@ -11,6 +11,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/arm_status.hpp"
 #include "saw/canopen/bus_master.hpp"
+#include "saw/canopen/bus_link.hpp"
 #include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/chain_kinematics.hpp"
 #include "saw/canopen/sdo_queue.hpp"

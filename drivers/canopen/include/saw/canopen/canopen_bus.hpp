@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "saw/canopen/bus_link.hpp"
 #include "saw/canopen/bus_task.hpp"
 #include "saw/task.hpp"
 

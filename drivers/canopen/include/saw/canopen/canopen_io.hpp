@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "saw/canopen/bus_link.hpp"
 #include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/io_node.hpp"
@@ -100,6 +101,8 @@ struct CanopenIoConfig {
 class CanopenIo : public Device {
  public:
   CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config);
+  // On a caller's bus (tests), of which it is the master as of a URI (config.bus unused).
+  CanopenIo(std::string name, TaskConfig task, CanopenIoConfig config, can::Bus& bus);
   ~CanopenIo() override;
   IoNode& node() noexcept { return *io_; }
   BusPort& port() noexcept { return *link_.port; }
@@ -115,7 +118,7 @@ class CanopenIo : public Device {
   bool accepts(ServoMode m) const noexcept override { return m == ServoMode::jp; }
 
  private:
-  CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig> config);
+  CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig> config, can::Bus* bus);
   Outcome check_node() noexcept;
   Outcome check_emcy() noexcept;
   Outcome failure(const char* why, FaultCode code, std::uint32_t detail = 0, TimeNs age = 0) noexcept;
