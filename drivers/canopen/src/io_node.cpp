@@ -1,17 +1,8 @@
 #include "saw/canopen/io_node.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <stdexcept>
-
-#include "saw/canopen/cob.hpp"
-#include "saw/canopen/emcy.hpp"
-#include "saw/canopen/heartbeat.hpp"
-#include "saw/canopen/nmt.hpp"
-#include "saw/canopen/sdo_client.hpp"
-#include "saw/canopen/sync.hpp"
-#include "saw/log.hpp"
 
 namespace saw::canopen {
 namespace {
@@ -80,172 +71,45 @@ NodeSetup setup_of(const IoNodeConfig& c) {
   return s;
 }
 
-// One start-up write, encoded at construction: the cycle only sends it.
-struct Encoded {
-  ObjectAddress address;
-  std::array<std::uint8_t, 8> bytes{};
-  std::size_t size = 0;
-  bool optional = false;
-};
+namespace {
 
-struct IoNode::Impl {
-  Impl(can::Bus& b, IoNodeConfig c)
-      : bus(b),
-        config(std::move(c)),
-        sdo(SdoClientConfig{SdoChannel::of_node(config.node), 500'000'000, 64}) {}
-  can::Bus& bus;
-  IoNodeConfig config;
-  std::vector<PdoPacker> rpdos;
-  std::vector<PdoUnpacker> tpdos;
-  std::vector<Where> outputs, inputs;
-  HeartbeatConsumer heartbeats;
-  SyncProducer sync{1'000'000};  // shut_down()'s one SYNC
-  AxisHealth health;
-  IoEmcys emcys;
-  std::uint32_t tpdo_seen = 0;
-  bool fresh = false;
-  TimeNs last_received = 0, first_cycle = -1;
-  std::uint64_t foreign = 0;
-  std::array<can::Received, 32> inbox{};
-  std::vector<can::Frame> outbox;
-  // Re-configuration (a node that rebooted).
-  SdoClient sdo;
-  std::vector<Encoded> writes;
-  Reconfiguration reconfig;
-  std::size_t next = 0;
-  bool started = false, starting = false;
-  TimeNs since = 0;
+NodeDriverOptions io_options() {
+  NodeDriverOptions o;
+  o.sdo_timeout = 500'000'000;
+  o.sdo_capacity = 64;
+  o.sdo_waits_for_reconfiguration = true;
+  return o;
+}
 
-  void step_reconfiguration(std::size_t& n, TimeNs now) noexcept;
-  // Runtime SDO.
-  SdoQueue queue{16};
-  bool transfer = false;  // a runtime transfer holds the SDO client
-  std::uint32_t tag = 0;
-  void service_sdo(std::size_t& n, TimeNs now) noexcept;
+std::vector<NodeSpec> spec_of(const IoNodeConfig& c) {
+  NodeSpec s;
+  s.who = "I/O node '" + c.name + "'";
+  s.node = c.node;
+  s.pdos = c.pdos;
+  s.heartbeat_timeout = c.heartbeat_timeout;
+  s.writes = setup_of(c).writes;  // checks c first
+  return {std::move(s)};
+}
 
-  void on_frame(const can::Frame& f, TimeNs now) noexcept;
-  void heartbeat_events(TimeNs now) noexcept;
-  void send(std::size_t n) noexcept { (void)bus.send(std::span<const can::Frame>(outbox.data(), n)); }
-};
+}  // namespace
 
-IoNode::IoNode(can::Bus& bus, IoNodeConfig config) : impl_(std::make_unique<Impl>(bus, std::move(config))) {
-  Impl& m = *impl_;
-  check(m.config);
-  for (const PdoMapping& p : m.config.pdos) {
-    if (!p.enabled) continue;
-    if (p.kind == PdoKind::rpdo)
-      m.rpdos.emplace_back(p);
-    else
-      m.tpdos.emplace_back(p);
+IoNode::IoNode(can::Bus& bus, IoNodeConfig config)
+    : NodeDriver(bus, io_options(), spec_of(config)), config_(std::move(config)) {
+  for (const PdoEntry& e : config_.outputs) {
+    const auto [pdo, slot] = find(config_.pdos, PdoKind::rpdo, e.address);
+    outputs_.push_back({pdo, slot});
   }
-  for (const PdoEntry& e : m.config.outputs)
-    m.outputs.push_back(find(m.config.pdos, PdoKind::rpdo, e.address));
-  for (const PdoEntry& e : m.config.inputs) m.inputs.push_back(find(m.config.pdos, PdoKind::tpdo, e.address));
-  m.heartbeats.watch(m.config.node, m.config.heartbeat_timeout);
-  for (const StartupWrite& w : setup_of(m.config).writes) {
-    Encoded e;
-    e.address = w.write.address;
-    e.size = size_of(w.write.type);
-    e.optional = w.optional;
-    if (e.size > e.bytes.size() ||
-        encode(w.write.type, startup_value(w.write), std::span(e.bytes.data(), e.size)) != Codec::ok)
-      throw std::invalid_argument("I/O node '" + m.config.name + "': value " + std::to_string(w.write.value) +
-                                  " does not fit " + to_string(w.write.address));
-    m.writes.push_back(e);
+  for (const PdoEntry& e : config_.inputs) {
+    const auto [pdo, slot] = find(config_.pdos, PdoKind::tpdo, e.address);
+    inputs_.push_back({pdo, slot});
   }
-  // The RPDOs, then room for an SDO request and NMT start (or a SYNC and NMT at the end).
-  m.outbox.resize(m.rpdos.size() + 4);
 }
 
 IoNode::~IoNode() = default;
 
-const IoNodeConfig& IoNode::config() const noexcept { return impl_->config; }
-bool IoNode::fresh() const noexcept { return impl_->fresh; }
-TimeNs IoNode::last_received() const noexcept { return impl_->last_received; }
-const AxisHealth& IoNode::health() const noexcept { return impl_->health; }
-std::uint64_t IoNode::foreign_frames() const noexcept { return impl_->foreign; }
-const IoEmcys& IoNode::emcys() const noexcept { return impl_->emcys; }
-bool IoNode::valid() const noexcept {
-  const std::size_t n = impl_->tpdos.size();
-  return impl_->tpdo_seen == (n >= 32 ? ~0u : (1u << n) - 1);
-}
-
-void IoNode::Impl::on_frame(const can::Frame& f, TimeNs now) noexcept {
-  if (!canopen_data_frame(f)) {
-    ++foreign;
-    return;
-  }
-  const std::uint32_t id = f.can_id() & CAN_SFF_MASK;
-  const std::uint8_t node = config.node;
-  if (id == cob::heartbeat + node) return heartbeats.on_frame(f, now);
-  if (id == cob::emcy + node) {
-    const auto e = parse_emcy(f);
-    if (!e) {
-      ++foreign;
-      return;
-    }
-    health.error_register = e->error_register;
-    switch (emcy_severity(*e)) {
-      case EmcySeverity::reset:
-        ++emcys.resets;
-        return;
-      case EmcySeverity::warning:
-        ++emcys.warnings;
-        emcys.last_warning = *e;
-        break;
-      case EmcySeverity::fault:
-        ++emcys.faults;
-        emcys.last_fault = *e;
-        break;
-    }
-    ++health.emcy_count;
-    health.last_emcy = e->code;
-    return;
-  }
-  for (std::size_t p = 0; p < tpdos.size(); ++p) {
-    if (tpdos[p].layout().cob_id() != id) continue;
-    if (tpdos[p].receive(f) != PdoReceive::ok) {
-      ++health.bad_pdos;
-      return;
-    }
-    tpdo_seen |= 1u << p;
-    fresh = true;
-    last_received = now;
-    return;
-  }
-  if (id == cob::sdo_tx + node) return sdo.on_frame(f, now);
-  ++foreign;
-}
-
-void IoNode::Impl::heartbeat_events(TimeNs now) noexcept {
-  while (const auto e = heartbeats.poll(now)) {
-    note_heartbeat(health, *e);
-  }
-  // A node silent from the start is lost all the same once its timeout has passed.
-  if (!health.heartbeat_seen && !health.heartbeat_lost && now - first_cycle > config.heartbeat_timeout) {
-    health.heartbeat_lost = true;
-    health.silent_for = now - first_cycle;
-    ++health.heartbeat_losses;
-  }
-}
-
-void IoNode::receive(TimeNs now) noexcept {
-  Impl& m = *impl_;
-  if (m.first_cycle < 0) m.first_cycle = now;
-  m.fresh = false;
-  for (std::size_t total = 0; total < 256;) {
-    const std::size_t n = m.bus.receive(m.inbox);
-    for (std::size_t i = 0; i < n; ++i) m.on_frame(m.inbox[i].frame, now);
-    total += n;
-    if (n < m.inbox.size()) break;
-  }
-  m.heartbeat_events(now);
-}
-
 Codec IoNode::set_output(std::size_t i, double value) noexcept {
-  Impl& m = *impl_;
-  const Where w = m.outputs[i];
-  const DataType t = m.config.outputs[i].type;
+  const Where w = outputs_[i];
+  const DataType t = config_.outputs[i].type;
   if (!std::isfinite(value)) return Codec::invalid;
   Number n;
   switch (type_class(t)) {
@@ -262,125 +126,16 @@ Codec IoNode::set_output(std::size_t i, double value) noexcept {
       n = static_cast<std::uint64_t>(std::llround(value));
       break;
   }
-  return m.rpdos[static_cast<std::size_t>(w.pdo)].set_number(static_cast<std::size_t>(w.slot), n);
+  return rpdos(0)[static_cast<std::size_t>(w.pdo)].set_number(static_cast<std::size_t>(w.slot), n);
 }
 
 bool IoNode::input(std::size_t i, double& value) const noexcept {
-  const Impl& m = *impl_;
-  const Where w = m.inputs[i];
-  const PdoUnpacker& p = m.tpdos[static_cast<std::size_t>(w.pdo)];
+  const Where w = inputs_[i];
+  const PdoUnpacker& p = tpdos(0)[static_cast<std::size_t>(w.pdo)];
   Number n;
   if (!p.has_data() || p.get_number(static_cast<std::size_t>(w.slot), n) != Codec::ok) return false;
   value = std::visit([](auto v) { return static_cast<double>(v); }, n);
   return true;
-}
-
-void IoNode::transmit(TimeNs now) noexcept {
-  Impl& m = *impl_;
-  std::size_t n = 0;
-  for (const PdoPacker& p : m.rpdos) m.outbox[n++] = p.frame();
-  m.step_reconfiguration(n, now);
-  m.service_sdo(n, now);
-  m.send(n);
-}
-
-SdoQueue& IoNode::sdo_queue() noexcept { return impl_->queue; }
-
-void IoNode::Impl::service_sdo(std::size_t& n, TimeNs now) noexcept {
-  if (!transfer) {
-    if (reconfig.state == Reconfiguration::State::busy) return;  // the client is the re-configuration's
-    const SdoRequest* r = queue.front();
-    if (r == nullptr) return;
-    const SdoRequest request = *r;
-    queue.pop();
-    SdoReply reply;
-    reply.tag = request.tag;
-    const ObjectAddress address{request.index, request.subindex};
-    const bool bad = request.node != config.node ||
-                     (request.write && (request.size == 0 || request.size > request.data.size()));
-    const bool begun =
-        !bad && (request.write ? sdo.download(address, std::span(request.data.data(), request.size), now)
-                               : sdo.upload(address, now));
-    if (!begun) {
-      reply.status = bad ? Status::invalid : Status::busy;
-      (void)queue.reply(reply);
-      return;
-    }
-    transfer = true;
-    tag = request.tag;
-  }
-  while (const auto f = sdo.poll(now))
-    if (n < outbox.size()) outbox[n++] = *f;
-  if (sdo.busy()) return;
-  const SdoResult& result = sdo.result();
-  SdoReply reply;
-  reply.tag = tag;
-  reply.abort = static_cast<std::uint32_t>(result.abort);
-  reply.remote = result.remote;
-  if (result.status == SdoStatus::done) {
-    const auto data = sdo.data();
-    reply.total = static_cast<std::uint32_t>(data.size());
-    reply.size = static_cast<std::uint8_t>(std::min(data.size(), reply.data.size()));
-    std::copy_n(data.begin(), reply.size, reply.data.begin());
-  }
-  (void)queue.reply(reply);
-  transfer = false;
-}
-
-void IoNode::reconfigure(TimeNs now) noexcept {
-  Impl& m = *impl_;
-  m.reconfig = {};
-  m.reconfig.state = Reconfiguration::State::busy;
-  m.next = 0;
-  m.started = m.starting = false;
-  m.since = now;
-  m.tpdo_seen = 0;  // its TPDOs, once it sends them again, decide
-}
-
-const Reconfiguration& IoNode::reconfiguration() const noexcept { return impl_->reconfig; }
-
-void IoNode::Impl::step_reconfiguration(std::size_t& n, TimeNs now) noexcept {
-  if (reconfig.state != Reconfiguration::State::busy || transfer) return;  // a runtime transfer first
-  if (starting) {
-    if (health.nmt_state == NmtState::operational)
-      reconfig.state = Reconfiguration::State::done;
-    else if (now - since > 2'000'000'000)
-      reconfig.state = Reconfiguration::State::failed;  // no operational heartbeat within 2 s
-    return;
-  }
-  if (started && !sdo.busy()) {
-    const Encoded& w = writes[next];
-    const SdoResult& r = sdo.result();
-    const bool missing = r.abort == SdoAbort::no_object || r.abort == SdoAbort::no_subindex;
-    if (r.status != SdoStatus::done && !(w.optional && missing)) {
-      reconfig.state = Reconfiguration::State::failed;
-      reconfig.object = w.address;
-      reconfig.abort = r.abort;
-      return;
-    }
-    ++next;
-    started = false;
-  }
-  if (!started && next < writes.size()) {
-    const Encoded& w = writes[next];
-    started = sdo.download(w.address, std::span(w.bytes.data(), w.size), now);
-  }
-  while (const auto f = sdo.poll(now))
-    if (n < outbox.size()) outbox[n++] = *f;
-  if (!started && next >= writes.size() && n < outbox.size()) {
-    outbox[n++] = nmt_frame(NmtCommand::start, config.node);
-    starting = true;
-    since = now;
-  }
-}
-
-void IoNode::shut_down(TimeNs) noexcept {
-  Impl& m = *impl_;
-  std::size_t n = 0;
-  for (const PdoPacker& p : m.rpdos) m.outbox[n++] = p.frame();
-  m.outbox[n++] = m.sync.extra();
-  m.outbox[n++] = nmt_frame(NmtCommand::enter_pre_operational, m.config.node);
-  m.send(n);
 }
 
 }  // namespace saw::canopen

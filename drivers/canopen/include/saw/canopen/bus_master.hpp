@@ -8,6 +8,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
 #include "saw/canopen/cia402_controller.hpp"
+#include "saw/canopen/node_driver.hpp"
 #include "saw/canopen/sdo.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/clock.hpp"
@@ -28,28 +29,8 @@ struct BusMasterConfig {
   cia402::ControllerConfig controller;
 };
 
-// A drive's configuration run again from the cycle (a drive that rebooted): the start-up's SDO
-// writes through its SDO channel, then NMT start and an operational heartbeat.
-struct Reconfiguration {
-  enum class State : std::uint8_t { idle, busy, done, failed } state = State::idle;
-  ObjectAddress object{};           // failed: the write refused (0x0000: no operational heartbeat)
-  SdoAbort abort = SdoAbort::none;  // ... and why
-};
-
-// Figures since construction; each only grows.
-struct MasterCounters {
-  std::uint64_t cycles = 0;
-  std::uint64_t frames_received = 0;
-  std::uint64_t frames_sent = 0;
-  std::uint64_t send_refused = 0;  // frames the bus did not take (full, down)
-  std::uint64_t syncs = 0;
-  std::uint64_t heartbeats = 0;                // the master's own
-  std::uint64_t foreign_frames = 0;            // frames for no drive of this master (another master's, ...)
-  std::uint64_t receive_limited = 0;           // cycles that left frames for the next (max_frames)
-  std::uint64_t emcy = 0;                      // EMCY messages, error resets included
-  std::uint64_t sdo_done = 0, sdo_failed = 0;  // runtime SDO transfers
-  std::uint64_t heartbeat_events_dropped = 0;
-};
+// Its counters are a node driver's (node_driver.hpp).
+using MasterCounters = NodeCounters;
 
 // The cycle, called by the owning task in this order:
 //   receive(now)   every frame that arrived (non-blocking, at most max_frames): TPDOs (the drives'
@@ -61,22 +42,15 @@ struct MasterCounters {
 //                  its RPDO before the SYNC that applies it; the master's heartbeat when due.
 // receive() and transmit() neither allocate, lock, block, print nor throw. Construction and
 // start-up (StartupSequence, on the set-up thread) happen before the first cycle.
-class BusMaster {
+class BusMaster : public NodeDriver {
  public:
   // Throws std::invalid_argument naming the axis and the problem (see check(AxisConfig)), and
   // for two axes that share a node-ID or a PDO identifier.
   BusMaster(can::Bus& bus, BusMasterConfig config, std::vector<AxisConfig> axes);
-  ~BusMaster();
-  BusMaster(const BusMaster&) = delete;
-  BusMaster& operator=(const BusMaster&) = delete;
+  ~BusMaster() override;
 
-  can::Bus& bus() noexcept;
-  std::size_t size() const noexcept;
   const AxisConfig& axis(std::size_t i) const noexcept;
-
-  void receive(TimeNs now) noexcept;
   const AxisFeedback& feedback(std::size_t i) const noexcept;
-  const AxisHealth& health(std::size_t i) const noexcept;
 
   // Where the controller walks the drive, and a fault reset (a rising edge of bit 7 once the
   // drive is in fault).
@@ -90,23 +64,25 @@ class BusMaster {
   // The last setpoint packed, in SI.
   double setpoint(std::size_t i) const noexcept;
 
-  void transmit(TimeNs now) noexcept;
   // The last frames of a master that stops: every drive's RPDOs with `controlword` (disable
   // voltage, or quick stop) and the setpoints as set, one SYNC so that the drives take them at
   // once, then NMT enter pre-operational for every node. Sent before it returns.
   void shut_down(std::uint16_t controlword, TimeNs now) noexcept;
-  // Starts re-running drive i's configuration (a drive that rebooted), stepped by transmit();
-  // its feedback counts as not received until its TPDOs come again.
-  void reconfigure(std::size_t i, TimeNs now) noexcept;
-  const Reconfiguration& reconfiguration(std::size_t i) const noexcept;
+  // reconfigure(i, now) (NodeDriver): its feedback also counts as not valid until its TPDOs come
+  // again, and stale from the re-configuration's end.
   // The controller's answer of the last transmit().
   const cia402::ControllerOutput& control(std::size_t i) const noexcept;
 
-  const MasterCounters& counters() const noexcept;
-  // Runtime SDO: non-RT code submits here, the cycle runs one transfer at a time.
-  SdoQueue& sdo_queue() noexcept;
-
  private:
+  void on_first_cycle(TimeNs now) noexcept override;
+  void on_received(std::size_t i, TimeNs now) noexcept override;
+  void before_rpdos(std::size_t i, TimeNs now) noexcept override;
+  void after_rpdos(TimeNs now) noexcept override;
+  void before_shut_down(std::size_t i, TimeNs now) noexcept override;
+  can::Frame shut_down_sync() noexcept override;
+  void on_reconfigure(std::size_t i) noexcept override;
+  void on_reconfigured(std::size_t i, TimeNs now) noexcept override;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -3,15 +3,14 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
-#include "saw/canopen/bus_master.hpp"
 #include "saw/canopen/emcy.hpp"
+#include "saw/canopen/node_driver.hpp"
 #include "saw/canopen/pdo.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/canopen/startup.hpp"
@@ -40,56 +39,50 @@ struct IoNodeConfig {
 // times, a PDO check() refuses, an output or input no enabled PDO of its kind maps).
 void check(const IoNodeConfig& c);
 
-// An I/O node's EMCYs by what they mean (emcy_severity): counters only grow, a reader compares
-// them with the values it saw last (several in one cycle: the newest of each kind is kept).
-struct IoEmcys {
-  std::uint64_t warnings = 0, faults = 0, resets = 0;
-  Emcy last_warning{}, last_fault{};
-};
+// An I/O node's EMCYs by what they mean (node_driver.hpp).
+using IoEmcys = NodeEmcys;
 
 // Its start-up: PDOs, the RPDO deadline, 0x1017, 0x1016:01, the deployment's writes (no CiA 402 objects).
 NodeSetup setup_of(const IoNodeConfig& c);
 
-// The cycle, on the owner's thread: receive() takes every frame that arrived (TPDOs, heartbeat,
-// EMCY; anything else counted as foreign), transmit() sends the RPDOs with the outputs as set.
-// Neither allocates, locks, blocks, prints nor throws. SYNC and the master's heartbeat are the
-// bus task's.
-class IoNode {
+// The cycle, on the owner's thread (NodeDriver): receive() takes every frame that arrived
+// (TPDOs, heartbeat, EMCY; anything else counted as foreign), transmit() sends the RPDOs with the
+// outputs as set. Neither allocates, locks, blocks, prints nor throws. SYNC and the master's
+// heartbeat are the bus task's.
+class IoNode : public NodeDriver {
  public:
   IoNode(can::Bus& bus, IoNodeConfig config);  // throws as check()
-  ~IoNode();
-  IoNode(const IoNode&) = delete;
-  IoNode& operator=(const IoNode&) = delete;
+  ~IoNode() override;
 
-  const IoNodeConfig& config() const noexcept;
-  void receive(TimeNs now) noexcept;
+  const IoNodeConfig& config() const noexcept { return config_; }
   // Output i as its mapped type holds it (an integer: rounded); a value the type cannot hold is
   // not packed (the previous one stays) and the reason returned.
   Codec set_output(std::size_t i, double value) noexcept;
   // Input i from the last TPDO that carried it; false before one came.
   bool input(std::size_t i, double& value) const noexcept;
-  bool valid() const noexcept;                // every enabled TPDO arrived at least once
-  bool fresh() const noexcept;                // a TPDO arrived in the last receive()
-  TimeNs last_received() const noexcept;      // when (the cycle's time)
-  const AxisHealth& health() const noexcept;  // heartbeat, NMT state, EMCY, boot-ups, bad PDOs
-  std::uint64_t foreign_frames() const noexcept;
-  const IoEmcys& emcys() const noexcept;
-  void transmit(TimeNs now) noexcept;
+  bool valid() const noexcept { return tpdos_valid(0); }        // every enabled TPDO arrived at least once
+  bool fresh() const noexcept { return NodeDriver::fresh(0); }  // a TPDO arrived in the last receive()
+  TimeNs last_received() const noexcept { return NodeDriver::last_received(0); }  // when (the cycle's time)
+  const AxisHealth& health() const noexcept { return NodeDriver::health(0); }     // heartbeat, NMT, EMCY, ...
+  std::uint64_t foreign_frames() const noexcept { return counters().foreign_frames; }
+  const IoEmcys& emcys() const noexcept { return NodeDriver::emcys(0); }
   // Starts running the node's configuration again (a node that rebooted: its PDOs, heartbeat and
   // consumer are gone): the start-up's SDO writes, NMT start, an operational heartbeat, stepped by
   // transmit(); its inputs count as not received until its TPDOs come again.
-  void reconfigure(TimeNs now) noexcept;
-  const Reconfiguration& reconfiguration() const noexcept;
-  // Runtime SDO: non-RT code submits here (requests for this node only), transmit() runs one
-  // transfer at a time through the node's SDO channel (not while a re-configuration runs).
-  SdoQueue& sdo_queue() noexcept;
-  // The last frames of a master that stops: the RPDOs with the outputs as set (the caller set
-  // the safe ones), one SYNC so that the node takes them at once, NMT enter pre-operational.
-  void shut_down(TimeNs now) noexcept;
+  void reconfigure(TimeNs now) noexcept { NodeDriver::reconfigure(0, now); }
+  const Reconfiguration& reconfiguration() const noexcept { return NodeDriver::reconfiguration(0); }
+  // Runtime SDO (sdo_queue()): requests for this node only, one transfer at a time through the
+  // node's SDO channel (not while a re-configuration runs). shut_down(): the RPDOs with the
+  // outputs as set (the caller set the safe ones), one SYNC so that the node takes them at once,
+  // NMT enter pre-operational.
 
  private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  // Where an object sits: which enabled PDO of its kind, which slot; pdo < 0: not mapped.
+  struct Where {
+    int pdo = -1, slot = -1;
+  };
+  IoNodeConfig config_;
+  std::vector<Where> outputs_, inputs_;
 };
 
 }  // namespace saw::canopen
