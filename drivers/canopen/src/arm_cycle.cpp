@@ -127,30 +127,16 @@ Outcome CanopenArm::enable() {
 Outcome CanopenArm::reconfigure_rebooted() noexcept {
   bool busy = false;
   for (std::size_t i = 0; i < n_; ++i) {
-    if (!rebooted_[i]) continue;
-    const JointConfig& j = config_.joints[i];
-    if (!reconfiguring_[i]) {
-      master_->reconfigure(i, now());
-      reconfiguring_[i] = true;
-    }
-    const Reconfiguration& r = master_->reconfiguration(i);
-    switch (r.state) {
-      case Reconfiguration::State::idle:
-      case Reconfiguration::State::busy:
+    switch (monitor_->reconfigure(*master_, i, now())) {
+      case NodeMonitor::Step::busy:
         busy = true;
         break;
-      case Reconfiguration::State::done:
-        rebooted_[i] = reconfiguring_[i] = false;
-        saw::log(LogLevel::info, name().c_str(), "{} (node {}) configured again after its reboot",
-                 j.name.c_str(), unsigned{j.node});
-        break;
-      case Reconfiguration::State::failed:
-        reconfiguring_[i] = false;  // the next enable tries again
-        saw::log(LogLevel::error, name().c_str(), "{} (node {}): configuring it again failed at {:x}:{}: {}",
-                 j.name.c_str(), unsigned{j.node}, unsigned{r.object.index}, unsigned{r.object.subindex},
-                 r.object.index == 0 ? "no operational heartbeat" : to_string(r.abort).data());
+      case NodeMonitor::Step::failed:
         return failure(FaultReason::node_rebooted, FaultCode::device_lost, i,
-                       static_cast<std::uint32_t>(r.abort));
+                       static_cast<std::uint32_t>(master_->reconfiguration(i).abort));
+      case NodeMonitor::Step::not_rebooted:
+      case NodeMonitor::Step::done:
+        break;
     }
   }
   return busy ? Outcome::pending() : Outcome::done();
@@ -264,25 +250,12 @@ Outcome CanopenArm::check_axis(std::size_t i) noexcept {
   const AxisFeedback& f = master_->feedback(i);
   const JointConfig& j = config_.joints[i];
   const TimeNs t = now();
-  if (h.boot_ups != boot_ups_seen_[i]) {
-    boot_ups_seen_[i] = h.boot_ups;
-    rebooted_[i] = true;  // its PDOs and mode are gone: the next enable configures it again
-    reconfiguring_[i] = false;
-    // During an enable no FAULT says it (the enable configures the drive again and goes on):
-    // the log does, so that a drive that reboots is never unnoticed.
-    if (enabling())
-      saw::log(LogLevel::warning, name().c_str(),
-               "{} (node {}) rebooted (boot-up seen) during the enable: configuring it again", j.name.c_str(),
-               unsigned{j.node});
-  }
+  monitor_->look(i, enabling());  // a boot-up: its PDOs and mode are gone, the next enable configures it
   const bool drive_fault = f.state == cia402::State::fault || f.state == cia402::State::fault_reaction_active;
   if (const Outcome o = check_emcy(i, drive_fault); o.is_failed()) return o;
-  if (rebooted_[i]) {
+  if (monitor_->rebooted(i)) {
     if (enabling()) return Outcome::done();  // the enable configures it again (its checks after)
-    if (says())
-      saw::log(LogLevel::error, name().c_str(),
-               "{} (node {}) rebooted (boot-up seen): its configuration is gone", j.name.c_str(),
-               unsigned{j.node});
+    if (says()) monitor_->say_rebooted(i);
     return failure(FaultReason::node_rebooted, FaultCode::device_lost, i);
   }
   if (h.heartbeat_lost) {
@@ -298,12 +271,8 @@ Outcome CanopenArm::check_axis(std::size_t i) noexcept {
   }
   // A drive that leaves operational (its own error behaviour, another master's NMT command) no
   // longer takes PDOs: that drive's fault at once, not a stale feedback 100 ms later.
-  if (h.heartbeat_seen && h.nmt_state != NmtState::operational && h.nmt_state != NmtState::initialising) {
-    if (says())
-      saw::log(LogLevel::error, name().c_str(), "{} (node {}) left operational: its heartbeat says {}",
-               j.name.c_str(), unsigned{j.node}, to_string(h.nmt_state).data());
+  if (monitor_->left_operational(i, says()))
     return failure(FaultReason::nmt_left, FaultCode::device_lost, i, static_cast<std::uint32_t>(h.nmt_state));
-  }
   const TimeNs age = t - (f.valid ? f.last_received : std::max(start_time_, f.watch_from));
   if (age > config_.feedback_timeout)
     return failure(FaultReason::feedback_stale, FaultCode::input_stale, i, 0, age);

@@ -145,6 +145,9 @@ CanopenArm::CanopenArm(std::string name, TaskConfig task, Checked<CanopenArmConf
     m.heartbeat_period = 0;
   }
   master_ = std::make_unique<BusMaster>(bus_, m, axes_of(config_));
+  std::vector<const char*> names;  // the joints' names, in the master's keeping (they do not move)
+  for (std::size_t i = 0; i < master_->size(); ++i) names.push_back(master_->axis(i).name.c_str());
+  monitor_ = std::make_unique<NodeMonitor>(*master_, this->name().c_str(), std::move(names));
   if (config_.chain) kinematics_ = std::make_unique<ChainKinematics>(*config_.chain);
   setpoint_js_.size = static_cast<std::uint32_t>(n_);
   for (std::size_t i = 0; i < n_; ++i) (void)setpoint_js_.set_name(i, config_.joints[i].name);

@@ -171,6 +171,7 @@ CanopenIo::CanopenIo(std::string name, TaskConfig task, Checked<CanopenIoConfig>
   config_.node.master_timeout = k.heartbeat_timeout;
   config_.node.name = this->name();
   io_ = std::make_unique<IoNode>(*link_.bus, config_.node);
+  monitor_ = std::make_unique<NodeMonitor>(*io_, this->name().c_str(), std::vector<const char*>{nullptr});
   set_safe_outputs();
   status_.node = config_.node.node;
   auto& c = provide("canopen");
@@ -227,34 +228,19 @@ Outcome CanopenIo::read() {
 Outcome CanopenIo::check_node() noexcept {
   const AxisHealth& h = io_->health();
   const bool says = operating_state().state != OperatingStateValue::fault;
-  const unsigned node = config_.node.node;
   const can::BusState bus = link_.port->state();
   if (bus == can::BusState::bus_off || bus == can::BusState::down)
     return failure("bus off", FaultCode::device_lost, static_cast<std::uint32_t>(bus));
-  if (h.boot_ups != boot_ups_seen_) {
-    boot_ups_seen_ = h.boot_ups;
-    rebooted_ = true;
-    reconfiguring_ = false;  // a configuration under way starts over: the node lost what it had
-    // During an enable no FAULT says it (the enable configures the node again): the log does.
-    if (enabling())
-      saw::log(LogLevel::warning, name().c_str(),
-               "node {} rebooted (boot-up seen) during the enable: configuring it again", node);
-  }
-  if (rebooted_) {
+  monitor_->look(0, enabling());
+  if (monitor_->rebooted(0)) {
     if (enabling()) return Outcome::done();  // the enable configures it again
-    if (says)
-      saw::log(LogLevel::error, name().c_str(), "node {} rebooted (boot-up seen): its configuration is gone",
-               node);
+    if (says) monitor_->say_rebooted(0);
     return failure("node rebooted", FaultCode::device_lost);
   }
   if (const Outcome o = check_emcy(); o.is_failed()) return o;
   if (h.heartbeat_lost) return failure("heartbeat lost", FaultCode::device_lost, 0, h.silent_for);
-  if (h.heartbeat_seen && h.nmt_state != NmtState::operational && h.nmt_state != NmtState::initialising) {
-    if (says)
-      saw::log(LogLevel::error, name().c_str(), "node {} left operational: its heartbeat says {}", node,
-               to_string(h.nmt_state).data());
+  if (monitor_->left_operational(0, says))
     return failure("left NMT operational", FaultCode::device_lost, static_cast<std::uint32_t>(h.nmt_state));
-  }
   const TimeNs age = now() - (io_->valid() ? io_->last_received() : std::max(start_time_, watch_from_));
   if (age > config_.feedback_timeout) return failure("feedback stale", FaultCode::input_stale, 0, age);
   return Outcome::done();
@@ -286,30 +272,18 @@ Outcome CanopenIo::check_emcy() noexcept {
 // A node that rebooted lost its PDO maps and heartbeats: the enable runs its configuration again
 // (the start-up's writes, NMT start) before waiting for its TPDOs.
 Outcome CanopenIo::enable() {
-  if (rebooted_) {
-    if (!reconfiguring_) {
-      io_->reconfigure(now());
-      reconfiguring_ = true;
-    }
-    const Reconfiguration& r = io_->reconfiguration();
-    switch (r.state) {
-      case Reconfiguration::State::idle:
-      case Reconfiguration::State::busy:
-        return Outcome::pending();
-      case Reconfiguration::State::done:
-        rebooted_ = reconfiguring_ = false;
-        ++status_.reconfigurations;
-        watch_from_ = now();  // its TPDOs come from the next SYNC on
-        saw::log(LogLevel::info, name().c_str(), "node {} configured again after its reboot",
-                 unsigned{config_.node.node});
-        break;
-      case Reconfiguration::State::failed:
-        reconfiguring_ = false;  // the next enable tries again
-        saw::log(LogLevel::error, name().c_str(), "node {}: configuring it again failed at {:x}:{}: {}",
-                 unsigned{config_.node.node}, unsigned{r.object.index}, unsigned{r.object.subindex},
-                 r.object.index == 0 ? "no operational heartbeat" : to_string(r.abort).data());
-        return failure("node rebooted", FaultCode::device_lost, static_cast<std::uint32_t>(r.abort));
-    }
+  switch (monitor_->reconfigure(*io_, 0, now())) {
+    case NodeMonitor::Step::busy:
+      return Outcome::pending();
+    case NodeMonitor::Step::done:
+      ++status_.reconfigurations;
+      watch_from_ = now();  // its TPDOs come from the next SYNC on
+      break;
+    case NodeMonitor::Step::failed:
+      return failure("node rebooted", FaultCode::device_lost,
+                     static_cast<std::uint32_t>(io_->reconfiguration().abort));
+    case NodeMonitor::Step::not_rebooted:
+      break;
   }
   return io_->valid() ? Outcome::done() : Outcome::pending();
 }

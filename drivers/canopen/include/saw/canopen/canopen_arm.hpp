@@ -10,10 +10,11 @@
 
 #include "saw/can/bus.hpp"
 #include "saw/canopen/arm_status.hpp"
-#include "saw/canopen/bus_master.hpp"
 #include "saw/canopen/bus_link.hpp"
+#include "saw/canopen/bus_master.hpp"
 #include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/chain_kinematics.hpp"
+#include "saw/canopen/node_monitor.hpp"
 #include "saw/canopen/sdo_queue.hpp"
 #include "saw/canopen/startup.hpp"
 #include "saw/device.hpp"
@@ -168,9 +169,7 @@ class CanopenArm : public Device {
   // An EMCY waits for the drive's next statusword: fault (an error) or not (a warning).
   std::array<bool, JointState::max_joints> emcy_pending_{};
   std::array<int, JointState::max_joints> emcy_tpdos_{};
-  std::array<std::uint32_t, JointState::max_joints> boot_ups_seen_{};
-  std::array<bool, JointState::max_joints> rebooted_{};
-  std::array<bool, JointState::max_joints> reconfiguring_{};  // this enable re-runs its configuration
+  std::unique_ptr<NodeMonitor> monitor_;  // reboots, NMT state, re-configuration
 
   // State-table sources.
   JointState setpoint_js_{};

@@ -13,6 +13,7 @@
 #include "saw/canopen/bus_task.hpp"
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/io_node.hpp"
+#include "saw/canopen/node_monitor.hpp"
 #include "saw/canopen/startup.hpp"
 #include "saw/device.hpp"
 
@@ -132,9 +133,7 @@ class CanopenIo : public Device {
   TimeNs start_time_ = -1;
   TimeNs watch_from_ = 0;  // not valid: stale counts from here (a re-configuration's end), or the start
   std::uint64_t emcy_faults_seen_ = 0, emcy_warnings_seen_ = 0;
-  std::uint32_t boot_ups_seen_ = 0;
-  bool rebooted_ = false;
-  bool reconfiguring_ = false;  // this enable re-runs its configuration
+  std::unique_ptr<NodeMonitor> monitor_;  // reboots, NMT state, re-configuration
   CanopenIoStatus status_{};
 };
 
