@@ -384,12 +384,19 @@ class Live:
         p = rec["process"]
         if p.poll() is None:
             p.send_signal(signal.SIGINT)
+        hung = False
         try:
             p.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
+            hung = True
+            p.send_signal(signal.SIGUSR1)  # it prints where each of its threads is (faulthandler)
+            time.sleep(1.0)
             p.kill()
             p.wait()
         rec["thread"].join(timeout=2)
+        if hung:
+            return {"error": f"the recorder did not stop within {timeout:g} s (killed); where it was: "
+                             + (rec["error"] or "(nothing said)"), "files": [], "topics": {}}
         return rec["summary"] or {"error": rec["error"] or f"the recorder exited with {p.returncode}",
                                   "files": [], "topics": {}}
 

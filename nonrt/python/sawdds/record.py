@@ -18,11 +18,11 @@ SIGTERM or after S seconds one JSON line: {"files": [...], "topics": {topic: {"s
 import argparse
 import array
 import csv
+import faulthandler
 import json
 import os
 import signal
 import sys
-import threading
 import time
 
 from cyclonedds._clayer import ddspy_take
@@ -140,9 +140,16 @@ def main(argv=None) -> int:
     p.add_argument("--wait", type=float, default=10.0, help="how long to look for the topics' gateways")
     args = p.parse_args(argv)
     from mcap.writer import CompressionType, Writer
-    stop = threading.Event()
+    # A stop is a plain flag: a handler that took a lock (Event.set) could find it held by the
+    # very thread it interrupts (inside Event.wait) and never return. SIGUSR1 prints where every
+    # thread is (faulthandler, from C): what a caller asks before it kills a recorder that hangs.
+    stop = [False]
+
+    def stopping(*_):
+        stop[0] = True
     for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
+        signal.signal(sig, stopping)
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     os.makedirs(args.out, exist_ok=True)
     client = Client(args.domain)
     endpoints = []
@@ -176,9 +183,9 @@ def main(argv=None) -> int:
         time.sleep(0.005)
     print("ready", flush=True)
     end = time.monotonic() + args.seconds if args.seconds else None
-    while not stop.is_set() and (end is None or time.monotonic() < end):
+    while not stop[0] and (end is None or time.monotonic() < end):
         if not sum(t.take(writer) for t in tracks):
-            stop.wait(0.002)
+            time.sleep(0.002)
     time.sleep(0.05)  # what was on its way when told to stop
     # Then what is still queued, for at most a second: a stream the recorder cannot keep up with
     # (1 kHz rows on a loaded machine) never runs dry, and a recorder told to stop must stop.
