@@ -114,17 +114,18 @@ std::vector<PdoMapping> default_pdo_mappings(cia402::Mode mode, std::uint8_t nod
   std::vector<PdoMapping> maps{make_pdo(PdoKind::rpdo, 1, node, rpdo1),
                                make_pdo(PdoKind::tpdo, 1, node, tpdo1),
                                make_pdo(PdoKind::tpdo, 2, node, tpdo2)};
-  const auto off = [&](PdoKind kind, std::uint16_t number) {
-    PdoMapping m;
-    m.kind = kind;
-    m.number = number;
-    m.enabled = false;
-    m.cob_id = default_pdo_cob_id(kind, number, node);
-    maps.push_back(m);
-  };
-  for (std::uint16_t n = 2; n <= 4; ++n) off(PdoKind::rpdo, n);
-  for (std::uint16_t n = 3; n <= 4; ++n) off(PdoKind::tpdo, n);
+  for (std::uint16_t n = 2; n <= 4; ++n) maps.push_back(unused_pdo(PdoKind::rpdo, n, node));
+  for (std::uint16_t n = 3; n <= 4; ++n) maps.push_back(unused_pdo(PdoKind::tpdo, n, node));
   return maps;
+}
+
+PdoMapping unused_pdo(PdoKind kind, std::uint16_t number, std::uint8_t node) noexcept {
+  PdoMapping m;
+  m.kind = kind;
+  m.number = number;
+  m.enabled = false;
+  m.cob_id = default_pdo_cob_id(kind, number, node);
+  return m;
 }
 
 }  // namespace saw::canopen

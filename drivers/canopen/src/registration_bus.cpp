@@ -1,11 +1,13 @@
 // The CANopen types of a shared bus for deployments: canopen_bus (the bus task) and canopen_io (an I/O node).
+#include "registration_bus.hpp"
+
 #include <chrono>
 #include <cstdio>
 
-#include "registration_params.hpp"
 #include "saw/canopen/canopen_bus.hpp"
 #include "saw/canopen/canopen_io.hpp"
 #include "saw/canopen/cob.hpp"
+#include "saw/canopen/device_params.hpp"
 #include "saw/canopen/eds.hpp"
 #include "saw/canopen/emcy.hpp"
 #include "saw/canopen/pdo_text.hpp"
@@ -17,22 +19,11 @@ namespace {
 using namespace std::chrono_literals;
 using deploy::ComponentContext;
 using deploy::Params;
-using params::duration;
 
 struct BusSpec {
   TaskConfig task;
   CanopenBusConfig config;
 };
-
-// The master's heartbeat: its node-ID, its period and each node's consumer time (0x1016).
-void parse_master(const Params& p, std::uint8_t& node, TimeNs& period, TimeNs& timeout) {
-  const Params master = p.child("master_heartbeat");
-  node = static_cast<std::uint8_t>(master.get_in_range("node", 1, 127, 127));
-  period = duration(master, "period", 100ms, 1ms, 65535ms);
-  timeout = duration(master, "timeout", 3 * std::chrono::nanoseconds(period), 0ms, 65535ms);
-  if (timeout != 0 && timeout <= period)
-    master.fail_at("timeout", "must be above the master's heartbeat period (or 0: not watched)");
-}
 
 BusSpec parse_bus_task(const ComponentContext& ctx, Params& p) {
   BusSpec s;
@@ -40,7 +31,10 @@ BusSpec parse_bus_task(const ComponentContext& ctx, Params& p) {
   if (!is_bus_uri(s.config.uri))
     p.fail_at("bus", "'" + s.config.uri + "' is not a bus: virtual:<name> or socketcan:<interface>");
   s.task = deploy::periodic_task(ctx, p, "canopen_bus");
-  parse_master(p, s.config.node, s.config.heartbeat_period, s.config.heartbeat_timeout);
+  const MasterHeartbeatParams master = params::parse_master_heartbeat(p);
+  s.config.node = master.node;
+  s.config.heartbeat_period = master.period;
+  s.config.heartbeat_timeout = master.timeout;
   // The send phase: after the route phase (the task's offset) with room for the clients between
   // (at least 1 us each side), within the period.
   const TimeNs period = s.task.period.count(), route = s.task.offset.count();
@@ -113,12 +107,7 @@ std::vector<PdoMapping> default_io_pdos(const Params& p, std::uint8_t node,
         }
         continue;
       }
-      PdoMapping off;
-      off.kind = kind;
-      off.number = n;
-      off.enabled = false;
-      off.cob_id = default_pdo_cob_id(kind, n, node);
-      pdos.push_back(off);
+      pdos.push_back(unused_pdo(kind, n, node));
     }
   return pdos;
 }
@@ -126,24 +115,16 @@ std::vector<PdoMapping> default_io_pdos(const Params& p, std::uint8_t node,
 IoSpec parse_io(const ComponentContext& ctx, Params& p) {
   IoSpec s;
   CanopenIoConfig& c = s.config;
-  c.bus = params::parse_bus(p);
   s.task = deploy::periodic_task(ctx, p, "canopen_io");
+  const NodeParams n = params::parse_node(p, s.task.period.count());
+  apply_node_params(n, c);
   c.interface_name = p.get_or<std::string>("interface", "io");
   const int node = p.get<int>("node");
   if (!valid_node_id(static_cast<unsigned>(node))) p.fail_at("node", "a node-ID is 1..127");
   c.node.node = static_cast<std::uint8_t>(node);
   c.node.name = ctx.name;
-  const Params hb = p.child("heartbeat");
-  c.node.heartbeat_period = duration(hb, "period", 100ms, 1ms, 65535ms);
-  c.node.heartbeat_timeout =
-      duration(hb, "timeout", 3 * std::chrono::nanoseconds(c.node.heartbeat_period), 1ms, 600s);
-  if (c.node.heartbeat_timeout <= c.node.heartbeat_period)
-    hb.fail_at("timeout", "must be above the heartbeat period");
-  if (is_bus_uri(c.bus))
-    parse_master(p, c.master_node, c.master_heartbeat_period, c.master_heartbeat_timeout);
-  else if (p.has("master_heartbeat"))
-    p.fail_at("master_heartbeat",
-              "the master's heartbeat is the bus's: set it on canopen_bus '" + c.bus + "'");
+  c.node.heartbeat_period = n.heartbeat_period;
+  c.node.heartbeat_timeout = n.heartbeat_timeout;
   const auto names = p.get<std::vector<std::string>>("channels");
   if (names.empty() || names.size() > JointState::max_joints) p.fail_at("channels", "1 to 8 channels");
   const Params joints = p.child("joints");
@@ -162,15 +143,7 @@ IoSpec parse_io(const ComponentContext& ctx, Params& p) {
     c.node.pdos = default_io_pdos(p, c.node.node, c.node.outputs, c.node.inputs);
   }
   c.node.writes = params::parse_writes(p);
-  const auto period = s.task.period;
   c.contract = deploy::parse_device_settings(p, s.task, {.force = false}, c.contract);
-  c.rpdo_deadline = params::rpdo_deadline(p, period.count());
-  c.feedback_timeout =
-      duration(p, "feedback_timeout", std::max<std::chrono::nanoseconds>(10 * period, 10ms), 2 * period, 10s);
-  const Params st = p.child("startup");
-  c.startup.boot_timeout = duration(st, "boot_timeout", 2s, 10ms, 600s);
-  c.startup.sdo_timeout = duration(st, "sdo_timeout", 500ms, 1ms, 60s);
-  c.startup.operational_timeout = duration(st, "operational_timeout", 2s, 10ms, 600s);
   try {
     check(c.node);
   } catch (const std::invalid_argument& e) {

@@ -31,6 +31,10 @@ PdoEntry parse_pdo_entry(std::string_view text);
 PdoMapping make_pdo(PdoKind kind, std::uint16_t number, std::uint8_t node, std::span<const PdoEntry> entries,
                     std::optional<std::uint32_t> cob_id = std::nullopt);
 
+// PDO `number` of `node` configured as not valid (its predefined identifier with bit 31 clear in
+// the mapping, nothing mapped): so that a node's factory PDOs do not load the bus.
+PdoMapping unused_pdo(PdoKind kind, std::uint16_t number, std::uint8_t node) noexcept;
+
 // What the master maps when the deployment says nothing: RPDO1 controlword + the mode's target
 // (target position, velocity or torque); TPDO1 statusword + position actual + torque actual,
 // TPDO2 velocity actual + modes of operation display + error code; PDOs 2..4 (RPDO) and 3..4 (TPDO)
