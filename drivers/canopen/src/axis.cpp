@@ -9,11 +9,7 @@ namespace saw::canopen {
 namespace {
 
 bool maps(const AxisConfig& a, PdoKind kind, ObjectAddress object) {
-  for (const PdoMapping& m : a.pdos)
-    if (m.kind == kind && m.enabled)
-      for (std::size_t i = 0; i < m.count; ++i)
-        if (m.entries[i].address == object) return true;
-  return false;
+  return find_mapped(a.pdos, kind, object).pdo >= 0;
 }
 
 }  // namespace

@@ -5,25 +5,6 @@
 #include <stdexcept>
 
 namespace saw::canopen {
-namespace {
-
-// Where an object sits: which enabled PDO of its kind, which slot; pdo < 0: not mapped.
-struct Where {
-  int pdo = -1, slot = -1;
-};
-
-Where find(const std::vector<PdoMapping>& pdos, PdoKind kind, ObjectAddress a) {
-  int n = 0;
-  for (const PdoMapping& m : pdos) {
-    if (!m.enabled || m.kind != kind) continue;
-    for (std::size_t s = 0; s < m.count; ++s)
-      if (m.entries[s].address == a) return {n, static_cast<int>(s)};
-    ++n;
-  }
-  return {};
-}
-
-}  // namespace
 
 void check(const IoNodeConfig& c) {
   const std::string who = "I/O node '" + c.name + "' (node " + std::to_string(c.node) + ")";
@@ -56,10 +37,10 @@ void check(const IoNodeConfig& c) {
         fail("two PDOs on identifier " + std::to_string(p.cob_id));
     }
   for (const PdoEntry& e : c.outputs)
-    if (find(c.pdos, PdoKind::rpdo, e.address).pdo < 0)
+    if (find_mapped(c.pdos, PdoKind::rpdo, e.address).pdo < 0)
       fail("no RPDO maps its output " + to_string(e.address));
   for (const PdoEntry& e : c.inputs)
-    if (find(c.pdos, PdoKind::tpdo, e.address).pdo < 0)
+    if (find_mapped(c.pdos, PdoKind::tpdo, e.address).pdo < 0)
       fail("no TPDO maps its input " + to_string(e.address));
 }
 
@@ -96,11 +77,11 @@ std::vector<NodeSpec> spec_of(const IoNodeConfig& c) {
 IoNode::IoNode(can::Bus& bus, IoNodeConfig config)
     : NodeDriver(bus, io_options(), spec_of(config)), config_(std::move(config)) {
   for (const PdoEntry& e : config_.outputs) {
-    const auto [pdo, slot] = find(config_.pdos, PdoKind::rpdo, e.address);
+    const auto [pdo, slot] = find_mapped(config_.pdos, PdoKind::rpdo, e.address);
     outputs_.push_back({pdo, slot});
   }
   for (const PdoEntry& e : config_.inputs) {
-    const auto [pdo, slot] = find(config_.pdos, PdoKind::tpdo, e.address);
+    const auto [pdo, slot] = find_mapped(config_.pdos, PdoKind::tpdo, e.address);
     inputs_.push_back({pdo, slot});
   }
 }
@@ -108,7 +89,7 @@ IoNode::IoNode(can::Bus& bus, IoNodeConfig config)
 IoNode::~IoNode() = default;
 
 Codec IoNode::set_output(std::size_t i, double value) noexcept {
-  const Where w = outputs_[i];
+  const MappedAt w = outputs_[i];
   const DataType t = config_.outputs[i].type;
   if (!std::isfinite(value)) return Codec::invalid;
   Number n;
@@ -130,7 +111,7 @@ Codec IoNode::set_output(std::size_t i, double value) noexcept {
 }
 
 bool IoNode::input(std::size_t i, double& value) const noexcept {
-  const Where w = inputs_[i];
+  const MappedAt w = inputs_[i];
   const PdoUnpacker& p = tpdos(0)[static_cast<std::size_t>(w.pdo)];
   Number n;
   if (!p.has_data() || p.get_number(static_cast<std::size_t>(w.slot), n) != Codec::ok) return false;

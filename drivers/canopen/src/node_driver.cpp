@@ -54,7 +54,7 @@ NodeDriver::NodeDriver(can::Bus& bus, NodeDriverOptions options, std::vector<Nod
   for (const Node& n : nodes_) rpdos += n.rpdos.size();
   // The RPDOs, an SDO request, SYNC, the heartbeat, room to spare, an NMT command per node
   // (shut_down()), and per node a re-configuration's SDO request and NMT start.
-  outbox_.resize(rpdos + 5 + 3 * nodes_.size() + options_.extra_frames);
+  outbox_.resize(rpdos + 5 + 3 * nodes_.size());
   inbox_.resize(64);
 }
 

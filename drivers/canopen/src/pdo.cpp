@@ -181,4 +181,15 @@ Codec PdoUnpacker::get_number(std::size_t slot, Number& out) const noexcept {
   return decode(s.type, {bytes, size_of(s.type)}, out);
 }
 
+MappedAt find_mapped(std::span<const PdoMapping> pdos, PdoKind kind, ObjectAddress object) noexcept {
+  int n = 0;
+  for (const PdoMapping& m : pdos) {
+    if (!m.enabled || m.kind != kind) continue;
+    for (std::size_t s = 0; s < m.count; ++s)
+      if (m.entries[s].address == object) return {n, static_cast<int>(s)};
+    ++n;
+  }
+  return {};
+}
+
 }  // namespace saw::canopen

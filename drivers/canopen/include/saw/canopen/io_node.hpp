@@ -77,12 +77,8 @@ class IoNode : public NodeDriver {
   // NMT enter pre-operational.
 
  private:
-  // Where an object sits: which enabled PDO of its kind, which slot; pdo < 0: not mapped.
-  struct Where {
-    int pdo = -1, slot = -1;
-  };
   IoNodeConfig config_;
-  std::vector<Where> outputs_, inputs_;
+  std::vector<MappedAt> outputs_, inputs_;  // where each output and input sits
 };
 
 }  // namespace saw::canopen

@@ -69,7 +69,6 @@ struct NodeDriverOptions {
   std::size_t sdo_capacity = 256;    // bytes a runtime SDO transfer carries at most
   std::size_t sdo_queue = 16;        // runtime SDO requests (and replies) in flight
   std::size_t max_frames = 256;      // frames read per cycle at most; the rest wait a cycle
-  std::size_t extra_frames = 0;      // frames a profile adds per cycle besides the nodes' own
   bool log_emcy = false;             // an info line per EMCY heard (source: the bus's name)
   // A runtime transfer waits while its node is re-configured (else the re-configuration waits).
   bool sdo_waits_for_reconfiguration = false;

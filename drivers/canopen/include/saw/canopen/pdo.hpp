@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -80,6 +81,13 @@ std::uint32_t default_pdo_cob_id(PdoKind kind, std::uint16_t number, std::uint8_
 // identifier that is not 11 bits or is reserved by CiA 301, no entry or more than 64 bits,
 // an entry whose width is not its type's, a string type mapped.
 void check(const PdoMapping& m);
+
+// Where an object sits among the enabled PDOs of a kind: the PDO's index among those (0: the
+// first enabled), and its entry's slot; pdo < 0: not mapped.
+struct MappedAt {
+  int pdo = -1, slot = -1;
+};
+MappedAt find_mapped(std::span<const PdoMapping> pdos, PdoKind kind, ObjectAddress object) noexcept;
 
 // One SDO write of a configuration sequence.
 struct SdoWrite {
