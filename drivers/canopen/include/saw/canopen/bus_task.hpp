@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "saw/can/bus.hpp"
+#include "saw/canopen/frame_counters.hpp"
 #include "saw/canopen/heartbeat.hpp"
 #include "saw/canopen/sync.hpp"
 #include "saw/clock.hpp"
@@ -36,17 +37,9 @@ struct BusTaskConfig {
   TimeNs send_offset = 0;
 };
 
-// Figures since construction; each only grows.
-struct BusTaskCounters {
-  std::uint64_t cycles = 0;
-  std::uint64_t frames_received = 0;
-  std::uint64_t frames_sent = 0;
-  std::uint64_t send_refused = 0;  // frames the bus did not take (full, down)
-  std::uint64_t syncs = 0;
-  std::uint64_t heartbeats = 0;      // the master's own
-  std::uint64_t foreign_frames = 0;  // frames for no client (another master's, unknown nodes)
-  std::uint64_t dropped = 0;         // frames for a client whose ring was full
-  std::uint64_t receive_limited = 0;
+// The frames' figures (foreign: for no client), and what only a bus task counts.
+struct BusTaskCounters : FrameCounters {
+  std::uint64_t dropped = 0;  // frames for a client whose ring was full
   // A phase that found the other one still running (a late wake-up, an overrun) and skipped
   // its turn: its frames wait for its next one.
   std::uint64_t phase_skips = 0;

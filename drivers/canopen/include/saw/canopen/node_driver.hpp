@@ -12,6 +12,7 @@
 #include "saw/can/bus.hpp"
 #include "saw/canopen/axis.hpp"
 #include "saw/canopen/emcy.hpp"
+#include "saw/canopen/frame_counters.hpp"
 #include "saw/canopen/heartbeat.hpp"
 #include "saw/canopen/pdo.hpp"
 #include "saw/canopen/sdo.hpp"
@@ -31,16 +32,8 @@ struct Reconfiguration {
   SdoAbort abort = SdoAbort::none;  // ... and why
 };
 
-// Figures since construction; each only grows.
-struct NodeCounters {
-  std::uint64_t cycles = 0;
-  std::uint64_t frames_received = 0;
-  std::uint64_t frames_sent = 0;
-  std::uint64_t send_refused = 0;  // frames the bus did not take (full, down)
-  std::uint64_t syncs = 0;
-  std::uint64_t heartbeats = 0;                // the master's own
-  std::uint64_t foreign_frames = 0;            // frames for no node of this driver (another master's, ...)
-  std::uint64_t receive_limited = 0;           // cycles that left frames for the next (max_frames)
+// The frames' figures (foreign: for no node of this driver), and what only a node driver counts.
+struct NodeCounters : FrameCounters {
   std::uint64_t emcy = 0;                      // EMCY messages, error resets included
   std::uint64_t sdo_done = 0, sdo_failed = 0;  // runtime SDO transfers
   std::uint64_t heartbeat_events_dropped = 0;
