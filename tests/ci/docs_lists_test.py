@@ -2,9 +2,11 @@
 components (docs/architecture.md, every saw_library's COMPONENT) and the device conformance rigs
 (docs/extending.md, every tests/device/*_rig.cpp). Each list sits after a marker comment
 (`<!-- components: ...`, `<!-- rigs: ...`) and ends at the first name followed by ';' or '.'.
-And the types the gateway and its mapping modules map (every `registry.add<T, ...>` and
-`add_fields<T, ...>` under nonrt/): each named in the paragraph after `<!-- mapped types:`
-(docs/architecture.md), which also names the DDS types they map to.
+And each package README's table of headers (rows `| \`name.hpp\` |`): the headers of the
+package's include/ folder, no more and no fewer. And the types the gateway and its mapping
+modules map (every `registry.add<T, ...>` and `add_fields<T, ...>` under nonrt/): each named in
+the paragraph after `<!-- mapped types:` (docs/architecture.md), which also names the DDS types
+they map to.
 
 usage: docs_lists_test.py SOURCE_DIR
 """
@@ -52,8 +54,25 @@ def components(root):
     return found
 
 
+def header_tables(root):
+    """(README, the headers its table lists, the headers of its package's include/) for each package README with one."""
+    for readme in sorted(glob.glob(os.path.join(root, "drivers", "*", "README.md"))):
+        says = set(re.findall(r"^\| `([A-Za-z0-9_]+\.hpp)` \|", open(readme).read(), re.M))
+        if not says:
+            continue
+        include = os.path.join(os.path.dirname(readme), "include")
+        truth = {os.path.basename(p) for p in glob.glob(os.path.join(include, "**", "*.hpp"), recursive=True)
+                 if "/detail/" not in p}
+        yield os.path.relpath(readme, root), says, truth
+
+
 def main(root):
     failures = 0
+    for readme, says, truth in header_tables(root):
+        ok = says == truth
+        failures += not ok
+        print(("ok   " if ok else "FAIL ") + f"{readme} lists the {len(truth)} headers of its include/"
+              + ("" if ok else f": missing {sorted(truth - says)}, not in the tree {sorted(says - truth)}"))
     for doc, marker, truth in (
             ("docs/architecture.md", "components", components(root)),
             ("docs/extending.md", "rigs",
