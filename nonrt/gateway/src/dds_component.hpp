@@ -16,6 +16,9 @@ namespace saw::gateway {
 
 // A DdsContext whose participant goes with the last component (or resolver) that uses it.
 struct OwnedDds {
+  // The registry ctx.mappings points into: a component's event thread takes through its mappings
+  // until the component is gone, which may be after its resolver.
+  std::shared_ptr<const MappingRegistry> mappings;
   DdsContext ctx;
   ~OwnedDds();
 };

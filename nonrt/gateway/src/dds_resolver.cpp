@@ -16,7 +16,8 @@ DdsResolver::DdsResolver(Options options) : options_(std::move(options)) {
   }
   auto owned = std::make_shared<OwnedDds>();
   auto& ctx = owned->ctx;
-  ctx.mappings = options_.mappings.get();
+  owned->mappings = options_.mappings;
+  ctx.mappings = owned->mappings.get();
   ctx.participant = make_participant(options_.dds);
   ctx.publisher = ctx.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   ctx.subscriber = ctx.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
